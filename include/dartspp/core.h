@@ -1,0 +1,73 @@
+/* dartspp core: vectors, errors, counter-based RNG, sampling helpers.
+ * Everything here is small and inline-friendly; no module state. */
+#ifndef DARTSPP_CORE_H
+#define DARTSPP_CORE_H
+
+#include <math.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#ifndef M_PI
+#define M_PI 3.14159265358979323846
+#endif
+#define DP_INV_PI (1.0 / M_PI)
+#define DP_INV_4PI (1.0 / (4.0 * M_PI))
+
+/* ---- errors: every fallible call fills one of these and returns non-zero ---- */
+typedef struct {
+    char msg[1024];
+} dp_error;
+
+/* printf-style; returns -1 so callers can `return dp_fail(err, ...)`. */
+int dp_fail(dp_error *err, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+
+/* ---- 3-vectors (double: geometry and time are accumulated in double) ---- */
+typedef struct {
+    double x, y, z;
+} vec3;
+
+static inline vec3 v3(double x, double y, double z) { vec3 r = {x, y, z}; return r; }
+static inline vec3 v3s(double s) { return v3(s, s, s); }
+static inline vec3 v3_add(vec3 a, vec3 b) { return v3(a.x + b.x, a.y + b.y, a.z + b.z); }
+static inline vec3 v3_sub(vec3 a, vec3 b) { return v3(a.x - b.x, a.y - b.y, a.z - b.z); }
+static inline vec3 v3_mul(vec3 a, vec3 b) { return v3(a.x * b.x, a.y * b.y, a.z * b.z); }
+static inline vec3 v3_scale(vec3 a, double s) { return v3(a.x * s, a.y * s, a.z * s); }
+static inline vec3 v3_neg(vec3 a) { return v3(-a.x, -a.y, -a.z); }
+static inline double v3_dot(vec3 a, vec3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+static inline vec3 v3_cross(vec3 a, vec3 b)
+{
+    return v3(a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x);
+}
+static inline double v3_len(vec3 a) { return sqrt(v3_dot(a, a)); }
+static inline vec3 v3_norm(vec3 a)
+{
+    double l = v3_len(a);
+    return l > 0.0 ? v3_scale(a, 1.0 / l) : a;
+}
+static inline vec3 v3_exp_neg(vec3 a) { return v3(exp(-a.x), exp(-a.y), exp(-a.z)); }
+static inline double v3_max(vec3 a) { return fmax(a.x, fmax(a.y, a.z)); }
+static inline double v3_avg(vec3 a) { return (a.x + a.y + a.z) / 3.0; }
+static inline double v3_comp(vec3 a, int i) { return i == 0 ? a.x : (i == 1 ? a.y : a.z); }
+static inline int v3_is_finite(vec3 a) { return isfinite(a.x) && isfinite(a.y) && isfinite(a.z); }
+static inline int v3_is_zero(vec3 a) { return a.x == 0.0 && a.y == 0.0 && a.z == 0.0; }
+
+/* Orthonormal basis around unit n (Duff et al. 2017, "Building an orthonormal basis, revisited"). */
+void v3_basis(vec3 n, vec3 *s, vec3 *t);
+
+/* ---- counter-based RNG ----
+ * A stream is keyed by (seed, a, b) — e.g. (seed, iteration, pixel) — so that a sample's random numbers
+ * do not depend on which thread computes it or in which order. */
+typedef struct {
+    uint64_t state;
+} dp_rng;
+
+dp_rng rng_stream(uint64_t seed, uint64_t a, uint64_t b);
+uint64_t rng_next_u64(dp_rng *r);
+/* uniform in [0, 1) with 53 random bits */
+double rng_uniform(dp_rng *r);
+
+/* ---- sampling helpers (pdfs in solid angle) ---- */
+vec3 sample_uniform_sphere(double u1, double u2);
+vec3 sample_cosine_hemisphere(double u1, double u2); /* local frame, +z up */
+
+#endif

@@ -1,0 +1,76 @@
+/* dartspp io: float32 images in and out (OpenEXR through its C API, PFM, PNG preview), frame sidecar CSV,
+ * atomic file writes, and the error metrics of `dartspp compare`. */
+#ifndef DARTSPP_IO_H
+#define DARTSPP_IO_H
+
+#include "dartspp/core.h"
+
+/* An RGB float32 image, row 0 at the top, 3 interleaved floats per pixel. */
+typedef struct {
+    int width, height;
+    float *rgb;
+} image_rgb;
+
+int image_alloc(image_rgb *img, int width, int height, dp_error *err); /* zero-filled */
+void image_free(image_rgb *img);
+
+/* What an EXR header records about the time axis (DESIGN §4). */
+typedef struct {
+    const char *time_unit;   /* e.g. "optical path length in scene units (c = 1)" */
+    int gated;               /* 0 = steady state (no gate): gate_start/gate_end not written */
+    double gate_start;       /* window [gate_start, gate_end) of this image */
+    double gate_end;
+    int camera_warped;       /* 1: the camera leg counts in the path time */
+    int frame_index;         /* -1 for a gate image, k for frame k */
+    const char *integrator;  /* e.g. "path_tracer" (may be NULL) */
+} image_meta;
+
+/* Atomic writes: write to "<path>.tmp.<pid>" in the same folder, then rename over <path>. */
+int atomic_open(const char *path, char *tmp_path, size_t tmp_len, dp_error *err); /* returns fd or -1 */
+int atomic_commit(int fd, const char *tmp_path, const char *path, dp_error *err);  /* fsync, close, rename */
+void atomic_abort(int fd, const char *tmp_path);
+
+/* Float32 RGB EXR (channels R, G, B, ZIP compression) with the metadata as header attributes
+ * `dartspp.timeUnit`, `dartspp.gateStart`, `dartspp.gateEnd`, `dartspp.cameraWarped`, `dartspp.frame`. */
+int exr_write(const char *path, const image_rgb *img, const image_meta *meta, dp_error *err);
+/* Reads R,G,B (or Y as grey) of any pixel type into float; other channels ignored. */
+int exr_read(const char *path, image_rgb *img, dp_error *err);
+
+/* PFM: "PF\n<w> <h>\n-1\n", little-endian float32 RGB, rows bottom to top. Reader also takes "Pf" (grey)
+ * and big-endian (positive scale). */
+int pfm_write(const char *path, const image_rgb *img, dp_error *err);
+int pfm_read(const char *path, image_rgb *img, dp_error *err);
+
+/* 8-bit sRGB PNG preview: values divided by the 0.99 quantile of the image's finite channel values
+ * (1 if that quantile is 0), clamped to [0,1], sRGB-encoded; non-finite values shown as 0. */
+int png_write_preview(const char *path, const image_rgb *img, dp_error *err);
+
+/* By extension: ".exr" (meta may be NULL) or ".pfm"; anything else is an error naming the path. */
+int image_write(const char *path, const image_rgb *img, const image_meta *meta, dp_error *err);
+int image_read(const char *path, image_rgb *img, dp_error *err);
+
+/* The q-quantile (0..1) of all finite channel values (nearest-rank on the sorted values); 0 if none. */
+double image_quantile(const image_rgb *img, double q);
+
+/* Error of an image against a reference of the same size. Pixels with a non-finite channel in either
+ * image are left out of every mean and counted in `nonfinite`. */
+typedef struct {
+    double mse;          /* mean over channels and pixels of (x - r)^2 */
+    double rmse;         /* sqrt(mse) */
+    double rel_mse;      /* mean of (x - r)^2 / (r^2 + 1e-2) */
+    double mse_q99;      /* mse after dividing both images by q99 (papers' metric); = mse if q99 == 0 */
+    double q99;          /* 0.99 quantile of the reference */
+    long nonfinite;      /* pixels left out */
+    long pixels;         /* pixels compared (finite in both) */
+} image_error;
+
+int image_compare(const image_rgb *img, const image_rgb *ref, image_error *out, dp_error *err);
+
+/* Frame sidecar: "index,start,end" header and one line per frame k: k, start + k*w, start + (k+1)*w,
+ * written with %.17g so that the time axis is exact. Atomic. */
+int frames_csv_write(const char *path, int frame_count, double start, double width, dp_error *err);
+
+/* Create the parent folders of a file path (mkdir -p of dirname); 0 on success. */
+int make_parent_dirs(const char *path, dp_error *err);
+
+#endif
