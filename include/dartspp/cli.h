@@ -1,0 +1,9 @@
+/* dartspp command line: `dartspp render ...`, `dartspp compare ...`. Each returns the process exit
+ * status: 0 success, 2 bad input (message on stderr), 1 other failures. */
+#ifndef DARTSPP_CLI_H
+#define DARTSPP_CLI_H
+
+int cli_render(int argc, char **argv);
+int cli_compare(int argc, char **argv);
+
+#endif

@@ -1,0 +1,66 @@
+/* dartspp render: the film (running mean of passes, gate image and transient frames), the progressive
+ * driver (passes, time budget, progress, interruption) and the integrators. */
+#ifndef DARTSPP_RENDER_H
+#define DARTSPP_RENDER_H
+
+#include <signal.h>
+
+#include "dartspp/io.h"
+#include "dartspp/scene.h"
+
+/* ---- film ----
+ * Sums of per-pass pixel estimates; the image is sum / passes. Gate image: contributions weighted by
+ * 1/width inside [start, end) (steady state: weight 1, no test). Frame k: 1/w inside its own window, so a
+ * frame is exactly the gate image of its window (DESIGN §4). In frame mode the gate image is the image of
+ * the union window. */
+typedef struct {
+    int width, height;
+    time_window window;
+    double *sum;       /* 3 per pixel */
+    float *frame_sum;  /* frame_count × 3 per pixel */
+    long passes;
+    long nonfinite;    /* non-finite contributions suppressed (never written into an image) */
+} film;
+
+int film_init(film *f, int width, int height, const time_window *tw, dp_error *err);
+void film_free(film *f);
+/* Adds contribution c arriving at path time t to pixel index px (not thread-safe for one pixel).
+ * Returns 0 when c was non-finite and was dropped (the caller counts it). */
+int film_splat(film *f, size_t px, double t, vec3 c);
+/* Gate image (k < 0) or frame k, as the mean over passes. */
+int film_image(const film *f, int k, image_rgb *img, dp_error *err);
+
+/* ---- driver ---- */
+typedef struct {
+    int threads;            /* 0: all cores */
+    uint64_t seed;
+    long spp;               /* passes; < 0: as the scene says */
+    double time_limit;      /* seconds; < 0: as the scene says */
+    int progress;           /* progress line on stderr */
+    volatile sig_atomic_t *stop; /* set asynchronously (SIGINT): finish the current pass and return */
+} render_options;
+
+typedef struct {
+    long passes;
+    double seconds;
+    double camera_rays;     /* primary rays traced */
+    double rays;            /* all rays traced (primary, bounce, shadow) */
+    long nonfinite;
+    int interrupted;
+} render_stats;
+
+/* Renders the scene with its integrator into f (initialised here). */
+int render_scene(const scene *s, const render_options *opt, film *f, render_stats *st, dp_error *err);
+
+/* One pass of the reference path tracer over every pixel; returns rays traced. Deterministic: the
+ * samples of pixel p in pass i come from rng_stream(seed, i, p). */
+double path_tracer_pass(const scene *s, film *f, uint64_t seed, long pass, long *nonfinite);
+
+/* ---- outputs ----
+ * Writes the gate image to `path` (.exr or .pfm), a PNG preview `<stem>.png`, and in frame mode one image
+ * per frame `<stem>_<NNNN>.<ext>` (0-based, zero-padded to at least 4 digits) and `<stem>_frames.csv`.
+ * Every file is written atomically; `wrote` (may be NULL) is called with each path written. */
+int render_write_outputs(const scene *s, const film *f, const char *path, const char *integrator,
+                         void (*wrote)(const char *path), dp_error *err);
+
+#endif

@@ -1,0 +1,173 @@
+/* dartspp scene: the Tungsten JSON subset of the paper's scenes (docs/scene-format.md §2.4), `.wo3` and
+ * `.obj` meshes, camera, point lights, BSDFs, homogeneous media, phase functions, the time window and
+ * the Embree 3 scene. A loaded scene is read-only: every later stage takes `const scene *`. */
+#ifndef DARTSPP_SCENE_H
+#define DARTSPP_SCENE_H
+
+#include "dartspp/core.h"
+
+/* ---- materials ---- */
+typedef enum { BSDF_LAMBERT, BSDF_MIRROR, BSDF_NULL, BSDF_FORWARD } bsdf_type;
+typedef struct {
+    bsdf_type type;
+    vec3 albedo;
+} bsdf;
+/* null and forward surfaces are crossed as if absent (index-matched boundaries, invisible lights) */
+static inline int bsdf_is_passthrough(const bsdf *b) { return b->type == BSDF_NULL || b->type == BSDF_FORWARD; }
+
+/* ---- media ---- */
+typedef enum { PHASE_ISOTROPIC, PHASE_HENYEY_GREENSTEIN, PHASE_IDA } phase_type;
+typedef struct {
+    phase_type type;
+    double g; /* HG asymmetry; for `ida` the anisotropy the table is built for (0 unless given) */
+} phase_function;
+
+/* p(ω_in → ω_out) per steradian; both are propagation directions (Tungsten convention). */
+double phase_eval(const phase_function *pf, vec3 w_in, vec3 w_out);
+/* Samples ω_out ∝ phase; the weight phase/pdf is exactly 1. */
+vec3 phase_sample(const phase_function *pf, vec3 w_in, double u1, double u2);
+
+#define MEDIUM_VACUUM (-1)
+typedef struct {
+    char name[64];
+    int guided;        /* "guided_homo": DARTS samplers allowed */
+    vec3 sigma_s;      /* per unit length, density applied */
+    vec3 sigma_a;
+    vec3 sigma_t;
+    double eta;        /* refractive index = vacuum speed / `speed_of_light` (time per length) */
+    int max_bounces;   /* medium events since the last surface */
+    phase_function phase;
+} medium;
+
+/* ---- geometry ---- */
+typedef struct {
+    char name[64];
+    int bsdf;                     /* index into scene.bsdfs */
+    int overrides_media;          /* 0: a crossing keeps the current medium */
+    int int_medium, ext_medium;   /* medium index or MEDIUM_VACUUM, used when overrides_media */
+    uint32_t first_tri, tri_count;
+} surface;
+
+/* medium on the far side of `s` for a ray leaving the hit point in direction d (Tungsten selectMedium) */
+static inline int surface_next_medium(const surface *s, int current, vec3 d, vec3 ng)
+{
+    if (!s->overrides_media) return current;
+    return v3_dot(d, ng) < 0.0 ? s->int_medium : s->ext_medium;
+}
+
+typedef struct {
+    char name[64];
+    vec3 pos;
+    vec3 intensity;   /* radiant intensity (W/sr); `power` P is stored as P/(4π) */
+    int medium;       /* ext_medium, else MEDIUM_VACUUM */
+} point_light;
+
+typedef struct {
+    int width, height;
+    double fov_deg;         /* horizontal */
+    vec3 pos;
+    vec3 right, up, forward; /* world axes of the image plane: +right = screen right, +up = screen up */
+    double plane_dist;      /* 1 / tan(fov/2): image plane spans x in [-1,1] */
+    int medium;
+} camera;
+
+/* Direction of the camera ray through the image-plane point (px, py) in pixel units: pixel (x, y) covers
+ * [x, x+1) × [y, y+1), row 0 at the top; px = x + u with u uniform in [0,1) is the box filter. */
+vec3 camera_ray_dir(const camera *c, double px, double py);
+
+/* ---- time ---- */
+typedef struct {
+    int gated;        /* 0: steady state, no time weighting (transient_time_width == 0, no frames) */
+    int frame_count;  /* 0: one gate image; N >= 1: frames [start + k w, start + (k+1) w) */
+    double start;     /* window start */
+    double width;     /* gate width, or frame width */
+} time_window;
+
+static inline double time_window_end(const time_window *tw)
+{
+    return tw->start + tw->width * (tw->frame_count > 0 ? tw->frame_count : 1);
+}
+
+/* ---- settings ---- */
+typedef enum { INTEGRATOR_PATH_TRACER, INTEGRATOR_PHOTON_POINTS } integrator_type;
+
+typedef struct {
+    integrator_type type;
+    char type_name[64];
+    int min_bounces, max_bounces;   /* path segments incl. the light connection (DESIGN §4) */
+    time_window window;
+    double vacuum_eta;              /* 1 / vaccum_speed_of_light */
+    int enable_rr;                  /* path tracer: Russian roulette on throughput */
+    /* photon points (issue 3 onwards) */
+    double photon_count, volume_photon_count;
+    int gather_photon_count;
+    double gather_radius, volume_gather_radius, alpha, volume_alpha;
+    int fixed_volume_radius, include_surfaces, low_order_scattering;
+    int enable_guiding, enable_elliptical, strict_time_width;
+} integrator_settings;
+
+typedef struct {
+    long spp;                /* progressive passes; 0 = no limit */
+    double timeout_seconds;  /* 0 = no limit */
+    double checkpoint_seconds;
+    char output_file[1024];  /* LDR preview as written in the scene (may be empty) */
+    char hdr_output_file[1024];
+    int transients_buffer;   /* output_buffers has an entry of type "transients" */
+} renderer_settings;
+
+/* ---- the scene ---- */
+typedef struct scene scene;
+struct scene {
+    char path[1024];         /* scene file as given */
+    char dir[1024];          /* its folder: meshes are relative to it */
+    bsdf *bsdfs;
+    int bsdf_count;
+    medium *media;
+    int medium_count;
+    surface *surfaces;
+    int surface_count;
+    point_light *lights;
+    int light_count;
+    camera cam;
+    integrator_settings integrator;
+    renderer_settings renderer;
+    /* triangles in world space (float, as Embree holds them) */
+    float *verts;            /* 3 per vertex */
+    uint32_t *tris;          /* 3 global vertex indices per triangle */
+    uint32_t vert_count, tri_count;
+    char *notes;             /* warnings and (with verbose) ignored keys, one per line; may be NULL */
+    void *rt_device, *rt_scene; /* Embree handles */
+};
+
+typedef struct {
+    const char *const *sets; /* "key=value" overrides of integrator/renderer keys (--set) */
+    int set_count;
+    int verbose;             /* also list ignored keys in notes */
+} scene_load_options;
+
+int scene_load(const char *path, const scene_load_options *opt, scene *s, dp_error *err);
+void scene_free(scene *s);
+
+/* ---- ray queries ---- */
+typedef struct {
+    double t;
+    vec3 p;      /* hit point from barycentrics */
+    vec3 ng;     /* unit geometric normal (p1-p0)x(p2-p0) */
+    int surface;
+} hit_record;
+
+/* Closest hit with t in (0, tmax); returns 1 on a hit. */
+int scene_intersect(const scene *s, vec3 o, vec3 d, double tmax, hit_record *h);
+/* Origin for a ray leaving surface point p on the side of n (Wächter & Binder, Ray Tracing Gems ch. 6). */
+vec3 offset_ray_origin(vec3 p, vec3 n);
+
+/* Transmittance and time from p (in medium `med`) to the point q, crossing only null/forward surfaces;
+ * returns 0 (and tr = 0) when an opaque surface is in the way. time accumulates eta * length. */
+int scene_transmittance(const scene *s, vec3 p, int med, vec3 q, vec3 *tr, double *time);
+
+static inline double medium_eta(const scene *s, int med)
+{
+    return med == MEDIUM_VACUUM ? s->integrator.vacuum_eta : s->media[med].eta;
+}
+
+#endif

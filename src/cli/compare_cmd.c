@@ -1,0 +1,43 @@
+/* `dartspp compare IMAGE REFERENCE [--csv]`: error metrics of an image against a reference. */
+#include <stdio.h>
+#include <string.h>
+
+#include "dartspp/cli.h"
+#include "dartspp/io.h"
+
+int cli_compare(int argc, char **argv)
+{
+    const char *paths[2] = {NULL, NULL};
+    int csv = 0, np = 0;
+    for (int i = 0; i < argc; i++) {
+        if (!strcmp(argv[i], "--csv")) csv = 1;
+        else if (argv[i][0] == '-' && argv[i][1]) {
+            fprintf(stderr, "dartspp compare: unknown option '%s'\n", argv[i]);
+            return 2;
+        } else if (np < 2) paths[np++] = argv[i];
+        else {
+            fprintf(stderr, "dartspp compare: too many arguments ('%s')\n", argv[i]);
+            return 2;
+        }
+    }
+    if (np != 2) {
+        fprintf(stderr, "usage: dartspp compare IMAGE REFERENCE [--csv]\n");
+        return 2;
+    }
+    image_rgb img = {0}, ref = {0};
+    image_error e;
+    dp_error err;
+    int rc = image_read(paths[0], &img, &err) || image_read(paths[1], &ref, &err) || image_compare(&img, &ref, &e, &err);
+    if (rc) fprintf(stderr, "dartspp compare: %s\n", err.msg);
+    else if (csv)
+        printf("%.9g,%.9g,%.9g,%.9g,%.9g,%ld,%ld\n", e.mse, e.rmse, e.rel_mse, e.mse_q99, e.q99, e.nonfinite, e.pixels);
+    else
+        printf("image              %s\nreference          %s\nmse                %.6g\nrmse               %.6g\n"
+               "relative mse       %.6g   (mean of (x-r)^2/(r^2+0.01))\n"
+               "mse / q99^2        %.6g   (both divided by the reference's 0.99 quantile %.6g)\n"
+               "non-finite pixels  %ld   (of %ld compared)\n",
+               paths[0], paths[1], e.mse, e.rmse, e.rel_mse, e.mse_q99, e.q99, e.nonfinite, e.pixels + e.nonfinite);
+    image_free(&img);
+    image_free(&ref);
+    return rc ? 2 : 0;
+}

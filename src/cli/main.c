@@ -1,0 +1,27 @@
+/* dartspp: entry point and sub-command dispatch. */
+#include <stdio.h>
+#include <string.h>
+
+#include "dartspp/cli.h"
+
+static void usage(FILE *f)
+{
+    fprintf(f,
+            "usage: dartspp render SCENE.json [--threads N] [--seed S] [--spp N] [--time SECONDS]\n"
+            "                      [--output PATH.exr|.pfm] [--set key=value ...] [--verbose] [--quiet]\n"
+            "       dartspp compare IMAGE REFERENCE [--csv]      (EXR or PFM)\n"
+            "See README.md for the scene keys, outputs and units.\n");
+}
+
+int main(int argc, char **argv)
+{
+    if (argc < 2 || !strcmp(argv[1], "-h") || !strcmp(argv[1], "--help")) {
+        usage(argc < 2 ? stderr : stdout);
+        return argc < 2 ? 2 : 0;
+    }
+    if (!strcmp(argv[1], "render")) return cli_render(argc - 2, argv + 2);
+    if (!strcmp(argv[1], "compare")) return cli_compare(argc - 2, argv + 2);
+    fprintf(stderr, "dartspp: unknown command '%s' (commands: render, compare)\n", argv[1]);
+    usage(stderr);
+    return 2;
+}

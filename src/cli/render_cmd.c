@@ -1,0 +1,140 @@
+/* `dartspp render SCENE.json [options]`: load, render progressively, write the outputs. */
+#include <errno.h>
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "dartspp/cli.h"
+#include "dartspp/render.h"
+
+typedef struct {
+    const char *scene_path;
+    const char *output;
+    const char **sets;
+    int set_count;
+    int verbose, quiet;
+    render_options ro;
+} render_args;
+
+static volatile sig_atomic_t stop_requested = 0; /* written only by the signal handler */
+
+static void on_signal(int sig)
+{
+    (void)sig;
+    stop_requested = 1;
+}
+
+static int bad_arg(const char *opt, const char *val, const char *why)
+{
+    fprintf(stderr, "dartspp render: %s %s: %s\n", opt, val ? val : "", why);
+    return 2;
+}
+
+static int parse_number(const char *opt, const char *val, double lo, double *out)
+{
+    char *end;
+    errno = 0;
+    double d = val ? strtod(val, &end) : 0;
+    if (!val || end == val || *end || errno || !isfinite(d) || d < lo) return -1;
+    (void)opt;
+    *out = d;
+    return 0;
+}
+
+static int parse_args(int argc, char **argv, render_args *a)
+{
+    a->ro = (render_options){.threads = 0, .seed = 1, .spp = -1, .time_limit = -1, .progress = 1};
+    a->sets = calloc((size_t)argc + 1, sizeof(char *));
+    for (int i = 0; i < argc; i++) {
+        const char *o = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
+        double d;
+        if (!strcmp(o, "--verbose")) a->verbose = 1;
+        else if (!strcmp(o, "--quiet")) a->quiet = 1;
+        else if (!strcmp(o, "--threads") || !strcmp(o, "--seed") || !strcmp(o, "--spp") || !strcmp(o, "--time")) {
+            if (parse_number(o, v, 0, &d)) return bad_arg(o, v, "expected a non-negative number");
+            if (!strcmp(o, "--threads")) a->ro.threads = (int)d;
+            else if (!strcmp(o, "--seed")) a->ro.seed = (uint64_t)d;
+            else if (!strcmp(o, "--spp")) a->ro.spp = (long)d;
+            else a->ro.time_limit = d;
+            i++;
+        } else if (!strcmp(o, "--output")) {
+            if (!v) return bad_arg(o, v, "expected a path");
+            a->output = argv[++i];
+        } else if (!strcmp(o, "--set")) {
+            if (!v || !strchr(v, '=')) return bad_arg(o, v, "expected key=value");
+            a->sets[a->set_count++] = argv[++i];
+        } else if (o[0] == '-') return bad_arg(o, NULL, "unknown option");
+        else if (a->scene_path) return bad_arg(o, NULL, "only one scene file");
+        else a->scene_path = o;
+    }
+    if (!a->scene_path) return bad_arg("", NULL, "missing SCENE.json");
+    /* --time alone renders for that long; --spp alone renders that many passes */
+    if (a->ro.time_limit >= 0 && a->ro.spp < 0) a->ro.spp = 0;
+    if (a->ro.spp >= 0 && a->ro.time_limit < 0) a->ro.time_limit = 0;
+    return 0;
+}
+
+/* --output, else the scene's hdr_output_file, else <scene stem>.exr; relative to the working folder. */
+static void output_path(const render_args *a, const scene *s, char *out, size_t n)
+{
+    if (a->output) snprintf(out, n, "%s", a->output);
+    else if (s->renderer.hdr_output_file[0]) snprintf(out, n, "%s", s->renderer.hdr_output_file);
+    else {
+        const char *base = strrchr(a->scene_path, '/');
+        base = base ? base + 1 : a->scene_path;
+        const char *dot = strrchr(base, '.');
+        snprintf(out, n, "%.*s.exr", (int)(dot ? dot - base : (long)strlen(base)), base);
+    }
+}
+
+static void print_written(const char *path) { printf("wrote %s\n", path); }
+
+static void print_summary(const scene *s, const render_stats *st)
+{
+    const time_window *tw = &s->integrator.window;
+    printf("scene %s: %s, %dx%d, ", s->path, s->integrator.type_name, s->cam.width, s->cam.height);
+    if (!tw->gated) printf("steady state (no gate)\n");
+    else if (tw->frame_count) printf("%d frames of width %g from %g (camera-warped optical path length)\n", tw->frame_count, tw->width, tw->start);
+    else printf("gate [%g, %g) (camera-warped optical path length)\n", tw->start, time_window_end(tw));
+    printf("rendered %ld passes in %.2f s (%.2f M camera rays/s, %.2f M rays/s)%s; non-finite samples suppressed: %ld\n",
+           st->passes, st->seconds, st->seconds > 0 ? st->camera_rays / st->seconds * 1e-6 : 0.0,
+           st->seconds > 0 ? st->rays / st->seconds * 1e-6 : 0.0, st->interrupted ? " (interrupted)" : "", st->nonfinite);
+}
+
+int cli_render(int argc, char **argv)
+{
+    render_args a = {0};
+    int rc = parse_args(argc, argv, &a);
+    if (rc) {
+        free(a.sets);
+        return rc;
+    }
+    scene s;
+    dp_error err;
+    scene_load_options lo = {.sets = a.sets, .set_count = a.set_count, .verbose = a.verbose};
+    if (scene_load(a.scene_path, &lo, &s, &err)) {
+        fprintf(stderr, "dartspp render: %s\n", err.msg);
+        free(a.sets);
+        return 2;
+    }
+    if (s.notes) fputs(s.notes, stderr);
+    char out[2048];
+    output_path(&a, &s, out, sizeof out);
+    signal(SIGINT, on_signal);
+    signal(SIGTERM, on_signal);
+    a.ro.progress = !a.quiet;
+    a.ro.stop = &stop_requested;
+    film f = {0};
+    render_stats st;
+    rc = render_scene(&s, &a.ro, &f, &st, &err) ? 2 : 0;
+    if (!rc) {
+        print_summary(&s, &st);
+        if (render_write_outputs(&s, &f, out, s.integrator.type_name, print_written, &err)) rc = 1;
+    }
+    if (rc) fprintf(stderr, "dartspp render: %s\n", err.msg);
+    film_free(&f);
+    scene_free(&s);
+    free(a.sets);
+    return rc;
+}

@@ -1,0 +1,70 @@
+/* Atomic file writes: the data goes to "<path>.tmp.<pid>" in the same folder, is flushed to disk,
+ * and then renamed over <path>, so a reader never sees a half-written file. */
+#include "dartspp/io.h"
+
+#include <errno.h>
+#include <fcntl.h>
+#include <stdio.h>
+#include <string.h>
+#include <unistd.h>
+
+int atomic_open(const char *path, char *tmp_path, size_t tmp_len, dp_error *err)
+{
+    int n = snprintf(tmp_path, tmp_len, "%s.tmp.%ld", path, (long)getpid());
+    if (n < 0 || (size_t)n >= tmp_len) {
+        if (tmp_len) tmp_path[0] = '\0';
+        dp_fail(err, "%s: path too long", path);
+        return -1;
+    }
+    int fd = open(tmp_path, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
+    if (fd < 0) dp_fail(err, "%s: cannot open for writing: %s", path, strerror(errno));
+    return fd;
+}
+
+/* Best effort: make the rename itself durable by syncing the folder that holds the file. */
+static void sync_parent_dir(const char *path)
+{
+    const char *slash = strrchr(path, '/');
+    char dir[4096];
+    if (!slash) {
+        strcpy(dir, ".");
+    } else {
+        size_t n = slash == path ? 1 : (size_t)(slash - path);
+        if (n >= sizeof dir) return;
+        memcpy(dir, path, n);
+        dir[n] = '\0';
+    }
+    int fd = open(dir, O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+    if (fd < 0) return;
+    (void)fsync(fd);
+    close(fd);
+}
+
+int atomic_commit(int fd, const char *tmp_path, const char *path, dp_error *err)
+{
+    const char *what = "cannot flush to disk";
+    int ok = fsync(fd) == 0;
+    int e = errno;
+    if (close(fd) != 0 && ok) {
+        ok = 0;
+        e = errno;
+        what = "cannot close";
+    }
+    if (ok && rename(tmp_path, path) != 0) {
+        ok = 0;
+        e = errno;
+        what = "cannot rename the temporary file into place";
+    }
+    if (ok) {
+        sync_parent_dir(path);
+        return 0;
+    }
+    unlink(tmp_path);
+    return dp_fail(err, "%s: %s: %s", path, what, strerror(e));
+}
+
+void atomic_abort(int fd, const char *tmp_path)
+{
+    if (fd >= 0) close(fd);
+    if (tmp_path && tmp_path[0]) unlink(tmp_path);
+}

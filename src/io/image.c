@@ -1,0 +1,180 @@
+/* Images in memory: allocation, the quantile used for display scaling, the error metrics of
+ * `dartspp compare`, reading/writing by file extension, and creating output folders. */
+#include "dartspp/io.h"
+
+#include <errno.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+#include <sys/stat.h>
+
+/* Largest image accepted anywhere (also bounds what a corrupt file header can make us allocate). */
+#define IMAGE_MAX_PIXELS ((size_t)1 << 28)
+
+int image_alloc(image_rgb *img, int width, int height, dp_error *err)
+{
+    img->width = img->height = 0;
+    img->rgb = NULL;
+    if (width <= 0 || height <= 0)
+        return dp_fail(err, "invalid image size %dx%d", width, height);
+    size_t n = (size_t)width * (size_t)height;
+    if (n > IMAGE_MAX_PIXELS)
+        return dp_fail(err, "image size %dx%d exceeds the limit of %zu pixels", width, height,
+                       IMAGE_MAX_PIXELS);
+    img->rgb = calloc(n * 3, sizeof *img->rgb);
+    if (!img->rgb) return dp_fail(err, "out of memory for a %dx%d image", width, height);
+    img->width = width;
+    img->height = height;
+    return 0;
+}
+
+void image_free(image_rgb *img)
+{
+    if (!img) return;
+    free(img->rgb);
+    img->rgb = NULL;
+    img->width = img->height = 0;
+}
+
+static size_t image_values(const image_rgb *img)
+{
+    if (!img || !img->rgb || img->width <= 0 || img->height <= 0) return 0;
+    return (size_t)img->width * (size_t)img->height * 3;
+}
+
+static int cmp_float(const void *a, const void *b)
+{
+    float x = *(const float *)a, y = *(const float *)b;
+    return (x > y) - (x < y);
+}
+
+/* Nearest rank: the value at index ceil(q*n)-1 (clamped) of the sorted finite values.
+ * Returns -1 when out of memory; *out = 0 when there are no finite values. */
+static int quantile_of(const image_rgb *img, double q, double *out)
+{
+    size_t total = image_values(img), n = 0;
+    *out = 0.0;
+    if (total == 0) return 0;
+    float *v = malloc(total * sizeof *v);
+    if (!v) return -1;
+    for (size_t i = 0; i < total; ++i)
+        if (isfinite(img->rgb[i])) v[n++] = img->rgb[i];
+    if (n > 0) {
+        qsort(v, n, sizeof *v, cmp_float);
+        double rank = ceil((isnan(q) ? 0.0 : q) * (double)n) - 1.0;
+        size_t k = rank <= 0.0 ? 0 : (rank >= (double)(n - 1) ? n - 1 : (size_t)rank);
+        *out = v[k];
+    }
+    free(v);
+    return 0;
+}
+
+/* NaN if the temporary copy of the values cannot be allocated. */
+double image_quantile(const image_rgb *img, double q)
+{
+    double r;
+    return quantile_of(img, q, &r) == 0 ? r : NAN;
+}
+
+typedef struct {
+    double se, rel, se_q;
+} error_sums;
+
+static int pixel_finite(const float *p)
+{
+    return isfinite(p[0]) && isfinite(p[1]) && isfinite(p[2]);
+}
+
+static void add_pixel(error_sums *s, const float *x, const float *r, double q)
+{
+    for (int c = 0; c < 3; ++c) {
+        double d = (double)x[c] - (double)r[c];
+        double dq = (double)x[c] / q - (double)r[c] / q;
+        s->se += d * d;
+        s->rel += d * d / ((double)r[c] * (double)r[c] + 1e-2);
+        s->se_q += dq * dq;
+    }
+}
+
+int image_compare(const image_rgb *img, const image_rgb *ref, image_error *out, dp_error *err)
+{
+    memset(out, 0, sizeof *out);
+    if (!image_values(img) || !image_values(ref)) return dp_fail(err, "compare: empty image");
+    if (img->width != ref->width || img->height != ref->height)
+        return dp_fail(err, "compare: image is %dx%d but the reference is %dx%d", img->width,
+                       img->height, ref->width, ref->height);
+    if (quantile_of(ref, 0.99, &out->q99) != 0) return dp_fail(err, "compare: out of memory");
+    double q = out->q99 != 0.0 ? out->q99 : 1.0;
+    error_sums s = {0, 0, 0};
+    size_t n = (size_t)img->width * (size_t)img->height;
+    for (size_t i = 0; i < n; ++i) {
+        const float *x = img->rgb + 3 * i, *r = ref->rgb + 3 * i;
+        if (!pixel_finite(x) || !pixel_finite(r)) {
+            out->nonfinite++;
+            continue;
+        }
+        add_pixel(&s, x, r, q);
+        out->pixels++;
+    }
+    double count = 3.0 * (double)out->pixels;
+    if (count > 0) {
+        out->mse = s.se / count;
+        out->rel_mse = s.rel / count;
+        out->mse_q99 = s.se_q / count;
+    }
+    out->rmse = sqrt(out->mse);
+    return 0;
+}
+
+/* Case-insensitive test of the file name's extension (ext includes the dot). */
+static int has_ext(const char *path, const char *ext)
+{
+    size_t n = strlen(path), e = strlen(ext);
+    return n > e && strcasecmp(path + n - e, ext) == 0;
+}
+
+int image_write(const char *path, const image_rgb *img, const image_meta *meta, dp_error *err)
+{
+    if (has_ext(path, ".exr")) return exr_write(path, img, meta, err);
+    if (has_ext(path, ".pfm")) return pfm_write(path, img, err);
+    return dp_fail(err, "%s: unknown image format (expected .exr or .pfm)", path);
+}
+
+int image_read(const char *path, image_rgb *img, dp_error *err)
+{
+    if (has_ext(path, ".exr")) return exr_read(path, img, err);
+    if (has_ext(path, ".pfm")) return pfm_read(path, img, err);
+    img->width = img->height = 0;
+    img->rgb = NULL;
+    return dp_fail(err, "%s: unknown image format (expected .exr or .pfm)", path);
+}
+
+/* mkdir of one prefix of the path; an existing folder is fine. */
+static int mkdir_one(const char *dir, const char *path, dp_error *err)
+{
+    struct stat st;
+    if (mkdir(dir, 0777) == 0) return 0;
+    int e = errno;
+    if (e == EEXIST && stat(dir, &st) == 0 && S_ISDIR(st.st_mode)) return 0;
+    if (e == EEXIST) e = ENOTDIR;
+    return dp_fail(err, "%s: cannot create folder %s: %s", path, dir, strerror(e));
+}
+
+int make_parent_dirs(const char *path, dp_error *err)
+{
+    const char *slash = strrchr(path, '/');
+    if (!slash || slash == path) return 0;
+    char *dir = strndup(path, (size_t)(slash - path));
+    if (!dir) return dp_fail(err, "%s: out of memory", path);
+    int rc = 0;
+    for (char *p = dir + 1; rc == 0; ++p) {
+        if (*p != '/' && *p != '\0') continue;
+        char c = *p;
+        *p = '\0';
+        if (p[-1] != '/') rc = mkdir_one(dir, path, err);
+        *p = c;
+        if (c == '\0') break;
+    }
+    free(dir);
+    return rc;
+}

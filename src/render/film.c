@@ -1,0 +1,78 @@
+/* The film: per-pixel sums of pass estimates for the gate image and each transient frame. */
+#include "dartspp/render.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+int film_init(film *f, int width, int height, const time_window *tw, dp_error *err)
+{
+    memset(f, 0, sizeof *f);
+    f->width = width;
+    f->height = height;
+    f->window = *tw;
+    size_t n = (size_t)width * height * 3;
+    f->sum = calloc(n, sizeof(double));
+    if (tw->frame_count > 0) {
+        if ((double)n * tw->frame_count * sizeof(float) > 16e9) {
+            film_free(f);
+            return dp_fail(err, "%d frames of %dx%d need more than 16 GB", tw->frame_count, width, height);
+        }
+        f->frame_sum = calloc(n * (size_t)tw->frame_count, sizeof(float));
+    }
+    if (!f->sum || (tw->frame_count > 0 && !f->frame_sum)) {
+        film_free(f);
+        return dp_fail(err, "out of memory for a %dx%d film with %d frames", width, height, tw->frame_count);
+    }
+    return 0;
+}
+
+void film_free(film *f)
+{
+    free(f->sum);
+    free(f->frame_sum);
+    memset(f, 0, sizeof *f);
+}
+
+int film_splat(film *f, size_t px, double t, vec3 c)
+{
+    if (!v3_is_finite(c)) return 0;
+    const time_window *tw = &f->window;
+    double *s = &f->sum[3 * px];
+    if (!tw->gated) {
+        s[0] += c.x;
+        s[1] += c.y;
+        s[2] += c.z;
+        return 1;
+    }
+    double rel = (t - tw->start) / tw->width;
+    int frames = tw->frame_count > 0 ? tw->frame_count : 1;
+    if (!(rel >= 0.0 && rel < frames)) return 1;
+    double wg = 1.0 / (tw->width * frames);
+    s[0] += c.x * wg;
+    s[1] += c.y * wg;
+    s[2] += c.z * wg;
+    if (tw->frame_count > 0) {
+        size_t k = (size_t)rel;
+        if (k >= (size_t)tw->frame_count) k = (size_t)tw->frame_count - 1;
+        float *fs = &f->frame_sum[3 * ((size_t)f->width * f->height * k + px)];
+        double wf = 1.0 / tw->width;
+        fs[0] += (float)(c.x * wf);
+        fs[1] += (float)(c.y * wf);
+        fs[2] += (float)(c.z * wf);
+    }
+    return 1;
+}
+
+int film_image(const film *f, int k, image_rgb *img, dp_error *err)
+{
+    if (image_alloc(img, f->width, f->height, err)) return -1;
+    size_t n = (size_t)f->width * f->height * 3;
+    double inv = f->passes > 0 ? 1.0 / f->passes : 0.0;
+    if (k < 0) {
+        for (size_t i = 0; i < n; i++) img->rgb[i] = (float)(f->sum[i] * inv);
+    } else {
+        const float *fs = &f->frame_sum[n * (size_t)k];
+        for (size_t i = 0; i < n; i++) img->rgb[i] = (float)(fs[i] * inv);
+    }
+    return 0;
+}

@@ -1,0 +1,206 @@
+/* The reference integrator: an unbiased time-resolved volumetric path tracer.
+ * Free-flight distance sampling (spectral: one channel picked, pdf averaged over channels), phase and BSDF
+ * sampling, next-event estimation to every point light through index-matched boundaries, camera-warped
+ * path time (η·d on every segment, camera leg included), box gate or frames via the film.
+ * Bounces (DESIGN §4): a path of n segments, the light connection included, counts iff
+ * n <= max_bounces and n - 1 >= min_bounces. Crossing a null/forward surface does not end a segment. */
+#include "dartspp/render.h"
+
+#include <omp.h>
+
+typedef struct {
+    vec3 o, d;
+    int medium;
+    vec3 beta;     /* throughput */
+    double time;   /* path time from the camera to o */
+    int depth;     /* scattering vertices so far (segments so far) */
+} path_state;
+
+typedef struct {
+    const scene *s;
+    film *f;
+    size_t px;
+    dp_rng *rng;
+    long nonfinite;
+    double rays;
+} pixel_ctx;
+
+static int counts(const integrator_settings *in, int segments)
+{
+    return segments <= in->max_bounces && segments - 1 >= in->min_bounces;
+}
+
+static void splat(pixel_ctx *c, double t, vec3 contrib)
+{
+    if (v3_is_zero(contrib)) return;
+    if (!film_splat(c->f, c->px, t, contrib)) c->nonfinite++;
+}
+
+/* NEE to every point light from x; f_eval(w_to_light) is the phase function or BSDF·cos. */
+typedef double (*scatter_eval)(const void *ctx, vec3 w);
+
+static void connect_lights(pixel_ctx *c, const path_state *ps, vec3 x, scatter_eval fe, const void *fctx)
+{
+    const scene *s = c->s;
+    for (int i = 0; i < s->light_count; i++) {
+        const point_light *L = &s->lights[i];
+        vec3 to = v3_sub(L->pos, x);
+        double d2 = v3_dot(to, to);
+        if (d2 <= 0.0) continue;
+        vec3 w = v3_scale(to, 1.0 / sqrt(d2));
+        double f = fe(fctx, w);
+        if (f <= 0.0) continue;
+        vec3 tr;
+        double t = ps->time;
+        c->rays += 1;
+        if (!scene_transmittance(s, x, ps->medium, L->pos, &tr, &t)) continue;
+        splat(c, t, v3_scale(v3_mul(v3_mul(ps->beta, tr), L->intensity), f / d2));
+    }
+}
+
+typedef struct {
+    const phase_function *pf;
+    vec3 w_in;
+} phase_ctx;
+
+static double eval_phase(const void *ctx, vec3 w)
+{
+    const phase_ctx *p = ctx;
+    return phase_eval(p->pf, p->w_in, w);
+}
+
+typedef struct {
+    vec3 n; /* facing the side the path arrived from */
+} lambert_ctx;
+
+static double eval_lambert_cos(const void *ctx, vec3 w)
+{
+    double c = v3_dot(((const lambert_ctx *)ctx)->n, w);
+    return c > 0.0 ? c * DP_INV_PI : 0.0;
+}
+
+/* Free flight in a homogeneous medium with spectral σt: returns the distance (< tmax for a medium event)
+ * and multiplies beta by the transmittance (and σs at an event) over the one-sample-MIS pdf. */
+static double sample_free_flight(const medium *m, double tmax, dp_rng *rng, vec3 *beta, int *event)
+{
+    int ch = (int)(rng_uniform(rng) * 3.0);
+    double st = v3_comp(m->sigma_t, ch > 2 ? 2 : ch);
+    double t = st > 0.0 ? -log1p(-rng_uniform(rng)) / st : INFINITY;
+    *event = t < tmax;
+    double dist = *event ? t : tmax;
+    vec3 tr = v3_exp_neg(v3_scale(m->sigma_t, dist));
+    if (*event) {
+        double pdf = v3_avg(v3_mul(m->sigma_t, tr));
+        *beta = pdf > 0.0 ? v3_scale(v3_mul(*beta, v3_mul(m->sigma_s, tr)), 1.0 / pdf) : v3s(0);
+    } else {
+        double p = v3_avg(tr);
+        *beta = p > 0.0 ? v3_scale(v3_mul(*beta, tr), 1.0 / p) : v3s(0);
+    }
+    return dist;
+}
+
+/* Medium vertex: NEE, then phase sampling. Returns 0 when the path ends. */
+static int scatter_medium(pixel_ctx *c, path_state *ps, double t, int *medium_events)
+{
+    const scene *s = c->s;
+    const medium *m = &s->media[ps->medium];
+    ps->o = v3_add(ps->o, v3_scale(ps->d, t));
+    ps->time += m->eta * t;
+    ps->depth++;
+    if (++*medium_events > m->max_bounces) return 0;
+    phase_ctx pc = {&m->phase, ps->d};
+    if (counts(&s->integrator, ps->depth + 1)) connect_lights(c, ps, ps->o, eval_phase, &pc);
+    ps->d = phase_sample(&m->phase, ps->d, rng_uniform(c->rng), rng_uniform(c->rng));
+    return 1;
+}
+
+/* Surface hit: pass-through, mirror or Lambert. Returns 0 when the path ends. */
+static int scatter_surface(pixel_ctx *c, path_state *ps, const hit_record *h, int *medium_events)
+{
+    const scene *s = c->s;
+    const surface *sf = &s->surfaces[h->surface];
+    const bsdf *b = &s->bsdfs[sf->bsdf];
+    ps->time += medium_eta(s, ps->medium) * h->t;
+    vec3 n_in = v3_dot(ps->d, h->ng) < 0.0 ? h->ng : v3_neg(h->ng); /* facing the arriving path */
+    if (bsdf_is_passthrough(b)) {
+        ps->medium = surface_next_medium(sf, ps->medium, ps->d, h->ng);
+        ps->o = offset_ray_origin(h->p, v3_neg(n_in));
+        return 1;
+    }
+    ps->depth++;
+    *medium_events = 0;
+    if (b->type == BSDF_MIRROR) {
+        ps->d = v3_sub(ps->d, v3_scale(h->ng, 2.0 * v3_dot(ps->d, h->ng)));
+    } else {
+        lambert_ctx lc = {n_in};
+        path_state at = *ps;
+        at.beta = v3_mul(ps->beta, b->albedo);
+        if (counts(&s->integrator, ps->depth + 1))
+            connect_lights(c, &at, offset_ray_origin(h->p, n_in), eval_lambert_cos, &lc);
+        vec3 l = sample_cosine_hemisphere(rng_uniform(c->rng), rng_uniform(c->rng)), t1, t2;
+        v3_basis(n_in, &t1, &t2);
+        ps->d = v3_norm(v3_add(v3_add(v3_scale(t1, l.x), v3_scale(t2, l.y)), v3_scale(n_in, l.z)));
+    }
+    ps->beta = v3_mul(ps->beta, b->albedo);
+    ps->medium = surface_next_medium(sf, ps->medium, ps->d, h->ng);
+    ps->o = offset_ray_origin(h->p, n_in);
+    return 1;
+}
+
+/* Russian roulette after a few vertices, and termination once the path time is past the window:
+ * every later contribution arrives later still. Returns 0 when the path ends. */
+static int survive(pixel_ctx *c, path_state *ps)
+{
+    const time_window *tw = &c->s->integrator.window;
+    if (tw->gated && ps->time >= time_window_end(tw)) return 0;
+    if (v3_is_zero(ps->beta) || !v3_is_finite(ps->beta)) return 0;
+    if (!c->s->integrator.enable_rr || ps->depth < 5) return 1;
+    double q = fmin(1.0, v3_max(ps->beta));
+    if (rng_uniform(c->rng) >= q) return 0;
+    ps->beta = v3_scale(ps->beta, 1.0 / q);
+    return 1;
+}
+
+static void trace_camera_path(pixel_ctx *c, vec3 d)
+{
+    const scene *s = c->s;
+    path_state ps = {.o = s->cam.pos, .d = d, .medium = s->cam.medium, .beta = v3s(1.0)};
+    int medium_events = 0;
+    for (int guard = 0; guard < 100000; guard++) {
+        if (ps.depth >= s->integrator.max_bounces - 1) return; /* no later path can count */
+        hit_record h;
+        c->rays += 1;
+        int hit = scene_intersect(s, ps.o, ps.d, INFINITY, &h);
+        double tmax = hit ? h.t : INFINITY;
+        if (ps.medium != MEDIUM_VACUUM) {
+            int event;
+            double t = sample_free_flight(&s->media[ps.medium], tmax, c->rng, &ps.beta, &event);
+            if (event) {
+                if (!scatter_medium(c, &ps, t, &medium_events) || !survive(c, &ps)) return;
+                continue;
+            }
+        }
+        if (!hit || !scatter_surface(c, &ps, &h, &medium_events) || !survive(c, &ps)) return;
+    }
+}
+
+double path_tracer_pass(const scene *s, film *f, uint64_t seed, long pass, long *nonfinite)
+{
+    const camera *cam = &s->cam;
+    double rays = 0.0;
+    long bad = 0;
+#pragma omp parallel for schedule(dynamic, 1) reduction(+ : rays, bad)
+    for (int y = 0; y < cam->height; y++) {
+        for (int x = 0; x < cam->width; x++) {
+            size_t px = (size_t)y * cam->width + x;
+            dp_rng rng = rng_stream(seed, (uint64_t)pass, px);
+            pixel_ctx c = {.s = s, .f = f, .px = px, .rng = &rng};
+            double jx = rng_uniform(&rng), jy = rng_uniform(&rng);
+            trace_camera_path(&c, camera_ray_dir(cam, x + jx, y + jy));
+            rays += c.rays;
+            bad += c.nonfinite;
+        }
+    }
+    *nonfinite += bad;
+    return rays;
+}

@@ -1,0 +1,78 @@
+/* The progressive driver: passes until the pass count or the time budget is reached (or an interrupt),
+ * with a progress line on stderr. Passes are independent draws; the film holds their running mean. */
+#include "dartspp/render.h"
+
+#include <omp.h>
+#include <stdio.h>
+#include <time.h>
+#include <unistd.h>
+
+static double now_seconds(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return ts.tv_sec + 1e-9 * ts.tv_nsec;
+}
+
+typedef struct {
+    int tty;
+    double last_print;
+} progress_line;
+
+static void progress_print(progress_line *pl, const render_stats *st, long spp, double limit, int final)
+{
+    double now = st->seconds;
+    if (!final && now - pl->last_print < (pl->tty ? 0.25 : 5.0)) return;
+    pl->last_print = now;
+    char left[64] = "";
+    double rem = -1;
+    if (limit > 0) rem = limit - now;
+    if (spp > 0 && st->passes > 0) {
+        double by_spp = (spp - st->passes) * now / st->passes;
+        rem = rem < 0 ? by_spp : (by_spp < rem ? by_spp : rem);
+    }
+    if (rem >= 0) snprintf(left, sizeof left, ", %.1f s left", rem < 0 ? 0 : rem);
+    char total[32] = "";
+    if (spp > 0) snprintf(total, sizeof total, "/%ld", spp);
+    fprintf(stderr, "%spass %ld%s  %.1f s%s  %.2f M camera rays/s  %.2f M rays/s%s", pl->tty ? "\r\033[K" : "",
+            st->passes, total, now, left, now > 0 ? st->camera_rays / now * 1e-6 : 0.0,
+            now > 0 ? st->rays / now * 1e-6 : 0.0, pl->tty && !final ? "" : "\n");
+    fflush(stderr);
+}
+
+static int keep_going(const render_stats *st, long spp, double limit, volatile sig_atomic_t *stop)
+{
+    if (stop && *stop) return 0;
+    if (st->passes == 0) return 1;
+    if (spp > 0 && st->passes >= spp) return 0;
+    if (limit > 0) {
+        double per_pass = st->seconds / st->passes;
+        if (st->seconds + 0.5 * per_pass >= limit) return 0;
+    }
+    return 1;
+}
+
+int render_scene(const scene *s, const render_options *opt, film *f, render_stats *st, dp_error *err)
+{
+    *st = (render_stats){0};
+    if (s->integrator.type != INTEGRATOR_PATH_TRACER)
+        return dp_fail(err, "%s: integrator '%s' is not implemented yet (available: path_tracer)", s->path,
+                       s->integrator.type_name);
+    if (film_init(f, s->cam.width, s->cam.height, &s->integrator.window, err)) return -1;
+    if (opt->threads > 0) omp_set_num_threads(opt->threads);
+    long spp = opt->spp >= 0 ? opt->spp : s->renderer.spp;
+    double limit = opt->time_limit >= 0 ? opt->time_limit : s->renderer.timeout_seconds;
+    progress_line pl = {.tty = isatty(2), .last_print = -1e9};
+    double t0 = now_seconds();
+    while (keep_going(st, spp, limit, opt->stop)) {
+        st->rays += path_tracer_pass(s, f, opt->seed, st->passes, &f->nonfinite);
+        st->camera_rays += (double)s->cam.width * s->cam.height;
+        f->passes = ++st->passes;
+        st->seconds = now_seconds() - t0;
+        if (opt->progress) progress_print(&pl, st, spp, limit, 0);
+    }
+    st->nonfinite = f->nonfinite;
+    st->interrupted = opt->stop && *opt->stop;
+    if (opt->progress) progress_print(&pl, st, spp, limit, 1);
+    return 0;
+}

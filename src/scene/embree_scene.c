@@ -1,0 +1,143 @@
+/* Ray queries through Embree 3: one triangle geometry per surface (geomID = surface index), robust
+ * (watertight) traversal, hit points from barycentrics, self-intersection avoided by offsetting origins. */
+#include "scene_internal.h"
+
+#include <embree3/rtcore.h>
+#include <string.h>
+
+static void embree_error(void *user, enum RTCError code, const char *str)
+{
+    (void)user;
+    (void)code;
+    (void)str; /* reported through rtcGetDeviceError where it matters */
+}
+
+int scene_build_embree(scene *s, dp_error *err)
+{
+    RTCDevice dev = rtcNewDevice("threads=0");
+    if (!dev) return dp_fail(err, "%s: cannot create the Embree device (error %d)", s->path, (int)rtcGetDeviceError(NULL));
+    rtcSetDeviceErrorFunction(dev, embree_error, NULL);
+    RTCScene sc = rtcNewScene(dev);
+    rtcSetSceneFlags(sc, RTC_SCENE_FLAG_ROBUST);
+    rtcSetSceneBuildQuality(sc, RTC_BUILD_QUALITY_HIGH);
+    for (int i = 0; i < s->surface_count; i++) {
+        const surface *sf = &s->surfaces[i];
+        RTCGeometry g = rtcNewGeometry(dev, RTC_GEOMETRY_TYPE_TRIANGLE);
+        float *vb = rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float),
+                                            3 * (size_t)sf->tri_count);
+        unsigned *ib = rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned),
+                                               sf->tri_count);
+        if (!vb || !ib) {
+            rtcReleaseGeometry(g);
+            rtcReleaseScene(sc);
+            rtcReleaseDevice(dev);
+            return dp_fail(err, "%s: Embree could not allocate the geometry of '%s'", s->path, sf->name);
+        }
+        /* unshared vertices: each triangle's corners copied, so local index = 3·tri + corner */
+        for (uint32_t t = 0; t < sf->tri_count; t++) {
+            const uint32_t *tri = &s->tris[3 * (size_t)(sf->first_tri + t)];
+            for (int k = 0; k < 3; k++) {
+                memcpy(&vb[9 * (size_t)t + 3 * k], &s->verts[3 * (size_t)tri[k]], 3 * sizeof(float));
+                ib[3 * (size_t)t + k] = 3 * t + (unsigned)k;
+            }
+        }
+        rtcCommitGeometry(g);
+        rtcAttachGeometryByID(sc, g, (unsigned)i);
+        rtcReleaseGeometry(g);
+    }
+    rtcCommitScene(sc);
+    if (rtcGetDeviceError(dev) != RTC_ERROR_NONE) {
+        rtcReleaseScene(sc);
+        rtcReleaseDevice(dev);
+        return dp_fail(err, "%s: Embree failed to build the scene", s->path);
+    }
+    s->rt_device = dev;
+    s->rt_scene = sc;
+    return 0;
+}
+
+void scene_release_embree(scene *s)
+{
+    if (s->rt_scene) rtcReleaseScene((RTCScene)s->rt_scene);
+    if (s->rt_device) rtcReleaseDevice((RTCDevice)s->rt_device);
+    s->rt_scene = s->rt_device = NULL;
+}
+
+static vec3 vert(const scene *s, uint32_t i)
+{
+    const float *p = &s->verts[3 * (size_t)i];
+    return v3(p[0], p[1], p[2]);
+}
+
+int scene_intersect(const scene *s, vec3 o, vec3 d, double tmax, hit_record *h)
+{
+    struct RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    struct RTCRayHit rh;
+    rh.ray.org_x = (float)o.x;
+    rh.ray.org_y = (float)o.y;
+    rh.ray.org_z = (float)o.z;
+    rh.ray.dir_x = (float)d.x;
+    rh.ray.dir_y = (float)d.y;
+    rh.ray.dir_z = (float)d.z;
+    rh.ray.tnear = 0.0f;
+    rh.ray.tfar = tmax > 3e38 ? INFINITY : (float)tmax;
+    rh.ray.mask = 0xFFFFFFFFu;
+    rh.ray.flags = 0;
+    rh.ray.time = 0.0f;
+    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    rtcIntersect1((RTCScene)s->rt_scene, &ctx, &rh);
+    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return 0;
+    const surface *sf = &s->surfaces[rh.hit.geomID];
+    const uint32_t *tri = &s->tris[3 * (size_t)(sf->first_tri + rh.hit.primID)];
+    vec3 p0 = vert(s, tri[0]), p1 = vert(s, tri[1]), p2 = vert(s, tri[2]);
+    double u = rh.hit.u, v = rh.hit.v;
+    h->t = rh.ray.tfar;
+    h->p = v3_add(v3_scale(p0, 1.0 - u - v), v3_add(v3_scale(p1, u), v3_scale(p2, v)));
+    h->ng = v3_norm(v3_cross(v3_sub(p1, p0), v3_sub(p2, p0)));
+    h->surface = (int)rh.hit.geomID;
+    return 1;
+}
+
+/* Wächter & Binder, "A Fast and Robust Method for Avoiding Self-Intersection" (Ray Tracing Gems, ch. 6):
+ * move the float position by a few ulps along n, or by a fixed amount near the origin. */
+static float offset_component(float p, double n)
+{
+    const float origin = 1.0f / 32.0f, float_scale = 1.0f / 65536.0f, int_scale = 256.0f;
+    if (fabsf(p) < origin) return p + float_scale * (float)n;
+    int32_t of = (int32_t)(int_scale * n), bits;
+    memcpy(&bits, &p, 4);
+    bits += (p < 0) ? -of : of;
+    float r;
+    memcpy(&r, &bits, 4);
+    return r;
+}
+
+vec3 offset_ray_origin(vec3 p, vec3 n)
+{
+    return v3(offset_component((float)p.x, n.x), offset_component((float)p.y, n.y), offset_component((float)p.z, n.z));
+}
+
+int scene_transmittance(const scene *s, vec3 p, int med, vec3 q, vec3 *tr, double *time)
+{
+    *tr = v3s(1.0);
+    for (int crossing = 0; crossing < 256; crossing++) {
+        vec3 dq = v3_sub(q, p);
+        double dist = v3_len(dq);
+        if (dist <= 0.0) return 1;
+        vec3 d = v3_scale(dq, 1.0 / dist);
+        hit_record h;
+        int hit = scene_intersect(s, p, d, dist * (1.0 - 1e-7), &h);
+        double seg = hit ? h.t : dist;
+        if (med != MEDIUM_VACUUM) *tr = v3_mul(*tr, v3_exp_neg(v3_scale(s->media[med].sigma_t, seg)));
+        *time += medium_eta(s, med) * seg;
+        if (!hit) return 1;
+        const surface *sf = &s->surfaces[h.surface];
+        if (!bsdf_is_passthrough(&s->bsdfs[sf->bsdf])) break;
+        med = surface_next_medium(sf, med, d, h.ng);
+        p = offset_ray_origin(h.p, v3_dot(d, h.ng) > 0 ? h.ng : v3_neg(h.ng));
+    }
+    *tr = v3s(0.0);
+    return 0;
+}

@@ -1,0 +1,484 @@
+/* Scene files: the Tungsten JSON subset of docs/scene-format.md §2.4. Top level: media, bsdfs,
+ * primitives, camera, integrator, renderer. Unknown keys are ignored (listed with verbose). */
+#include "scene_internal.h"
+#include "settings.h"
+
+#include <errno.h>
+#include <libgen.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+static const char *const top_keys[] = {"media", "bsdfs", "primitives", "camera", "integrator", "renderer", NULL};
+static const char *const medium_keys[] = {"name", "type", "sigma_s", "sigma_a", "density", "speed_of_light",
+                                          "max_bounces", "phase_function", NULL};
+static const char *const bsdf_keys[] = {"name", "type", "albedo", NULL};
+static const char *const prim_keys[] = {"name", "type", "transform", "bsdf", "emission", "power", "int_medium",
+                                        "ext_medium", "file", "smooth", "backface_culling", "recompute_normals", NULL};
+static const char *const camera_keys[] = {"type", "resolution", "fov", "transform", "medium", NULL};
+
+static char *read_text_file(const char *path, dp_error *err)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f) {
+        dp_fail(err, "%s: cannot open scene file: %s", path, strerror(errno));
+        return NULL;
+    }
+    fseek(f, 0, SEEK_END);
+    long n = ftell(f);
+    fseek(f, 0, SEEK_SET);
+    if (n < 0 || n > (1L << 30)) {
+        fclose(f);
+        dp_fail(err, "%s: cannot read scene file (size %ld)", path, n);
+        return NULL;
+    }
+    char *text = malloc((size_t)n + 1);
+    size_t got = text ? fread(text, 1, (size_t)n, f) : 0;
+    fclose(f);
+    if (!text || got != (size_t)n) {
+        free(text);
+        dp_fail(err, "%s: cannot read scene file", path);
+        return NULL;
+    }
+    text[n] = 0;
+    return text;
+}
+
+/* Line and column of a byte offset, for parse errors. */
+static void line_col(const char *text, const char *at, int *line, int *col)
+{
+    *line = 1;
+    *col = 1;
+    for (const char *p = text; p < at && *p; p++) {
+        if (*p == '\n') {
+            (*line)++;
+            *col = 1;
+        } else (*col)++;
+    }
+}
+
+/* ---- named references (bsdf, media) ---- */
+
+static int find_medium(const scene *s, const char *name)
+{
+    for (int i = 0; i < s->medium_count; i++)
+        if (!strcmp(s->media[i].name, name)) return i;
+    return -2;
+}
+
+static int find_bsdf_named(const scene *s, const cJSON *names, const char *name)
+{
+    for (int i = 0; i < s->bsdf_count; i++) {
+        const cJSON *n = cJSON_GetArrayItem(names, i);
+        if (n && cJSON_IsString(n) && !strcmp(n->valuestring, name)) return i;
+    }
+    return -1;
+}
+
+/* ---- media ---- */
+
+static int parse_phase(json_ctx *c, const cJSON *v, const char *where, phase_function *pf)
+{
+    pf->type = PHASE_ISOTROPIC;
+    pf->g = 0.0;
+    if (!v) return 0;
+    if (!cJSON_IsObject(v)) return jfail(c, where, "phase_function", "expected an object");
+    char w[256];
+    snprintf(w, sizeof w, "%s.phase_function", where);
+    const char *type = "isotropic";
+    if (jget_string(c, v, w, "type", &type) < 0) return -1;
+    if (!strcmp(type, "isotropic")) pf->type = PHASE_ISOTROPIC;
+    else if (!strcmp(type, "henyey_greenstein")) pf->type = PHASE_HENYEY_GREENSTEIN;
+    else if (!strcmp(type, "ida")) pf->type = PHASE_IDA;
+    else return jfail(c, w, "type", "unsupported phase function '%s' (supported: isotropic, henyey_greenstein, ida)", type);
+    if (pf->type != PHASE_ISOTROPIC && jget_number_range(c, v, w, "g", 0.0, -0.999, 0.999, &pf->g)) return -1;
+    return 0;
+}
+
+static int parse_medium(json_ctx *c, const cJSON *v, int i, medium *m)
+{
+    char w[64];
+    snprintf(w, sizeof w, "media[%d]", i);
+    if (!cJSON_IsObject(v)) return jfail(c, w, NULL, "expected an object");
+    jnote_unknown_keys(c, v, w, medium_keys);
+    const char *name = "", *type = "homogeneous";
+    if (jget_string(c, v, w, "name", &name) < 0 || jget_string(c, v, w, "type", &type) < 0) return -1;
+    if (strlen(name) >= sizeof m->name) return jfail(c, w, "name", "longer than %zu characters", sizeof m->name - 1);
+    snprintf(m->name, sizeof m->name, "%s", name);
+    if (!strcmp(type, "homogeneous")) m->guided = 0;
+    else if (!strcmp(type, "guided_homo")) m->guided = 1;
+    else return jfail(c, w, "type", "unsupported medium '%s' (supported: homogeneous, guided_homo)", type);
+    double density, speed;
+    long maxb;
+    if (jget_vec3(c, v, w, "sigma_s", v3s(0), &m->sigma_s) || jget_vec3(c, v, w, "sigma_a", v3s(0), &m->sigma_a) ||
+        jget_number_range(c, v, w, "density", 1.0, 0.0, 0.0, &density) ||
+        jget_number(c, v, w, "speed_of_light", 1.0, &speed) || jget_int(c, v, w, "max_bounces", 1024, &maxb))
+        return -1;
+    if (m->sigma_s.x < 0 || m->sigma_s.y < 0 || m->sigma_s.z < 0)
+        return jfail(c, w, "sigma_s", "must be >= 0 in every channel");
+    if (m->sigma_a.x < 0 || m->sigma_a.y < 0 || m->sigma_a.z < 0)
+        return jfail(c, w, "sigma_a", "must be >= 0 in every channel");
+    if (!(speed > 0)) return jfail(c, w, "speed_of_light", "must be > 0 (got %g)", speed);
+    if (maxb < 0) return jfail(c, w, "max_bounces", "must be >= 0");
+    m->sigma_s = v3_scale(m->sigma_s, density);
+    m->sigma_a = v3_scale(m->sigma_a, density);
+    m->sigma_t = v3_add(m->sigma_s, m->sigma_a);
+    if (m->guided && v3_max(m->sigma_s) <= 0) return jfail(c, w, "sigma_s", "guided_homo needs sigma_s > 0");
+    m->eta = 1.0 / speed;
+    m->max_bounces = maxb > 1 << 30 ? 1 << 30 : (int)maxb;
+    return parse_phase(c, cJSON_GetObjectItemCaseSensitive(v, "phase_function"), w, &m->phase);
+}
+
+static int parse_media(json_ctx *c, const cJSON *root, scene *s)
+{
+    const cJSON *arr = cJSON_GetObjectItemCaseSensitive(root, "media");
+    if (!arr) return 0;
+    if (!cJSON_IsArray(arr)) return jfail(c, "media", NULL, "expected an array");
+    s->medium_count = cJSON_GetArraySize(arr);
+    s->media = calloc((size_t)s->medium_count + 1, sizeof(medium));
+    for (int i = 0; i < s->medium_count; i++) {
+        if (parse_medium(c, cJSON_GetArrayItem(arr, i), i, &s->media[i])) return -1;
+        for (int j = 0; j < i; j++)
+            if (s->media[i].name[0] && !strcmp(s->media[i].name, s->media[j].name))
+                return jfail(c, "media", NULL, "two media are named '%s'", s->media[i].name);
+    }
+    return 0;
+}
+
+/* A medium reference: a name or an inline object (appended to s->media). */
+static int medium_ref(json_ctx *c, scene *s, const cJSON *v, const char *where, const char *key, int *out)
+{
+    if (cJSON_IsNull(v)) {
+        *out = MEDIUM_VACUUM;
+        return 0;
+    }
+    if (cJSON_IsString(v)) {
+        if (!v->valuestring[0]) {
+            *out = MEDIUM_VACUUM;
+            return 0;
+        }
+        int k = find_medium(s, v->valuestring);
+        if (k < 0) return jfail(c, where, key, "no medium named '%s' in media[]", v->valuestring);
+        *out = k;
+        return 0;
+    }
+    if (cJSON_IsObject(v)) {
+        medium *grown = realloc(s->media, ((size_t)s->medium_count + 1) * sizeof(medium));
+        if (!grown) return jfail(c, where, key, "out of memory");
+        s->media = grown;
+        memset(&s->media[s->medium_count], 0, sizeof(medium));
+        if (parse_medium(c, v, s->medium_count, &s->media[s->medium_count])) return -1;
+        *out = s->medium_count++;
+        return 0;
+    }
+    return jfail(c, where, key, "expected a medium name or object");
+}
+
+/* ---- BSDFs ---- */
+
+static int parse_albedo(json_ctx *c, const cJSON *v, const char *where, scene *s, vec3 *albedo)
+{
+    const cJSON *a = cJSON_GetObjectItemCaseSensitive(v, "albedo");
+    if (cJSON_IsString(a)) {
+        char path[2100];
+        snprintf(path, sizeof path, "%s/%s", s->dir, a->valuestring);
+        FILE *f = fopen(path, "rb");
+        if (f) fclose(f);
+        jwarn(c, "%s.albedo: texture '%s' %s; using the constant albedo 0.5", where, a->valuestring,
+              f ? "ignored (textures are not supported)" : "not found");
+        *albedo = v3s(0.5);
+        return 0;
+    }
+    if (jget_vec3(c, v, where, "albedo", v3s(1.0), albedo)) return -1;
+    if (albedo->x < 0 || albedo->y < 0 || albedo->z < 0) return jfail(c, where, "albedo", "must be >= 0");
+    return 0;
+}
+
+static int parse_bsdf(json_ctx *c, const cJSON *v, const char *where, scene *s, bsdf *b)
+{
+    if (!cJSON_IsObject(v)) return jfail(c, where, NULL, "expected a BSDF object");
+    jnote_unknown_keys(c, v, where, bsdf_keys);
+    const char *type = "lambert";
+    if (jget_string(c, v, where, "type", &type) < 0) return -1;
+    if (!strcmp(type, "lambert")) b->type = BSDF_LAMBERT;
+    else if (!strcmp(type, "mirror")) b->type = BSDF_MIRROR;
+    else if (!strcmp(type, "null")) b->type = BSDF_NULL;
+    else if (!strcmp(type, "forward")) b->type = BSDF_FORWARD;
+    else return jfail(c, where, "type", "unsupported BSDF '%s' (supported: lambert, mirror, null, forward)", type);
+    return parse_albedo(c, v, where, s, &b->albedo);
+}
+
+static int parse_bsdfs(json_ctx *c, const cJSON *root, scene *s, const cJSON **names)
+{
+    const cJSON *arr = cJSON_GetObjectItemCaseSensitive(root, "bsdfs");
+    *names = NULL;
+    if (!arr) return 0;
+    if (!cJSON_IsArray(arr)) return jfail(c, "bsdfs", NULL, "expected an array");
+    s->bsdf_count = cJSON_GetArraySize(arr);
+    s->bsdfs = calloc((size_t)s->bsdf_count + 1, sizeof(bsdf));
+    cJSON *list = cJSON_CreateArray();
+    *names = list;
+    for (int i = 0; i < s->bsdf_count; i++) {
+        char w[64];
+        snprintf(w, sizeof w, "bsdfs[%d]", i);
+        const cJSON *v = cJSON_GetArrayItem(arr, i);
+        if (parse_bsdf(c, v, w, s, &s->bsdfs[i])) return -1;
+        const char *name = "";
+        if (jget_string(c, v, w, "name", &name) < 0) return -1;
+        cJSON_AddItemToArray(list, cJSON_CreateString(name));
+    }
+    return 0;
+}
+
+/* A BSDF reference: a name or an inline object (appended to s->bsdfs). */
+static int bsdf_ref(json_ctx *c, scene *s, const cJSON *names, const cJSON *v, const char *where, int *out)
+{
+    if (!v) return jfail(c, where, "bsdf", "missing (every surface needs a BSDF)");
+    if (cJSON_IsString(v)) {
+        int k = names ? find_bsdf_named(s, names, v->valuestring) : -1;
+        if (k < 0) return jfail(c, where, "bsdf", "no BSDF named '%s' in bsdfs[]", v->valuestring);
+        *out = k;
+        return 0;
+    }
+    if (cJSON_IsArray(v)) return jfail(c, where, "bsdf", "per-triangle BSDF arrays are not supported");
+    bsdf *grown = realloc(s->bsdfs, ((size_t)s->bsdf_count + 1) * sizeof(bsdf));
+    if (!grown) return jfail(c, where, "bsdf", "out of memory");
+    s->bsdfs = grown;
+    char w[256];
+    snprintf(w, sizeof w, "%s.bsdf", where);
+    if (parse_bsdf(c, v, w, s, &s->bsdfs[s->bsdf_count])) return -1;
+    *out = s->bsdf_count++;
+    return 0;
+}
+
+/* ---- primitives ---- */
+
+static int append_surface_mesh(json_ctx *c, scene *s, const tri_mesh *m, const xform *T, surface *sf, const char *where)
+{
+    if (m->nt == 0) return jfail(c, where, NULL, "the shape has no triangles");
+    uint32_t base = s->vert_count;
+    if ((uint64_t)s->vert_count + m->nv > (1u << 31) || (uint64_t)s->tri_count + m->nt > (1u << 31))
+        return jfail(c, where, NULL, "the scene has too many triangles");
+    float *v = realloc(s->verts, 3 * sizeof(float) * ((size_t)s->vert_count + m->nv));
+    if (!v) return jfail(c, where, NULL, "out of memory");
+    s->verts = v;
+    uint32_t *t = realloc(s->tris, 3 * sizeof(uint32_t) * ((size_t)s->tri_count + m->nt));
+    if (!t) return jfail(c, where, NULL, "out of memory");
+    s->tris = t;
+    for (uint32_t i = 0; i < m->nv; i++) {
+        vec3 p = xform_point(T, v3(m->pos[3 * i], m->pos[3 * i + 1], m->pos[3 * i + 2]));
+        if (!v3_is_finite(p)) return jfail(c, where, "transform", "maps a vertex to a non-finite position");
+        s->verts[3 * (size_t)(base + i)] = (float)p.x;
+        s->verts[3 * (size_t)(base + i) + 1] = (float)p.y;
+        s->verts[3 * (size_t)(base + i) + 2] = (float)p.z;
+    }
+    for (uint32_t i = 0; i < 3 * m->nt; i++) s->tris[3 * (size_t)s->tri_count + i] = base + m->idx[i];
+    sf->first_tri = s->tri_count;
+    sf->tri_count = m->nt;
+    s->vert_count += m->nv;
+    s->tri_count += m->nt;
+    return 0;
+}
+
+static int load_shape(json_ctx *c, scene *s, const cJSON *v, const char *where, const char *type, tri_mesh *m)
+{
+    if (!strcmp(type, "quad")) mesh_make_quad(m);
+    else if (!strcmp(type, "cube")) mesh_make_cube(m);
+    else {
+        const char *file = NULL;
+        if (jget_string(c, v, where, "file", &file) <= 0) return file ? -1 : jfail(c, where, "file", "missing (a mesh needs a file)");
+        char path[2100];
+        snprintf(path, sizeof path, "%s%s%s", file[0] == '/' ? "" : s->dir, file[0] == '/' ? "" : "/", file);
+        size_t n = strlen(file);
+        dp_error merr;
+        int rc;
+        if (n > 4 && !strcmp(file + n - 4, ".wo3")) rc = mesh_load_wo3(path, m, &merr);
+        else if (n > 4 && !strcmp(file + n - 4, ".obj")) rc = mesh_load_obj(path, m, &merr);
+        else return jfail(c, where, "file", "'%s': unsupported mesh format (supported: .wo3, .obj)", file);
+        if (rc) return jfail(c, where, "file", "%s", merr.msg);
+    }
+    return 0;
+}
+
+static int parse_point_light(json_ctx *c, scene *s, const cJSON *v, const char *where, const xform *T)
+{
+    point_light L = {0};
+    const char *name = "";
+    jget_string(c, v, where, "name", &name);
+    snprintf(L.name, sizeof L.name, "%s", name);
+    L.pos = T->pos;
+    int has_e = cJSON_HasObjectItem(v, "emission"), has_p = cJSON_HasObjectItem(v, "power");
+    if (has_e && has_p) return jfail(c, where, "power", "give either emission or power, not both");
+    if (!has_e && !has_p) return jfail(c, where, "emission", "a point light needs emission (intensity) or power");
+    if (jget_vec3(c, v, where, has_e ? "emission" : "power", v3s(0), &L.intensity)) return -1;
+    if (L.intensity.x < 0 || L.intensity.y < 0 || L.intensity.z < 0)
+        return jfail(c, where, has_e ? "emission" : "power", "must be >= 0");
+    if (has_p) L.intensity = v3_scale(L.intensity, DP_INV_4PI);
+    L.medium = MEDIUM_VACUUM;
+    const cJSON *em = cJSON_GetObjectItemCaseSensitive(v, "ext_medium");
+    if (em && medium_ref(c, s, em, where, "ext_medium", &L.medium)) return -1;
+    point_light *grown = realloc(s->lights, ((size_t)s->light_count + 1) * sizeof(point_light));
+    if (!grown) return jfail(c, where, NULL, "out of memory");
+    s->lights = grown;
+    s->lights[s->light_count++] = L;
+    return 0;
+}
+
+static int parse_surface(json_ctx *c, scene *s, const cJSON *names, const cJSON *v, const char *where,
+                         const char *type, const xform *T)
+{
+    surface sf = {0};
+    const char *name = "";
+    jget_string(c, v, where, "name", &name);
+    snprintf(sf.name, sizeof sf.name, "%s", name[0] ? name : where);
+    if (cJSON_HasObjectItem(v, "emission") || cJSON_HasObjectItem(v, "power"))
+        return jfail(c, where, "emission", "emissive %s primitives (area lights) are not supported (supported lights: point)", type);
+    if (bsdf_ref(c, s, names, cJSON_GetObjectItemCaseSensitive(v, "bsdf"), where, &sf.bsdf)) return -1;
+    const cJSON *im = cJSON_GetObjectItemCaseSensitive(v, "int_medium");
+    const cJSON *em = cJSON_GetObjectItemCaseSensitive(v, "ext_medium");
+    sf.int_medium = sf.ext_medium = MEDIUM_VACUUM;
+    sf.overrides_media = im || em;
+    if (im && medium_ref(c, s, im, where, "int_medium", &sf.int_medium)) return -1;
+    if (em && medium_ref(c, s, em, where, "ext_medium", &sf.ext_medium)) return -1;
+    tri_mesh m = {0};
+    int rc = load_shape(c, s, v, where, type, &m);
+    if (!rc) rc = append_surface_mesh(c, s, &m, T, &sf, where);
+    tri_mesh_free(&m);
+    if (rc) return rc;
+    surface *grown = realloc(s->surfaces, ((size_t)s->surface_count + 1) * sizeof(surface));
+    if (!grown) return jfail(c, where, NULL, "out of memory");
+    s->surfaces = grown;
+    s->surfaces[s->surface_count++] = sf;
+    return 0;
+}
+
+static int parse_primitives(json_ctx *c, const cJSON *root, scene *s, const cJSON *names)
+{
+    const cJSON *arr = cJSON_GetObjectItemCaseSensitive(root, "primitives");
+    if (!arr) return 0;
+    if (!cJSON_IsArray(arr)) return jfail(c, "primitives", NULL, "expected an array");
+    for (int i = 0; i < cJSON_GetArraySize(arr); i++) {
+        char w[64];
+        snprintf(w, sizeof w, "primitives[%d]", i);
+        const cJSON *v = cJSON_GetArrayItem(arr, i);
+        if (!cJSON_IsObject(v)) return jfail(c, w, NULL, "expected an object");
+        jnote_unknown_keys(c, v, w, prim_keys);
+        const char *type = NULL;
+        if (jget_string(c, v, w, "type", &type) <= 0) return type ? -1 : jfail(c, w, "type", "missing");
+        xform T;
+        if (xform_parse(c, cJSON_GetObjectItemCaseSensitive(v, "transform"), w, &T)) return -1;
+        int rc;
+        if (!strcmp(type, "point")) rc = parse_point_light(c, s, v, w, &T);
+        else if (!strcmp(type, "mesh") || !strcmp(type, "quad") || !strcmp(type, "cube"))
+            rc = parse_surface(c, s, names, v, w, type, &T);
+        else rc = jfail(c, w, "type", "unsupported primitive '%s' (supported: mesh, quad, cube, point)", type);
+        if (rc) return rc;
+    }
+    return 0;
+}
+
+/* ---- camera ---- */
+
+static int parse_camera(json_ctx *c, const cJSON *root, scene *s)
+{
+    const cJSON *v = cJSON_GetObjectItemCaseSensitive(root, "camera");
+    if (!cJSON_IsObject(v)) return jfail(c, "camera", NULL, v ? "expected an object" : "missing");
+    jnote_unknown_keys(c, v, "camera", camera_keys);
+    const char *type = "pinhole";
+    if (jget_string(c, v, "camera", "type", &type) < 0) return -1;
+    if (strcmp(type, "pinhole")) return jfail(c, "camera", "type", "unsupported camera '%s' (supported: pinhole)", type);
+    camera *cam = &s->cam;
+    cam->width = 512;
+    cam->height = 512;
+    const cJSON *res = cJSON_GetObjectItemCaseSensitive(v, "resolution");
+    if (res) {
+        double w, h;
+        if (cJSON_IsNumber(res)) w = h = res->valuedouble;
+        else if (cJSON_IsArray(res) && cJSON_GetArraySize(res) == 2 && cJSON_IsNumber(cJSON_GetArrayItem(res, 0)) &&
+                 cJSON_IsNumber(cJSON_GetArrayItem(res, 1))) {
+            w = cJSON_GetArrayItem(res, 0)->valuedouble;
+            h = cJSON_GetArrayItem(res, 1)->valuedouble;
+        } else return jfail(c, "camera", "resolution", "expected [width, height]");
+        if (!(w >= 1 && h >= 1 && w <= 65536 && h <= 65536 && w * h <= 1 << 28))
+            return jfail(c, "camera", "resolution", "must be between 1 and 65536 per side (got %g x %g)", w, h);
+        cam->width = (int)w;
+        cam->height = (int)h;
+    }
+    if (jget_number(c, v, "camera", "fov", 60.0, &cam->fov_deg)) return -1;
+    if (!(cam->fov_deg > 0 && cam->fov_deg < 180)) return jfail(c, "camera", "fov", "must be in (0, 180) degrees (got %g)", cam->fov_deg);
+    xform T;
+    if (xform_parse(c, cJSON_GetObjectItemCaseSensitive(v, "transform"), "camera", &T)) return -1;
+    cam->pos = T.pos;
+    cam->right = v3_neg(v3_norm(T.x)); /* Tungsten negates the camera's x axis */
+    cam->up = v3_norm(T.y);
+    cam->forward = v3_norm(T.z);
+    cam->plane_dist = 1.0 / tan(0.5 * cam->fov_deg * M_PI / 180.0);
+    cam->medium = MEDIUM_VACUUM;
+    const cJSON *m = cJSON_GetObjectItemCaseSensitive(v, "medium");
+    return m ? medium_ref(c, s, m, "camera", "medium", &cam->medium) : 0;
+}
+
+/* ---- top level ---- */
+
+static void set_dir(scene *s, const char *path)
+{
+    snprintf(s->path, sizeof s->path, "%s", path);
+    char tmp[1024];
+    snprintf(tmp, sizeof tmp, "%s", path);
+    snprintf(s->dir, sizeof s->dir, "%s", dirname(tmp));
+}
+
+static int parse_all(json_ctx *c, cJSON *root, scene *s, const scene_load_options *opt)
+{
+    if (!cJSON_IsObject(root)) return jfail(c, "(top level)", NULL, "expected a JSON object");
+    jnote_unknown_keys(c, root, "", top_keys);
+    if (settings_apply_overrides(c, root, opt ? opt->sets : NULL, opt ? opt->set_count : 0)) return -1;
+    const cJSON *names = NULL;
+    int rc = parse_media(c, root, s);
+    if (!rc) rc = parse_bsdfs(c, root, s, &names);
+    if (!rc) rc = parse_primitives(c, root, s, names);
+    if (!rc) rc = parse_camera(c, root, s);
+    if (!rc) rc = settings_parse(c, root, s);
+    cJSON_Delete((cJSON *)names);
+    return rc;
+}
+
+int scene_load(const char *path, const scene_load_options *opt, scene *s, dp_error *err)
+{
+    memset(s, 0, sizeof *s);
+    set_dir(s, path);
+    char *text = read_text_file(path, err);
+    if (!text) return -1;
+    strbuf notes = {0};
+    json_ctx c = {.file = path, .err = err, .verbose = opt ? opt->verbose : 0, .notes = &notes};
+    const char *end = NULL;
+    cJSON *root = cJSON_ParseWithOpts(text, &end, 1);
+    int rc;
+    if (!root) {
+        int line, col;
+        const char *at = cJSON_GetErrorPtr();
+        line_col(text, at ? at : text, &line, &col);
+        rc = dp_fail(err, "%s:%d:%d: malformed JSON", path, line, col);
+    } else {
+        rc = parse_all(&c, root, s, opt);
+    }
+    cJSON_Delete(root);
+    free(text);
+    s->notes = notes.text;
+    if (!rc) rc = scene_build_embree(s, err);
+    if (rc) scene_free(s);
+    return rc;
+}
+
+void scene_free(scene *s)
+{
+    scene_release_embree(s);
+    free(s->bsdfs);
+    free(s->media);
+    free(s->surfaces);
+    free(s->lights);
+    free(s->verts);
+    free(s->tris);
+    free(s->notes);
+    memset(s, 0, sizeof *s);
+}
