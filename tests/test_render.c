@@ -54,7 +54,7 @@ static void test_frames_sum_to_union_gate(void **state)
     (void)state;
     const char *frames[] = {"frame_num=4", "start_time=7", "transient_time_width=0.5"};
     const char *gate[] = {"transient_time_center=8", "transient_time_width=2"};
-    const char *gate1[] = {"transient_time_center=7.75", "transient_time_width=0.5"};
+    const char *gate1[] = {"transient_time_center=7.25", "transient_time_width=0.5"};
     scene sf, sg, s1;
     load("scenes/fogbox/fogbox.json", frames, 3, &sf);
     load("scenes/fogbox/fogbox.json", gate, 2, &sg);

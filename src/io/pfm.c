@@ -170,7 +170,7 @@ int pfm_read(const char *path, image_rgb *img, dp_error *err)
     img->rgb = NULL;
     FILE *f = fopen(path, "rb");
     if (!f) return dp_fail(err, "%s: cannot open: %s", path, strerror(errno));
-    pfm_header h;
+    pfm_header h = {0, 0, 0, 0, 0};
     int rc = read_header(f, path, &h, err);
     if (rc == 0 && image_alloc(img, h.width, h.height, err) != 0) {
         char why[sizeof err->msg];
