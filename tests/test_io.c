@@ -8,6 +8,8 @@
 #include <ftw.h>
 #include <openexr.h>
 #include <png.h>
+#include <signal.h>
+#include <sys/resource.h>
 #include <sys/stat.h>
 
 /* ---- helpers ---- */
@@ -420,6 +422,9 @@ static void test_pfm_bad_inputs(void **state)
     expect_read_error(pfm_read, path);
     test_write_file(path, "PF\n1 1");
     expect_read_error(pfm_read, path);
+    const unsigned char trailing[10 + 24] = {'P', 'F', '\n', '1', ' ', '1', '\n', '-', '1', '\n'};
+    write_bytes(path, trailing, sizeof trailing); /* 1x1 RGB is 12 bytes of data, not 24 */
+    expect_read_error(pfm_read, path);
     test_write_file(path, "");
     expect_read_error(pfm_read, path);
     join(path, sizeof path, dir, "missing.pfm");
@@ -453,6 +458,59 @@ static void test_quantile_known_set(void **state)
     assert_true(image_quantile(&img, 0.5) == 7.0); /* sorted 2,3,4,6,7,..: ceil(4.5)-1 = 4 */
     for (int i = 0; i < 12; ++i) img.rgb[i] = NAN;
     assert_true(image_quantile(&img, 0.5) == 0.0);
+    image_free(&img);
+}
+
+static void test_quantile_negative_values(void **state)
+{
+    (void)state;
+    image_rgb img;
+    /* sorted: -10, -3, -0.5, 0, 1.25, 2 */
+    const float v[6] = {-3, -0.5f, 2, -10, 0, 1.25f};
+    fill(&img, 2, 1, v);
+    assert_true(image_quantile(&img, 0.0) == -10.0);
+    assert_true(image_quantile(&img, 0.3) == -3.0);  /* ceil(1.8)-1 = 1 */
+    assert_true(image_quantile(&img, 0.34) == -0.5); /* ceil(2.04)-1 = 2 */
+    assert_true(image_quantile(&img, 0.5) == -0.5);  /* ceil(3)-1 = 2 */
+    assert_true(image_quantile(&img, 0.51) == 0.0);  /* ceil(3.06)-1 = 3 */
+    assert_true(image_quantile(&img, 1.0) == 2.0);
+    image_free(&img);
+}
+
+static int cmp_float(const void *a, const void *b)
+{
+    float x = *(const float *)a, y = *(const float *)b;
+    return (x > y) - (x < y);
+}
+
+/* Against the definition: sort the finite values, take index ceil(q*n)-1. Random values of both
+ * signs and many magnitudes, with repeats, zeros and non-finite values mixed in. */
+static void test_quantile_matches_sorted_definition(void **state)
+{
+    (void)state;
+    image_rgb img;
+    dp_error err;
+    assert_int_equal(image_alloc(&img, 101, 37, &err), 0);
+    size_t total = 101 * 37 * 3, n = 0;
+    float *sorted = malloc(total * sizeof *sorted);
+    assert_non_null(sorted);
+    uint32_t s = 99;
+    for (size_t i = 0; i < total; ++i) {
+        s = s * 1664525u + 1013904223u;
+        int kind = (int)(s >> 28);
+        float mag = (float)((s >> 8) & 0xfffff) * ldexpf(1.0f, (int)((s >> 3) & 31) - 20);
+        img.rgb[i] = kind == 0 ? 0.0f : kind == 1 ? NAN : kind == 2 ? INFINITY : kind == 3 ? 0.75f
+                   : (kind & 1) ? -mag : mag;
+        if (isfinite(img.rgb[i])) sorted[n++] = img.rgb[i];
+    }
+    qsort(sorted, n, sizeof *sorted, cmp_float);
+    const double qs[] = {0.0, 0.001, 0.1, 0.25, 0.5, 0.7, 0.9, 0.99, 0.999, 1.0};
+    for (size_t i = 0; i < sizeof qs / sizeof *qs; ++i) {
+        double r = ceil(qs[i] * (double)n) - 1.0;
+        size_t k = r < 0 ? 0 : (size_t)r;
+        assert_true(image_quantile(&img, qs[i]) == (double)sorted[k]);
+    }
+    free(sorted);
     image_free(&img);
 }
 
@@ -677,6 +735,51 @@ static void test_atomic_missing_folder_and_make_parent_dirs(void **state)
     remove_tree(dir);
 }
 
+/* A write that fails half-way (file size limit) reports the path, leaves the old file untouched
+ * and removes its temporary file. */
+static void test_atomic_failed_write_keeps_old_file(void **state)
+{
+    (void)state;
+    char *dir = test_tmpdir(), path[512];
+    image_rgb img;
+    dp_error err = {{0}};
+    noise_image(&img, 64, 64); /* 48 KiB of pixels */
+    const char *names[] = {"f.exr", "f.pfm", "f.png", "f.csv"};
+    long before[4];
+    for (int i = 0; i < 4; ++i) {
+        join(path, sizeof path, dir, names[i]);
+        test_write_file(path, "old");
+        before[i] = file_size(path);
+    }
+    struct rlimit old, lim;
+    assert_int_equal(getrlimit(RLIMIT_FSIZE, &old), 0);
+    lim = old;
+    lim.rlim_cur = 4096;
+    void (*old_handler)(int) = signal(SIGXFSZ, SIG_IGN);
+    assert_int_equal(setrlimit(RLIMIT_FSIZE, &lim), 0);
+    int rc[4];
+    dp_error msgs[4];
+    for (int i = 0; i < 4; ++i) {
+        join(path, sizeof path, dir, names[i]);
+        rc[i] = i == 0   ? exr_write(path, &img, NULL, &msgs[i])
+                : i == 1 ? pfm_write(path, &img, &msgs[i])
+                : i == 2 ? png_write_preview(path, &img, &msgs[i])
+                         : frames_csv_write(path, 1000, 0.0, 1.0, &msgs[i]);
+    }
+    setrlimit(RLIMIT_FSIZE, &old);
+    signal(SIGXFSZ, old_handler);
+    for (int i = 0; i < 4; ++i) {
+        join(path, sizeof path, dir, names[i]);
+        assert_int_not_equal(rc[i], 0);
+        assert_non_null(strstr(msgs[i].msg, path));
+        assert_int_equal(file_size(path), before[i]);
+    }
+    assert_int_equal(count_temp_files(dir), 0);
+    (void)err;
+    image_free(&img);
+    remove_tree(dir);
+}
+
 static void test_atomic_open_commit_abort(void **state)
 {
     (void)state;
@@ -773,6 +876,8 @@ int main(void)
         cmocka_unit_test(test_pfm_grey_and_big_endian),
         cmocka_unit_test(test_pfm_bad_inputs),
         cmocka_unit_test(test_quantile_known_set),
+        cmocka_unit_test(test_quantile_negative_values),
+        cmocka_unit_test(test_quantile_matches_sorted_definition),
         cmocka_unit_test(test_compare_hand_values),
         cmocka_unit_test(test_compare_nonfinite_excluded),
         cmocka_unit_test(test_compare_zero_reference),
@@ -781,6 +886,7 @@ int main(void)
         cmocka_unit_test(test_png_preview_zero_quantile),
         cmocka_unit_test(test_atomic_no_temp_left),
         cmocka_unit_test(test_atomic_missing_folder_and_make_parent_dirs),
+        cmocka_unit_test(test_atomic_failed_write_keeps_old_file),
         cmocka_unit_test(test_atomic_open_commit_abort),
         cmocka_unit_test(test_frames_csv),
         cmocka_unit_test(test_image_dispatch_by_extension),

@@ -31,7 +31,8 @@ int atomic_commit(int fd, const char *tmp_path, const char *path, dp_error *err)
 void atomic_abort(int fd, const char *tmp_path);
 
 /* Float32 RGB EXR (channels R, G, B, ZIP compression) with the metadata as header attributes
- * `dartspp.timeUnit`, `dartspp.gateStart`, `dartspp.gateEnd`, `dartspp.cameraWarped`, `dartspp.frame`. */
+ * `dartspp.timeUnit`, `dartspp.gateStart`/`dartspp.gateEnd` (gated images only), `dartspp.cameraWarped`,
+ * `dartspp.frame` (-1 for a gate image) and `dartspp.integrator` (when not NULL); none when meta is NULL. */
 int exr_write(const char *path, const image_rgb *img, const image_meta *meta, dp_error *err);
 /* Reads R,G,B (or Y as grey) of any pixel type into float; other channels ignored. */
 int exr_read(const char *path, image_rgb *img, dp_error *err);
@@ -49,7 +50,7 @@ int png_write_preview(const char *path, const image_rgb *img, dp_error *err);
 int image_write(const char *path, const image_rgb *img, const image_meta *meta, dp_error *err);
 int image_read(const char *path, image_rgb *img, dp_error *err);
 
-/* The q-quantile (0..1) of all finite channel values (nearest-rank on the sorted values); 0 if none. */
+/* The q-quantile (0..1) of all finite channel values (nearest-rank); 0 if none, NaN if out of memory. */
 double image_quantile(const image_rgb *img, double q);
 
 /* Error of an image against a reference of the same size. Pixels with a non-finite channel in either

@@ -42,34 +42,68 @@ static size_t image_values(const image_rgb *img)
     return (size_t)img->width * (size_t)img->height * 3;
 }
 
-static int cmp_float(const void *a, const void *b)
+/* Finite floats mapped to unsigned keys in the same order (sign flipped, negatives inverted). */
+static uint32_t float_key(float v)
 {
-    float x = *(const float *)a, y = *(const float *)b;
-    return (x > y) - (x < y);
+    uint32_t u;
+    memcpy(&u, &v, sizeof u);
+    return (u & 0x80000000u) ? ~u : (u | 0x80000000u);
 }
 
-/* Nearest rank: the value at index ceil(q*n)-1 (clamped) of the sorted finite values.
- * Returns -1 when out of memory; *out = 0 when there are no finite values. */
-static int quantile_of(const image_rgb *img, double q, double *out)
+static float key_float(uint32_t k)
+{
+    uint32_t u = (k & 0x80000000u) ? (k & 0x7fffffffu) : ~k;
+    float v;
+    memcpy(&v, &u, sizeof v);
+    return v;
+}
+
+/* Histogram of the finite values by the high 16 bits of their key or, with `low`, by the low 16 bits
+ * of those whose high bits equal `high`. Returns how many values were counted. */
+static size_t count_keys(const image_rgb *img, size_t *hist, int low, uint32_t high)
 {
     size_t total = image_values(img), n = 0;
+    memset(hist, 0, 65536 * sizeof *hist);
+    for (size_t i = 0; i < total; ++i) {
+        if (!isfinite(img->rgb[i])) continue;
+        uint32_t k = float_key(img->rgb[i]);
+        if (low && (k >> 16) != high) continue;
+        hist[low ? (k & 0xffffu) : (k >> 16)]++;
+        n++;
+    }
+    return n;
+}
+
+/* The bucket holding the value of rank *k (0-based, < the histogram total); *k becomes its rank
+ * inside that bucket. */
+static uint32_t find_bucket(const size_t *hist, size_t *k)
+{
+    uint32_t b = 0;
+    while (*k >= hist[b]) *k -= hist[b++];
+    return b;
+}
+
+/* Nearest rank: the value at index ceil(q*n)-1 (clamped) of the sorted finite values, found by a
+ * two-pass radix select (no sort, no copy of the image). Returns -1 when out of memory; *out = 0 when
+ * there are no finite values. */
+static int quantile_of(const image_rgb *img, double q, double *out)
+{
     *out = 0.0;
-    if (total == 0) return 0;
-    float *v = malloc(total * sizeof *v);
-    if (!v) return -1;
-    for (size_t i = 0; i < total; ++i)
-        if (isfinite(img->rgb[i])) v[n++] = img->rgb[i];
+    size_t *hist = malloc(65536 * sizeof *hist);
+    if (!hist) return -1;
+    size_t n = count_keys(img, hist, 0, 0);
     if (n > 0) {
-        qsort(v, n, sizeof *v, cmp_float);
         double rank = ceil((isnan(q) ? 0.0 : q) * (double)n) - 1.0;
         size_t k = rank <= 0.0 ? 0 : (rank >= (double)(n - 1) ? n - 1 : (size_t)rank);
-        *out = v[k];
+        uint32_t high = find_bucket(hist, &k);
+        count_keys(img, hist, 1, high);
+        *out = key_float(high << 16 | find_bucket(hist, &k));
     }
-    free(v);
+    free(hist);
     return 0;
 }
 
-/* NaN if the temporary copy of the values cannot be allocated. */
+/* NaN if the histogram cannot be allocated. */
 double image_quantile(const image_rgb *img, double q)
 {
     double r;

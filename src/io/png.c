@@ -72,8 +72,9 @@ static int write_stream(FILE *f, const image_rgb *img, dp_error *err)
     double scale = q > 0.0 ? q : 1.0; /* 0 (or no usable quantile): show the values as they are */
     png_byte *row = malloc((size_t)img->width * 3);
     int rc = row ? encode(f, img, scale, row, err) : dp_fail(err, "out of memory");
+    int e = errno;
     free(row);
-    if (rc == 0 && ferror(f)) rc = dp_fail(err, "write failed: %s", strerror(errno));
+    if (ferror(f)) rc = dp_fail(err, "write failed: %s", strerror(e)); /* better than libpng's text */
     if (fclose(f) != 0 && rc == 0) rc = dp_fail(err, "write failed: %s", strerror(errno));
     return rc;
 }
@@ -93,7 +94,7 @@ int png_write_preview(const char *path, const image_rgb *img, dp_error *err)
         atomic_abort(fd, tmp);
         return dp_fail(err, "%s: cannot open for writing: %s", path, strerror(e));
     }
-    dp_error local;
+    dp_error local = {{0}};
     if (write_stream(f, img, &local) != 0) {
         atomic_abort(fd, tmp);
         return dp_fail(err, "%s: %s", path, local.msg);
