@@ -1,0 +1,39 @@
+/* dartspp photon: photon records, the photon pass, and the two photon maps — volume photons answering
+ * "every photon within r of the segment o + tω, 0 <= t <= t_max", surface photons answering "k nearest
+ * within R" (FLANN kd-tree, exact search). Maps are rebuilt every iteration. */
+#ifndef DARTSPP_PHOTON_H
+#define DARTSPP_PHOTON_H
+
+#include "dartspp/core.h"
+
+typedef struct {
+    float pos[3];
+    float dir[3];     /* propagation direction of the segment arriving at pos (unit) */
+    float power[3];   /* already divided by the number of light paths (DESIGN / reference §8.3) */
+    int bounce;       /* path segments from the light to this photon */
+    double time;      /* light-to-photon path time (optical path length) */
+} photon;
+
+/* ---- volume photon map ---- */
+typedef struct volume_photon_map volume_photon_map;
+
+/* Builds the map over n photons (copied), each with the same gather radius r >= 0. NULL + err on failure. */
+volume_photon_map *volume_map_build(const photon *ph, size_t n, double r, dp_error *err);
+void volume_map_free(volume_photon_map *m);
+size_t volume_map_size(const volume_photon_map *m);
+
+/* Called for every photon p with t = (p - o)·d in [0, tmax] and d2 = |p - o|^2 - t^2 <= r^2
+ * (d unit; tmax may be INFINITY). Visit order is fixed by the map, so results are deterministic. */
+typedef void (*beam_visit_fn)(void *ctx, const photon *p, double t, double d2);
+void photon_map_query_beam(const volume_photon_map *m, vec3 o, vec3 d, double tmax, beam_visit_fn visit, void *ctx);
+
+/* ---- surface photon map ---- */
+typedef struct surface_photon_map surface_photon_map;
+
+surface_photon_map *surface_map_build(const photon *ph, size_t n, dp_error *err);
+void surface_map_free(surface_photon_map *m);
+/* Up to k photons nearest to x with squared distance < R^2, nearest first: indices into the photon
+ * array given to surface_map_build, and their squared distances. Returns the count found. Thread-safe. */
+int photon_map_query_knn(const surface_photon_map *m, vec3 x, int k, double R, int *idx, double *d2);
+
+#endif
