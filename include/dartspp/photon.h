@@ -36,4 +36,24 @@ void surface_map_free(surface_photon_map *m);
  * array given to surface_map_build, and their squared distances. Returns the count found. Thread-safe. */
 int photon_map_query_knn(const surface_photon_map *m, vec3 x, int k, double R, int *idx, double *d2);
 
+/* ---- photon pass ----
+ * Light paths from the point lights (light picked uniformly, direction uniform): photons stored at medium
+ * scattering vertices (volume) and at hits on Lambertian surfaces (surface), never on null/forward
+ * surfaces. Budgets: at most `photon_count` paths; surface and volume budgets `photon_count` and
+ * `volume_photon_count`. A map keeps the photons of the leading paths whose photons all fit (the cut is
+ * decided by path index, so the result does not depend on the thread count), and its powers are divided
+ * by that number of paths. */
+typedef struct {
+    photon *vol, *surf;
+    size_t n_vol, n_surf;
+    long paths;            /* light paths traced */
+    long vol_paths;        /* paths the volume powers are divided by */
+    long surf_paths;
+    long nonfinite;        /* photons dropped for a non-finite power */
+} photon_set;
+
+struct scene;
+int photon_pass(const struct scene *s, uint64_t seed, long iteration, photon_set *out, dp_error *err);
+void photon_set_free(photon_set *ps);
+
 #endif

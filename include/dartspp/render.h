@@ -47,6 +47,9 @@ typedef struct {
     double rays;            /* all rays traced (primary, bounce, shadow) */
     long nonfinite;
     int interrupted;
+    double photon_paths;    /* light paths traced (photon points) */
+    double stored_photons;  /* volume + surface photons stored, summed over iterations */
+    double r_vol, r_surf;   /* radii of the last iteration */
 } render_stats;
 
 /* Renders the scene with its integrator into f (initialised here). */
@@ -55,6 +58,13 @@ int render_scene(const scene *s, const render_options *opt, film *f, render_stat
 /* One pass of the reference path tracer over every pixel; returns rays traced. Deterministic: the
  * samples of pixel p in pass i come from rng_stream(seed, i, p). */
 double path_tracer_pass(const scene *s, film *f, uint64_t seed, long pass, long *nonfinite);
+
+/* Progressive radius of iteration i (0-based): r0 · (Π_{j=1..i} (j+α)/(j+1))^{1/dims}; dims 2 shrinks the
+ * kernel area by (j+α)/(j+1) per step (Knaus & Zwicker 2011), dims 3 is the reference's cube root. */
+double progressive_radius(double r0, double alpha, long iteration, int dims);
+
+/* One iteration of photon points: photon pass, maps, sensor pass into f. Returns 0 or -1 with err. */
+int photon_points_pass(const scene *s, film *f, uint64_t seed, long iteration, render_stats *st, dp_error *err);
 
 /* ---- outputs ----
  * Writes the gate image to `path` (.exr or .pfm), a PNG preview `<stem>.png`, and in frame mode one image

@@ -27,8 +27,15 @@ double phase_eval(const phase_function *pf, vec3 w_in, vec3 w_out);
 /* Samples ω_out ∝ phase; the weight phase/pdf is exactly 1. */
 vec3 phase_sample(const phase_function *pf, vec3 w_in, double u1, double u2);
 
+/* Free flight from a segment start with the next surface at tmax (may be INFINITY): one colour channel
+ * picked uniformly, pdf averaged over channels (one-sample MIS), so coloured media stay unbiased. Returns
+ * the distance; *event = 1 for a medium event (distance < tmax). beta is multiplied by Tr·σs/pdf at an
+ * event and by Tr/P(pass) otherwise. */
+struct medium;
+double medium_sample_free_flight(const struct medium *m, double tmax, dp_rng *rng, vec3 *beta, int *event);
+
 #define MEDIUM_VACUUM (-1)
-typedef struct {
+typedef struct medium {
     char name[64];
     int guided;        /* "guided_homo": DARTS samplers allowed */
     vec3 sigma_s;      /* per unit length, density applied */
@@ -104,6 +111,9 @@ typedef struct {
     double gather_radius, volume_gather_radius, alpha, volume_alpha;
     int fixed_volume_radius, include_surfaces, low_order_scattering;
     int enable_guiding, enable_elliptical, strict_time_width;
+    int volume_beams;               /* volume_photon_type "beams": loads, refused at render time */
+    int camera_leg_projected;       /* camera_leg: "euclidean" (reference, default) or "projected" */
+    int radius_schedule_3d;         /* radius_schedule: "2d" (default) or "3d" (reference cube root) */
 } integrator_settings;
 
 typedef struct {

@@ -79,26 +79,6 @@ static double eval_lambert_cos(const void *ctx, vec3 w)
     return c > 0.0 ? c * DP_INV_PI : 0.0;
 }
 
-/* Free flight in a homogeneous medium with spectral σt: returns the distance (< tmax for a medium event)
- * and multiplies beta by the transmittance (and σs at an event) over the one-sample-MIS pdf. */
-static double sample_free_flight(const medium *m, double tmax, dp_rng *rng, vec3 *beta, int *event)
-{
-    int ch = (int)(rng_uniform(rng) * 3.0);
-    double st = v3_comp(m->sigma_t, ch > 2 ? 2 : ch);
-    double t = st > 0.0 ? -log1p(-rng_uniform(rng)) / st : INFINITY;
-    *event = t < tmax;
-    double dist = *event ? t : tmax;
-    vec3 tr = v3_exp_neg(v3_scale(m->sigma_t, dist));
-    if (*event) {
-        double pdf = v3_avg(v3_mul(m->sigma_t, tr));
-        *beta = pdf > 0.0 ? v3_scale(v3_mul(*beta, v3_mul(m->sigma_s, tr)), 1.0 / pdf) : v3s(0);
-    } else {
-        double p = v3_avg(tr);
-        *beta = p > 0.0 ? v3_scale(v3_mul(*beta, tr), 1.0 / p) : v3s(0);
-    }
-    return dist;
-}
-
 /* Medium vertex: NEE, then phase sampling. Returns 0 when the path ends. */
 static int scatter_medium(pixel_ctx *c, path_state *ps, double t, int *medium_events)
 {
@@ -174,7 +154,7 @@ static void trace_camera_path(pixel_ctx *c, vec3 d)
         double tmax = hit ? h.t : INFINITY;
         if (ps.medium != MEDIUM_VACUUM) {
             int event;
-            double t = sample_free_flight(&s->media[ps.medium], tmax, c->rng, &ps.beta, &event);
+            double t = medium_sample_free_flight(&s->media[ps.medium], tmax, c->rng, &ps.beta, &event);
             if (event) {
                 if (!scatter_medium(c, &ps, t, &medium_events) || !survive(c, &ps)) return;
                 continue;

@@ -34,9 +34,13 @@ static void progress_print(progress_line *pl, const render_stats *st, long spp, 
     if (rem >= 0) snprintf(left, sizeof left, ", %.1f s left", rem < 0 ? 0 : rem);
     char total[32] = "";
     if (spp > 0) snprintf(total, sizeof total, "/%ld", spp);
-    fprintf(stderr, "%spass %ld%s  %.1f s%s  %.2f M camera rays/s  %.2f M rays/s%s", pl->tty ? "\r\033[K" : "",
+    char photons[96] = "";
+    if (st->photon_paths > 0)
+        snprintf(photons, sizeof photons, "  %.2f M photon paths/s  r_vol %.4g  R_surf %.4g",
+                 now > 0 ? st->photon_paths / now * 1e-6 : 0.0, st->r_vol, st->r_surf);
+    fprintf(stderr, "%spass %ld%s  %.1f s%s  %.2f M camera rays/s  %.2f M rays/s%s%s", pl->tty ? "\r\033[K" : "",
             st->passes, total, now, left, now > 0 ? st->camera_rays / now * 1e-6 : 0.0,
-            now > 0 ? st->rays / now * 1e-6 : 0.0, pl->tty && !final ? "" : "\n");
+            now > 0 ? st->rays / now * 1e-6 : 0.0, photons, pl->tty && !final ? "" : "\n");
     fflush(stderr);
 }
 
@@ -55,9 +59,8 @@ static int keep_going(const render_stats *st, long spp, double limit, volatile s
 int render_scene(const scene *s, const render_options *opt, film *f, render_stats *st, dp_error *err)
 {
     *st = (render_stats){0};
-    if (s->integrator.type != INTEGRATOR_PATH_TRACER)
-        return dp_fail(err, "%s: integrator '%s' is not implemented yet (available: path_tracer)", s->path,
-                       s->integrator.type_name);
+    if (s->integrator.volume_beams)
+        return dp_fail(err, "%s: integrator.volume_photon_type: 'beams' is not supported (supported: points)", s->path);
     if (film_init(f, s->cam.width, s->cam.height, &s->integrator.window, err)) return -1;
     if (opt->threads > 0) omp_set_num_threads(opt->threads);
     long spp = opt->spp >= 0 ? opt->spp : s->renderer.spp;
@@ -65,7 +68,12 @@ int render_scene(const scene *s, const render_options *opt, film *f, render_stat
     progress_line pl = {.tty = isatty(2), .last_print = -1e9};
     double t0 = now_seconds();
     while (keep_going(st, spp, limit, opt->stop)) {
-        st->rays += path_tracer_pass(s, f, opt->seed, st->passes, &f->nonfinite);
+        if (s->integrator.type == INTEGRATOR_PATH_TRACER)
+            st->rays += path_tracer_pass(s, f, opt->seed, st->passes, &f->nonfinite);
+        else if (photon_points_pass(s, f, opt->seed, st->passes, st, err)) {
+            film_free(f);
+            return -1;
+        }
         st->camera_rays += (double)s->cam.width * s->cam.height;
         f->passes = ++st->passes;
         st->seconds = now_seconds() - t0;

@@ -125,6 +125,8 @@ static int parse_medium(json_ctx *c, const cJSON *v, int i, medium *m)
     m->sigma_t = v3_add(m->sigma_s, m->sigma_a);
     if (m->guided && v3_max(m->sigma_s) <= 0) return jfail(c, w, "sigma_s", "guided_homo needs sigma_s > 0");
     m->eta = 1.0 / speed;
+    if (!v3_is_finite(m->sigma_t)) return jfail(c, w, "sigma_s", "sigma_s + sigma_a times density overflows");
+    if (!isfinite(m->eta)) return jfail(c, w, "speed_of_light", "too small (got %g)", speed);
     m->max_bounces = maxb > 1 << 30 ? 1 << 30 : (int)maxb;
     return parse_phase(c, cJSON_GetObjectItemCaseSensitive(v, "phase_function"), w, &m->phase);
 }
@@ -267,7 +269,8 @@ static int append_surface_mesh(json_ctx *c, scene *s, const tri_mesh *m, const x
     s->tris = t;
     for (uint32_t i = 0; i < m->nv; i++) {
         vec3 p = xform_point(T, v3(m->pos[3 * i], m->pos[3 * i + 1], m->pos[3 * i + 2]));
-        if (!v3_is_finite(p)) return jfail(c, where, "transform", "maps a vertex to a non-finite position");
+        if (!v3_is_finite(p) || !isfinite((float)p.x) || !isfinite((float)p.y) || !isfinite((float)p.z))
+            return jfail(c, where, "transform", "maps a vertex outside the float range");
         s->verts[3 * (size_t)(base + i)] = (float)p.x;
         s->verts[3 * (size_t)(base + i) + 1] = (float)p.y;
         s->verts[3 * (size_t)(base + i) + 2] = (float)p.z;
@@ -304,7 +307,7 @@ static int parse_point_light(json_ctx *c, scene *s, const cJSON *v, const char *
 {
     point_light L = {0};
     const char *name = "";
-    jget_string(c, v, where, "name", &name);
+    if (jget_string(c, v, where, "name", &name) < 0) return -1;
     snprintf(L.name, sizeof L.name, "%s", name);
     L.pos = T->pos;
     int has_e = cJSON_HasObjectItem(v, "emission"), has_p = cJSON_HasObjectItem(v, "power");
@@ -329,7 +332,7 @@ static int parse_surface(json_ctx *c, scene *s, const cJSON *names, const cJSON 
 {
     surface sf = {0};
     const char *name = "";
-    jget_string(c, v, where, "name", &name);
+    if (jget_string(c, v, where, "name", &name) < 0) return -1;
     snprintf(sf.name, sizeof sf.name, "%s", name[0] ? name : where);
     if (cJSON_HasObjectItem(v, "emission") || cJSON_HasObjectItem(v, "power"))
         return jfail(c, where, "emission", "emissive %s primitives (area lights) are not supported (supported lights: point)", type);

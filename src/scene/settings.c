@@ -11,7 +11,7 @@ static const char *const integrator_keys[] = {
     "enable_volume_light_sampling", "photon_count", "volume_photon_count", "gather_photon_count",
     "gather_radius", "volume_gather_radius", "volume_photon_type", "alpha", "volume_alpha",
     "fixed_volume_radius", "include_surfaces", "low_order_scattering", "enable_guiding", "enable_elliptical",
-    "strict_time_width", "enable_consistency_checks", "enable_two_sided_shading", "exclude_non_mis", "use_grid",
+    "strict_time_width", "camera_leg", "radius_schedule", "enable_consistency_checks", "enable_two_sided_shading", "exclude_non_mis", "use_grid",
     NULL};
 static const char *const renderer_keys[] = {"spp", "spp_step", "timeout", "checkpoint_interval", "output_file",
                                             "hdr_output_file", "output_buffers", "overwrite_output_files",
@@ -39,15 +39,15 @@ int settings_apply_overrides(json_ctx *c, cJSON *root, const char *const *sets, 
 {
     for (int i = 0; i < count; i++) {
         const char *eq = strchr(sets[i], '=');
-        if (!eq || eq == sets[i]) return dp_fail(c->err, "--set %s: expected key=value", sets[i]);
+        if (!eq || eq == sets[i]) return dp_fail(c->err, "%s: --set %s: expected key=value", c->file, sets[i]);
         char key[128];
         size_t n = (size_t)(eq - sets[i]);
-        if (n >= sizeof key) return dp_fail(c->err, "--set %s: key too long", sets[i]);
+        if (n >= sizeof key) return dp_fail(c->err, "%s: --set %s: key too long", c->file, sets[i]);
         memcpy(key, sets[i], n);
         key[n] = 0;
         const char *section = in_list(renderer_keys, key) ? "renderer" : "integrator";
         if (!in_list(renderer_keys, key) && !in_list(integrator_keys, key))
-            return dp_fail(c->err, "--set %s: unknown integrator or renderer key '%s'", sets[i], key);
+            return dp_fail(c->err, "%s: --set %s: unknown integrator or renderer key '%s'", c->file, sets[i], key);
         cJSON *obj = cJSON_GetObjectItemCaseSensitive(root, section);
         if (!obj) obj = cJSON_AddObjectToObject(root, section);
         if (!cJSON_IsObject(obj)) return jfail(c, section, NULL, "expected an object");
@@ -89,6 +89,9 @@ static int parse_window(json_ctx *c, const cJSON *v, integrator_settings *in)
     double center, width, start;
     long frames;
     int delta;
+    /* no gate and no frames asked for: steady state (as the reference path tracer does) */
+    int timed = cJSON_HasObjectItem(v, "transient_time_center") || cJSON_HasObjectItem(v, "frame_num") ||
+                cJSON_HasObjectItem(v, "transient_time_width");
     if (jget_number(c, v, "integrator", "transient_time_center", 0.0, &center) ||
         jget_number(c, v, "integrator", "transient_time_width", 0.1, &width) ||
         jget_number(c, v, "integrator", "start_time", 0.0, &start) ||
@@ -98,6 +101,7 @@ static int parse_window(json_ctx *c, const cJSON *v, integrator_settings *in)
     if (delta) return jfail(c, "integrator", "delta_time_gate", "delta gates are not supported (use a box gate width)");
     if (width < 0) return jfail(c, "integrator", "transient_time_width", "empty time window: width %g < 0", width);
     if (frames > 100000) return jfail(c, "integrator", "frame_num", "at most 100000 frames (got %ld)", frames);
+    if (!timed) width = 0.0;
     time_window *tw = &in->window;
     tw->frame_count = frames > 0 ? (int)frames : 0;
     tw->width = width;
@@ -121,8 +125,9 @@ static int parse_integrator_type(json_ctx *c, const cJSON *v, integrator_setting
     else if (!strcmp(type, "progressive_transient_photon_map")) in->type = INTEGRATOR_PHOTON_POINTS;
     else return jfail(c, "integrator", "type", "unsupported integrator '%s' (supported: path_tracer, progressive_transient_photon_map)", type);
     if (jget_string(c, v, "integrator", "volume_photon_type", &vpt) < 0) return -1;
-    if (in->type == INTEGRATOR_PHOTON_POINTS && strcmp(vpt, "points"))
+    if (strcmp(vpt, "points") && strcmp(vpt, "beams"))
         return jfail(c, "integrator", "volume_photon_type", "'%s' is not supported (supported: points)", vpt);
+    in->volume_beams = !strcmp(vpt, "beams");
     return 0;
 }
 
@@ -144,7 +149,19 @@ static int parse_photon_keys(json_ctx *c, const cJSON *v, integrator_settings *i
         jget_bool(c, v, w, "enable_elliptical", 0, &in->enable_elliptical) ||
         jget_bool(c, v, w, "strict_time_width", 0, &in->strict_time_width))
         return -1;
-    if (k < 1 || k > 100000) return jfail(c, w, "gather_photon_count", "must be in [1, 100000] (got %ld)", k);
+    if (k < 1 || k > 256) return jfail(c, w, "gather_photon_count", "must be in [1, 256] (got %ld)", k);
+    const char *leg = "euclidean", *sched = "2d";
+    if (jget_string(c, v, w, "camera_leg", &leg) < 0 || jget_string(c, v, w, "radius_schedule", &sched) < 0) return -1;
+    if (strcmp(leg, "euclidean") && strcmp(leg, "projected"))
+        return jfail(c, w, "camera_leg", "'%s' is not one of euclidean, projected", leg);
+    if (strcmp(sched, "2d") && strcmp(sched, "3d"))
+        return jfail(c, w, "radius_schedule", "'%s' is not one of 2d, 3d", sched);
+    in->camera_leg_projected = !strcmp(leg, "projected");
+    in->radius_schedule_3d = !strcmp(sched, "3d");
+    if (in->type == INTEGRATOR_PHOTON_POINTS && !(in->volume_gather_radius > 0 && in->volume_gather_radius < 1e29))
+        return jfail(c, w, "volume_gather_radius", "photon points need a finite radius > 0 (got %g)", in->volume_gather_radius);
+    if (in->type == INTEGRATOR_PHOTON_POINTS && !(in->photon_count >= 1))
+        return jfail(c, w, "photon_count", "photon points need at least 1 light path per iteration");
     in->gather_photon_count = (int)k;
     return 0;
 }
@@ -167,6 +184,7 @@ static int parse_integrator(json_ctx *c, const cJSON *root, integrator_settings 
     in->min_bounces = (int)(minb > maxb ? maxb : minb);
     in->max_bounces = (int)maxb;
     in->vacuum_eta = 1.0 / vac_speed;
+    if (!isfinite(in->vacuum_eta)) return jfail(c, "integrator", "vaccum_speed_of_light", "too small (got %g)", vac_speed);
     return parse_window(c, v, in);
 }
 

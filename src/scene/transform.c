@@ -5,12 +5,18 @@
 #include <stdio.h>
 #include <string.h>
 
-/* Gram–Schmidt in the order a, b, c: a is kept (normalised), b and c are made orthogonal to it. */
+/* Gram–Schmidt in the order a, b, c: a is kept (normalised), b and c are made orthogonal to it; an axis
+ * that collapses (parallel to an earlier one) is replaced by a cross product, as Tungsten does. */
 static void gram_schmidt(vec3 *a, vec3 *b, vec3 *c)
 {
     *a = v3_norm(*a);
-    *b = v3_norm(v3_sub(*b, v3_scale(*a, v3_dot(*a, *b))));
-    *c = v3_norm(v3_sub(v3_sub(*c, v3_scale(*a, v3_dot(*a, *c))), v3_scale(*b, v3_dot(*b, *c))));
+    *b = v3_sub(*b, v3_scale(*a, v3_dot(*a, *b)));
+    if (v3_dot(*b, *b) < 1e-10) *b = v3_cross(*a, *c);
+    if (v3_dot(*b, *b) < 1e-10) v3_basis(*a, b, c);
+    *b = v3_norm(*b);
+    *c = v3_sub(v3_sub(*c, v3_scale(*a, v3_dot(*a, *c))), v3_scale(*b, v3_dot(*b, *c)));
+    if (v3_dot(*c, *c) < 1e-10) *c = v3_cross(*a, *b);
+    *c = v3_norm(*c);
 }
 
 /* Rotation by Euler angles in degrees, applied Y·X·Z (Tungsten Mat4f::rotYXZ). */
@@ -21,8 +27,8 @@ static vec3 rot_yxz(vec3 deg, vec3 v)
     vec3 a = v3(v.x * cos(rz) - v.y * sin(rz), v.x * sin(rz) + v.y * cos(rz), v.z);
     /* then X */
     vec3 b = v3(a.x, a.y * cos(rx) - a.z * sin(rx), a.y * sin(rx) + a.z * cos(rx));
-    /* then Y */
-    return v3(b.x * cos(ry) + b.z * sin(ry), b.y, -b.x * sin(ry) + b.z * cos(ry));
+    /* then Y, with Tungsten's sign: [c 0 -s; 0 1 0; s 0 c] */
+    return v3(b.x * cos(ry) - b.z * sin(ry), b.y, b.x * sin(ry) + b.z * cos(ry));
 }
 
 static int parse_matrix16(json_ctx *c, const cJSON *v, const char *where, xform *out)

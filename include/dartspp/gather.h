@@ -1,0 +1,25 @@
+/* dartspp gather: the sensor pass of photon points. One jittered camera ray per pixel, walked through
+ * mirror, null and forward surfaces; along every medium segment the point-beam 2D estimator (biweight
+ * kernel) over the volume photons; at the first Lambertian hit the surface estimate (k nearest within R,
+ * box kernel); camera-warped time for every photon; box gate and frames through the film. */
+#ifndef DARTSPP_GATHER_H
+#define DARTSPP_GATHER_H
+
+#include "dartspp/photon.h"
+#include "dartspp/render.h"
+
+typedef struct {
+    const volume_photon_map *vol;   /* may be NULL */
+    const surface_photon_map *surf; /* may be NULL */
+    const photon *surf_photons;     /* the array the surface map was built over */
+    double r_vol;                   /* volume gather radius of this iteration */
+    double r_surf;                  /* surface search radius R of this iteration */
+    int k_surf;                     /* gather_photon_count */
+    int camera_leg_projected;       /* 0: Euclidean distance segment origin → photon (reference) */
+} gather_input;
+
+/* Adds one camera sample per pixel to f (pixel p of iteration i uses rng_stream(seed, i, p)).
+ * Returns the rays traced; non-finite contributions are dropped and counted in *nonfinite. */
+double sensor_pass(const scene *s, const gather_input *g, film *f, uint64_t seed, long iteration, long *nonfinite);
+
+#endif

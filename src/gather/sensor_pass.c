@@ -1,0 +1,133 @@
+/* The sensor pass of photon points (reference §9 with DESIGN §5). */
+#include <stdlib.h>
+
+#include "dartspp/gather.h"
+
+typedef struct {
+    const scene *s;
+    const gather_input *g;
+    film *f;
+    size_t px;
+    long nonfinite;
+    double rays;
+} pixel_ctx;
+
+typedef struct {
+    pixel_ctx *c;
+    const medium *m;
+    vec3 o, d;
+    vec3 thr;        /* camera throughput up to the segment origin */
+    double t_cam;    /* camera time up to the segment origin */
+    int b_cam;       /* camera segments including this one */
+} beam_ctx;
+
+static int counts(const integrator_settings *in, int segments)
+{
+    return segments <= in->max_bounces && segments - 1 >= in->min_bounces;
+}
+
+static void splat(pixel_ctx *c, double t, vec3 contrib)
+{
+    if (v3_is_zero(contrib)) return;
+    if (!film_splat(c->f, c->px, t, contrib)) c->nonfinite++;
+}
+
+static vec3 photon_vec(const float *v) { return v3(v[0], v[1], v[2]); }
+
+/* Point-beam 2D: biweight kernel 3/(πr²)(1 − d²/r²)² on the disc around the camera ray. */
+static void visit_volume_photon(void *ctx, const photon *p, double t, double d2)
+{
+    beam_ctx *b = ctx;
+    const scene *s = b->c->s;
+    if (!counts(&s->integrator, p->bounce + b->b_cam)) return;
+    double r2 = b->c->g->r_vol * b->c->g->r_vol;
+    double u = 1.0 - d2 / r2;
+    double K = 3.0 / (M_PI * r2) * u * u;
+    vec3 x = photon_vec(p->pos);
+    double leg = b->c->g->camera_leg_projected ? t : v3_len(v3_sub(x, b->o));
+    double time = b->t_cam + p->time + b->m->eta * leg;
+    double f = K * phase_eval(&b->m->phase, photon_vec(p->dir), v3_neg(b->d));
+    vec3 tr = v3_exp_neg(v3_scale(b->m->sigma_t, t));
+    splat(b->c, time, v3_scale(v3_mul(v3_mul(b->thr, tr), photon_vec(p->power)), f));
+}
+
+/* Surface estimate at a Lambertian hit: k nearest within R, box kernel over the disc of the k-th. */
+static void gather_surface(pixel_ctx *c, vec3 x, vec3 n_in, const bsdf *b, vec3 thr, double t_cam, int b_cam)
+{
+    const gather_input *g = c->g;
+    if (!g->surf) return;
+    int idx[256];
+    double d2[256];
+    int k = g->k_surf < 256 ? g->k_surf : 256;
+    int n = photon_map_query_knn(g->surf, x, k, g->r_surf, idx, d2);
+    if (n == 0) return;
+    double r2 = n == k ? d2[n - 1] : g->r_surf * g->r_surf;
+    if (!(r2 > 0.0)) return;
+    vec3 f = v3_scale(b->albedo, DP_INV_PI / (M_PI * r2));
+    for (int i = 0; i < n; i++) {
+        const photon *p = &g->surf_photons[idx[i]];
+        if (v3_dot(photon_vec(p->dir), n_in) >= 0.0) continue; /* arrived on the other side */
+        if (!counts(&c->s->integrator, p->bounce + b_cam)) continue;
+        splat(c, t_cam + p->time, v3_mul(v3_mul(thr, f), photon_vec(p->power)));
+    }
+}
+
+static void trace_sensor_path(pixel_ctx *c, vec3 d)
+{
+    const scene *s = c->s;
+    vec3 o = s->cam.pos, thr = v3s(1.0);
+    int med = s->cam.medium, b_cam = 1;
+    double t_cam = 0.0;
+    for (int guard = 0; guard < 10000 && b_cam <= s->integrator.max_bounces; guard++) {
+        hit_record h;
+        c->rays += 1;
+        int hit = scene_intersect(s, o, d, INFINITY, &h);
+        double len = hit ? h.t : INFINITY;
+        if (med != MEDIUM_VACUUM) {
+            const medium *m = &s->media[med];
+            beam_ctx b = {c, m, o, d, thr, t_cam, b_cam};
+            if (c->g->vol) photon_map_query_beam(c->g->vol, o, d, len, visit_volume_photon, &b);
+            thr = v3_mul(thr, v3_exp_neg(v3_scale(m->sigma_t, len)));
+        }
+        if (!hit || v3_is_zero(thr)) return;
+        t_cam += medium_eta(s, med) * len;
+        const surface *sf = &s->surfaces[h.surface];
+        const bsdf *bs = &s->bsdfs[sf->bsdf];
+        vec3 n_in = v3_dot(d, h.ng) < 0.0 ? h.ng : v3_neg(h.ng);
+        if (bsdf_is_passthrough(bs)) {
+            med = surface_next_medium(sf, med, d, h.ng);
+            o = offset_ray_origin(h.p, v3_neg(n_in));
+            continue;
+        }
+        if (bs->type != BSDF_MIRROR) {
+            gather_surface(c, h.p, n_in, bs, thr, t_cam, b_cam);
+            return;
+        }
+        d = v3_sub(d, v3_scale(h.ng, 2.0 * v3_dot(d, h.ng)));
+        thr = v3_mul(thr, bs->albedo);
+        med = surface_next_medium(sf, med, d, h.ng);
+        o = offset_ray_origin(h.p, n_in);
+        b_cam++;
+    }
+}
+
+double sensor_pass(const scene *s, const gather_input *g, film *f, uint64_t seed, long iteration, long *nonfinite)
+{
+    const camera *cam = &s->cam;
+    double rays = 0.0;
+    long bad = 0;
+#pragma omp parallel for schedule(dynamic, 1) reduction(+ : rays, bad)
+    for (int y = 0; y < cam->height; y++) {
+        for (int x = 0; x < cam->width; x++) {
+            size_t px = (size_t)y * cam->width + x;
+            dp_rng rng = rng_stream(seed, (uint64_t)iteration, px);
+            pixel_ctx c = {.s = s, .g = g, .f = f, .px = px};
+            double jx = rng_uniform(&rng), jy = rng_uniform(&rng);
+            trace_sensor_path(&c, camera_ray_dir(cam, x + jx, y + jy));
+            rays += c.rays;
+            bad += c.nonfinite;
+        }
+    }
+    *nonfinite += bad;
+    return rays;
+}

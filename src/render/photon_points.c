@@ -1,0 +1,40 @@
+/* Progressive photon points, one iteration: photon pass → photon maps (radii of this iteration) →
+ * sensor pass → film. Iterations are independent draws; the film keeps their mean. */
+#include "dartspp/gather.h"
+
+double progressive_radius(double r0, double alpha, long iteration, int dims)
+{
+    double log_ratio = 0.0;
+    for (long j = 1; j <= iteration; j++) log_ratio += log((j + alpha) / (j + 1.0));
+    return r0 * exp(log_ratio / dims);
+}
+
+int photon_points_pass(const scene *s, film *f, uint64_t seed, long iteration, render_stats *st, dp_error *err)
+{
+    const integrator_settings *in = &s->integrator;
+    photon_set ps;
+    if (photon_pass(s, seed, iteration, &ps, err)) return -1;
+    gather_input g = {.k_surf = in->gather_photon_count, .camera_leg_projected = in->camera_leg_projected};
+    g.r_vol = progressive_radius(in->volume_gather_radius, in->volume_alpha, iteration, in->radius_schedule_3d ? 3 : 2);
+    g.r_surf = progressive_radius(in->gather_radius, in->alpha, iteration, 2);
+    volume_photon_map *vm = NULL;
+    surface_photon_map *sm = NULL;
+    int rc = 0;
+    if (ps.n_vol > 0 && !(vm = volume_map_build(ps.vol, ps.n_vol, g.r_vol, err))) rc = -1;
+    if (!rc && ps.n_surf > 0 && !(sm = surface_map_build(ps.surf, ps.n_surf, err))) rc = -1;
+    if (!rc) {
+        g.vol = vm;
+        g.surf = sm;
+        g.surf_photons = ps.surf;
+        st->rays += sensor_pass(s, &g, f, seed, iteration, &f->nonfinite);
+        st->photon_paths += (double)ps.paths;
+        st->stored_photons += (double)(ps.n_vol + ps.n_surf);
+        st->r_vol = g.r_vol;
+        st->r_surf = g.r_surf;
+        f->nonfinite += ps.nonfinite;
+    }
+    volume_map_free(vm);
+    surface_map_free(sm);
+    photon_set_free(&ps);
+    return rc;
+}
