@@ -1,0 +1,345 @@
+/* Volume photon map: a balanced BVH over the photons, answering "every photon within r of the segment
+ * o + t·d, 0 <= t <= tmax" (reference §8.5, §9.3).
+ *
+ * Layout: a perfect binary tree in implicit (heap) order, node i having children 2i+1 and 2i+2; every leaf
+ * sits at the same depth and holds at most LEAF_MAX photons. The photons of the node with index j on level
+ * k are the contiguous range [j·n >> k, (j+1)·n >> k) of the tree-ordered arrays, so no ranges are stored.
+ * The build splits each range at its middle along the largest extent of its photons (quickselect), and
+ * each node keeps the float box of its photons grown by r plus a tiny padding that absorbs rounding.
+ *
+ * Query: iterative depth-first traversal (left child first, so the order is fixed by the map) with a slab
+ * test that stays exact for zero direction components, then the photon test in double:
+ *   w = p - o,  t = w·d,  v = w - t·d,  d2 = v·v   (= |w|^2 - t^2, without its cancellation; never < 0). */
+#include "dartspp/photon.h"
+
+#include <float.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define LEAF_MAX 8                  /* photons per leaf, at most */
+#define STACK_MAX 64                /* traversal stack; the tree depth is below 32 */
+#define PAD_REL 1e-12               /* box padding relative to coordinate size (~4500 double ulps) */
+#define TASK_MIN ((size_t)1 << 15)  /* ranges smaller than this are built without spawning tasks */
+#define INSERTION_MAX 16            /* quickselect finishes ranges this short by insertion sort */
+
+typedef struct {
+    float lo[3], hi[3];
+} node_box;
+
+/* A photon position and its index in the caller's array: the build sorts these 16-byte items, and they
+ * stay in tree order as the compact position array that the leaf tests read. */
+typedef struct {
+    float pos[3];
+    uint32_t src;
+} point_item;
+
+struct volume_photon_map {
+    size_t n;
+    int depth;          /* level of the leaves; the tree has 2^(depth+1) - 1 nodes */
+    double r2;          /* gather radius squared */
+    node_box *boxes;    /* per node: photons' box grown by r (+ padding), rounded outward to float */
+    point_item *points; /* positions, tree order */
+    photon *photons;    /* photon copies, tree order */
+};
+
+typedef struct {
+    size_t n;
+    int depth;
+    double pad; /* how far node boxes reach beyond their photons */
+    point_item *points;
+    node_box *boxes;
+} builder;
+
+/* ---- build ---- */
+
+/* First index of the j-th of the 2^level equal ranges that [0, n) is cut into (n < 2^32, j <= 2^level). */
+static size_t range_start(size_t n, size_t j, int level)
+{
+    return (size_t)(((uint64_t)j * (uint64_t)n) >> level);
+}
+
+/* Smallest depth at which ranges of n photons halved that many times hold at most LEAF_MAX photons. */
+static int leaf_depth(size_t n)
+{
+    int depth = 0;
+    while (((size_t)LEAF_MAX << depth) < n) depth++;
+    return depth;
+}
+
+static void range_bounds(const point_item *pts, size_t count, float mn[3], float mx[3])
+{
+    for (int a = 0; a < 3; a++) mn[a] = mx[a] = pts[0].pos[a];
+    for (size_t i = 1; i < count; i++)
+        for (int a = 0; a < 3; a++) {
+            float x = pts[i].pos[a];
+            if (x < mn[a]) mn[a] = x;
+            if (x > mx[a]) mx[a] = x;
+        }
+}
+
+static int widest_axis(const float mn[3], const float mx[3])
+{
+    double ext[3];
+    for (int a = 0; a < 3; a++) ext[a] = (double)mx[a] - mn[a];
+    return ext[0] >= ext[1] ? (ext[0] >= ext[2] ? 0 : 2) : (ext[1] >= ext[2] ? 1 : 2);
+}
+
+/* Nearest float <= x (resp. >= x), so that float boxes never shrink. */
+static float float_down(double x)
+{
+    float f = (float)x;
+    return (double)f > x ? nextafterf(f, -INFINITY) : f;
+}
+
+static float float_up(double x)
+{
+    float f = (float)x;
+    return (double)f < x ? nextafterf(f, INFINITY) : f;
+}
+
+static void store_box(node_box *box, const float mn[3], const float mx[3], double pad)
+{
+    for (int a = 0; a < 3; a++) {
+        box->lo[a] = float_down((double)mn[a] - pad);
+        box->hi[a] = float_up((double)mx[a] + pad);
+    }
+}
+
+static void swap_items(point_item *a, point_item *b)
+{
+    point_item t = *a;
+    *a = *b;
+    *b = t;
+}
+
+static float median_of_three(float a, float b, float c)
+{
+    if (a > b) { float t = a; a = b; b = t; }
+    if (b > c) b = c;
+    return a > b ? a : b;
+}
+
+static void insertion_sort(point_item *pts, ptrdiff_t lo, ptrdiff_t hi, int axis)
+{
+    for (ptrdiff_t i = lo + 1; i <= hi; i++) {
+        point_item x = pts[i];
+        ptrdiff_t j = i - 1;
+        while (j >= lo && pts[j].pos[axis] > x.pos[axis]) {
+            pts[j + 1] = pts[j];
+            j--;
+        }
+        pts[j + 1] = x;
+    }
+}
+
+/* Reorders pts[0, count) so that pts[k] holds the k-th smallest coordinate along axis, with nothing larger
+ * before it and nothing smaller after it (Hoare partitions around a median of three; duplicates split
+ * evenly because both scans stop on keys equal to the pivot). Deterministic. */
+static void select_nth(point_item *pts, size_t count, size_t k, int axis)
+{
+    ptrdiff_t lo = 0, hi = (ptrdiff_t)count - 1, kk = (ptrdiff_t)k;
+    while (hi - lo >= INSERTION_MAX) {
+        float pivot = median_of_three(pts[lo].pos[axis], pts[lo + (hi - lo) / 2].pos[axis], pts[hi].pos[axis]);
+        ptrdiff_t i = lo, j = hi;
+        while (i <= j) {
+            while (pts[i].pos[axis] < pivot) i++;
+            while (pts[j].pos[axis] > pivot) j--;
+            if (i <= j) swap_items(&pts[i++], &pts[j--]);
+        }
+        /* now [lo, j] <= pivot <= [i, hi], and everything strictly between j and i equals pivot */
+        if (kk <= j) hi = j;
+        else if (kk >= i) lo = i;
+        else return;
+    }
+    insertion_sort(pts, lo, hi, axis);
+}
+
+/* Builds the subtree of node (the j-th node of level): its box, then a median split and the children. */
+static void build_node(const builder *b, size_t node, int level, size_t j)
+{
+    size_t lo = range_start(b->n, j, level), hi = range_start(b->n, j + 1, level);
+    float mn[3], mx[3];
+    range_bounds(b->points + lo, hi - lo, mn, mx);
+    store_box(&b->boxes[node], mn, mx, b->pad);
+    if (level == b->depth) return;
+    size_t mid = range_start(b->n, 2 * j + 1, level + 1);
+    select_nth(b->points + lo, hi - lo, mid - lo, widest_axis(mn, mx));
+    if (hi - lo >= TASK_MIN) {
+#pragma omp task default(none) firstprivate(b, node, level, j)
+        build_node(b, 2 * node + 1, level + 1, 2 * j);
+        build_node(b, 2 * node + 2, level + 1, 2 * j + 1);
+#pragma omp taskwait
+    } else {
+        build_node(b, 2 * node + 1, level + 1, 2 * j);
+        build_node(b, 2 * node + 2, level + 1, 2 * j + 1);
+    }
+}
+
+/* Copies the positions into build items; fails on a non-finite one. Returns the largest |coordinate|. */
+static int gather_points(const photon *ph, size_t n, point_item *pts, double *max_abs, dp_error *err)
+{
+    double m = 0.0;
+    for (size_t i = 0; i < n; i++) {
+        for (int a = 0; a < 3; a++) {
+            float x = ph[i].pos[a];
+            if (!isfinite(x)) return dp_fail(err, "volume photon map: photon %zu has a non-finite position", i);
+            pts[i].pos[a] = x;
+            if (fabs((double)x) > m) m = fabs((double)x);
+        }
+        pts[i].src = (uint32_t)i;
+    }
+    *max_abs = m;
+    return 0;
+}
+
+static void build_tree(builder *b)
+{
+#pragma omp parallel default(none) shared(b)
+#pragma omp single
+    build_node(b, 0, 0, 0);
+}
+
+static void copy_photons_in_tree_order(const photon *ph, const point_item *pts, photon *out, size_t n)
+{
+#pragma omp parallel for schedule(static) default(none) shared(ph, pts, out, n)
+    for (size_t i = 0; i < n; i++) out[i] = ph[pts[i].src];
+}
+
+volume_photon_map *volume_map_build(const photon *ph, size_t n, double r, dp_error *err)
+{
+    if (!(r >= 0.0)) {
+        dp_fail(err, "volume photon map: the gather radius must be >= 0 (got %g)", r);
+        return NULL;
+    }
+    if (n > UINT32_MAX || (n > 0 && !ph)) {
+        dp_fail(err, "volume photon map: %zu photons %s", n, ph ? "are more than 2^32 - 1" : "but no array");
+        return NULL;
+    }
+    volume_photon_map *m = calloc(1, sizeof *m);
+    if (!m) {
+        dp_fail(err, "volume photon map: out of memory");
+        return NULL;
+    }
+    m->n = n;
+    m->r2 = r * r;
+    if (n == 0) return m;
+    m->depth = leaf_depth(n);
+    size_t node_count = ((size_t)2 << m->depth) - 1;
+    m->boxes = malloc(node_count * sizeof *m->boxes);
+    m->points = malloc(n * sizeof *m->points);
+    m->photons = malloc(n * sizeof *m->photons);
+    if (!m->boxes || !m->points || !m->photons) {
+        dp_fail(err, "volume photon map: out of memory for %zu photons", n);
+        volume_map_free(m);
+        return NULL;
+    }
+    double max_abs = 0.0;
+    if (gather_points(ph, n, m->points, &max_abs, err)) {
+        volume_map_free(m);
+        return NULL;
+    }
+    /* boxes reach r beyond their photons, plus PAD_REL of the coordinate scale to cover rounding */
+    builder b = {n, m->depth, r + PAD_REL * (r + max_abs), m->points, m->boxes};
+    build_tree(&b);
+    copy_photons_in_tree_order(ph, m->points, m->photons, n);
+    return m;
+}
+
+void volume_map_free(volume_photon_map *m)
+{
+    if (!m) return;
+    free(m->boxes);
+    free(m->points);
+    free(m->photons);
+    free(m);
+}
+
+size_t volume_map_size(const volume_photon_map *m) { return m ? m->n : 0; }
+
+/* ---- query ---- */
+
+typedef struct {
+    double o[3], d[3];
+    double inv[3];        /* 1/d: ±inf where d is ±0 */
+    int near_hi[3];       /* the slab is entered through its hi plane (d negative or -0) */
+    double near_shift[3]; /* added to the near plane before scaling by inv: -o, widened by the padding */
+    double far_shift[3];
+    double tmax;          /* photon test: t <= tmax */
+    double t_clip;        /* slab test: tmax, or DBL_MAX when tmax is infinite (so +inf entries miss) */
+    double r2;
+} beam;
+
+static beam make_beam(vec3 o, vec3 d, double tmax, double r2)
+{
+    beam q;
+    double oo[3] = {o.x, o.y, o.z}, dd[3] = {d.x, d.y, d.z}, o_max = 0.0;
+    for (int a = 0; a < 3; a++) o_max = fmax(o_max, fabs(oo[a]));
+    double pad = PAD_REL * o_max; /* covers the rounding of p - o for origins far from the photons */
+    for (int a = 0; a < 3; a++) {
+        q.o[a] = oo[a];
+        q.d[a] = dd[a];
+        q.inv[a] = 1.0 / dd[a];
+        q.near_hi[a] = signbit(q.inv[a]) != 0;
+        q.near_shift[a] = q.near_hi[a] ? -oo[a] + pad : -oo[a] - pad;
+        q.far_shift[a] = q.near_hi[a] ? -oo[a] - pad : -oo[a] + pad;
+    }
+    q.tmax = tmax;
+    q.t_clip = fmin(tmax, DBL_MAX);
+    q.r2 = r2;
+    return q;
+}
+
+/* Does the segment [0, tmax] meet the box? Where d_a = ±0, (plane - o)·inv is ±inf (no constraint, or a
+ * miss: +inf entry / -inf exit, caught because the interval is clipped to finite t) or NaN when o lies on
+ * the plane; the comparisons are written so a NaN never changes the interval, which is then the right
+ * answer (o on the boundary of the closed slab). */
+static int beam_meets_box(const beam *q, const node_box *box)
+{
+    double enter = 0.0, leave = q->t_clip;
+    for (int a = 0; a < 3; a++) {
+        double near_plane = q->near_hi[a] ? box->hi[a] : box->lo[a];
+        double far_plane = q->near_hi[a] ? box->lo[a] : box->hi[a];
+        double t_near = (near_plane + q->near_shift[a]) * q->inv[a];
+        double t_far = (far_plane + q->far_shift[a]) * q->inv[a];
+        enter = t_near > enter ? t_near : enter;
+        leave = t_far < leave ? t_far : leave;
+    }
+    return enter <= leave;
+}
+
+static void visit_leaf(const volume_photon_map *m, const beam *q, size_t first, size_t end, beam_visit_fn visit,
+                       void *ctx)
+{
+    for (size_t i = first; i < end; i++) {
+        const float *p = m->points[i].pos;
+        double wx = p[0] - q->o[0], wy = p[1] - q->o[1], wz = p[2] - q->o[2];
+        double t = wx * q->d[0] + wy * q->d[1] + wz * q->d[2];
+        if (!(t >= 0.0 && t <= q->tmax)) continue;
+        /* perpendicular offset v = w - t·d; |v|^2 is |w|^2 - t^2 without the cancellation */
+        double vx = wx - t * q->d[0], vy = wy - t * q->d[1], vz = wz - t * q->d[2];
+        double d2 = vx * vx + vy * vy + vz * vz;
+        if (d2 <= q->r2) visit(ctx, &m->photons[i], t, d2);
+    }
+}
+
+void photon_map_query_beam(const volume_photon_map *m, vec3 o, vec3 d, double tmax, beam_visit_fn visit, void *ctx)
+{
+    if (!m || m->n == 0 || !visit || !(tmax >= 0.0) || !v3_is_finite(o) || !v3_is_finite(d)) return;
+    beam q = make_beam(o, d, tmax, m->r2);
+    size_t first_leaf = ((size_t)1 << m->depth) - 1;
+    size_t stack[STACK_MAX];
+    int top = 0;
+    stack[top++] = 0;
+    while (top > 0) {
+        size_t node = stack[--top];
+        if (!beam_meets_box(&q, &m->boxes[node])) continue;
+        if (node < first_leaf) {
+            stack[top++] = 2 * node + 2; /* right below left: the left subtree is visited first */
+            stack[top++] = 2 * node + 1;
+            continue;
+        }
+        size_t leaf = node - first_leaf;
+        visit_leaf(m, &q, range_start(m->n, leaf, m->depth), range_start(m->n, leaf + 1, m->depth), visit, ctx);
+    }
+}
