@@ -56,7 +56,7 @@ static int int_cmp(const void *a, const void *b)
 }
 
 /* Same count, the same squared distances in the same order (bit for bit), and within every run of equal
- * distances the same set of indices. Returns 0 when equal, else fails with a description. */
+ * distances the same set of indices; fails with a description otherwise. */
 static void check_same(int n_got, const int *i_got, const double *d_got, int n_want, const int *i_want,
                        const double *d_want, const char *what, int line)
 {
@@ -69,9 +69,10 @@ static void check_same(int n_got, const int *i_got, const double *d_got, int n_w
     for (int s = 0; s < n_got;) {
         int e = s + 1;
         while (e < n_got && d_got[e] == d_got[s]) e++;
-        int a[e - s], b[e - s];
-        memcpy(a, i_got + s, sizeof a);
-        memcpy(b, i_want + s, sizeof b);
+        int *a = malloc(sizeof(int) * (size_t)(e - s)), *b = malloc(sizeof(int) * (size_t)(e - s));
+        assert_true(a && b);
+        memcpy(a, i_got + s, sizeof(int) * (size_t)(e - s));
+        memcpy(b, i_want + s, sizeof(int) * (size_t)(e - s));
         qsort(a, (size_t)(e - s), sizeof *a, int_cmp);
         qsort(b, (size_t)(e - s), sizeof *b, int_cmp);
         for (int j = 0; j < e - s; j++) {
@@ -79,6 +80,8 @@ static void check_same(int n_got, const int *i_got, const double *d_got, int n_w
                 fail_msg("line %d (%s): results %d..%d (d2 %.17g) hold index %d, brute force %d", line, what, s,
                          e - 1, d_got[s], a[j], b[j]);
         }
+        free(a);
+        free(b);
         s = e;
     }
 }
@@ -406,6 +409,29 @@ static void test_far_queries(void **state)
     free(ph);
 }
 
+/* Far from the origin a double query is up to ~1e-4 away from its float rounding, a sizeable fraction
+ * of R: the answer must still be the double-exact one. */
+static void test_queries_between_floats(void **state)
+{
+    (void)state;
+    const size_t n = 20000;
+    photon *ph = malloc(n * sizeof *ph);
+    assert_non_null(ph);
+    dp_rng r = rng_stream(91, 0, 0);
+    for (size_t i = 0; i < n; i++)
+        ph[i] = at(1234.5 + 0.05 * rng_uniform(&r), -1.0, 321.25 + 0.05 * rng_uniform(&r));
+    surface_photon_map *m = build_ok(ph, n);
+    for (int q = 0; q < 400; q++) {
+        vec3 x = v3(1234.5 + 0.05 * rng_uniform(&r), -1.0 + 1e-4 * rng_uniform(&r), 321.25 + 0.05 * rng_uniform(&r));
+        CHECK_QUERY(m, ph, n, x, 1, 1e-3);
+        CHECK_QUERY(m, ph, n, x, 20, 1e-3);
+        CHECK_QUERY(m, ph, n, x, 20, 4e-4);
+        CHECK_QUERY(m, ph, n, x, 100, 1e30);
+    }
+    surface_map_free(m);
+    free(ph);
+}
+
 /* A position that is not finite or beyond the float-safe range is refused at build. */
 static void test_build_rejects_bad_positions(void **state)
 {
@@ -446,6 +472,7 @@ static void test_concurrent_queries(void **state)
     memset(d2, 0, sizeof(double) * (size_t)(nq * k));
     int threads = 0;
     int per_thread[2] = {0, 0};
+    omp_set_dynamic(0);
 #pragma omp parallel num_threads(2)
     {
 #pragma omp single
@@ -520,6 +547,7 @@ int main(void)
         cmocka_unit_test(test_strict_radius_and_ties_on_a_grid),
         cmocka_unit_test(test_duplicate_positions),
         cmocka_unit_test(test_far_queries),
+        cmocka_unit_test(test_queries_between_floats),
         cmocka_unit_test(test_build_rejects_bad_positions),
         cmocka_unit_test(test_concurrent_queries),
         cmocka_unit_test(test_rebuild_is_deterministic),

@@ -1,8 +1,9 @@
 /* Surface photon map: "k nearest photons within R of x", exact, on a FLANN single kd-tree (C API).
  *
  * The map copies the photon positions into one contiguous float array (the FLANN dataset, alive for the
- * index lifetime) and builds FLANN_INDEX_KDTREE_SINGLE over it: one deterministic median-of-box kd-tree,
- * no randomness, exact search (eps 0; checks are unlimited, which a single tree ignores anyway).
+ * index lifetime) and builds FLANN_INDEX_KDTREE_SINGLE over it: one kd-tree split at the middle of the
+ * widest box side, no randomness, exact search (eps 0; checks are unlimited, which a single tree ignores
+ * anyway — and the C API forwards only `checks` to a search, not eps, sorted or cores).
  *
  * Distances. FLANN's L2 returns float squared distances from a float copy of the query; they are not
  * what a caller gets from |p - x|^2 in double, and near ties they may order points differently. The map
@@ -22,9 +23,12 @@
  * full radius search and always final.
  *
  * Threads. Queries only read the map. FLANN's kd-tree search is const and keeps its state on the stack
- * and in per-call result sets; every call gets its own FLANNParameters on the stack, with random_seed 0
- * so that the C API does not call srand() on each query. (Every FLANN C call still stores the log level
- * into FLANN's global logger; all calls store the same value, FLANN_LOG_NONE.)
+ * and in per-call result sets. Every FLANN C call first applies its FLANNParameters to process globals:
+ * log_level >= 0 is stored into FLANN's logger and random_seed > 0 calls srand() (reseeding the process's
+ * rand()). So the build sets FLANN_LOG_NONE and the fixed seed, while queries and free pass -1 ("leave as is",
+ * FLANN's own convention) and random_seed = 0, which makes them write no global state; every call gets
+ * its own FLANNParameters on the stack. (Each FLANN search also opens an OpenMP region of one thread,
+ * which costs about a microsecond per query in libgomp.)
  *
  * Coordinates are limited to |c| <= COORD_MAX so that FLANN's float squared distances cannot overflow;
  * queries beyond that range (never produced by a scene) are answered by a linear scan. */
@@ -55,7 +59,8 @@ typedef struct {
     int idx;
 } cand;
 
-static void flann_params(struct FLANNParameters *p, long seed)
+/* build: FLANN_LOG_NONE and BUILD_SEED; queries and free: log level -1 and seed 0 (no global writes) */
+static void flann_params(struct FLANNParameters *p, int build)
 {
     memset(p, 0, sizeof *p);
     p->algorithm = FLANN_INDEX_KDTREE_SINGLE;
@@ -66,8 +71,8 @@ static void flann_params(struct FLANNParameters *p, long seed)
     p->cores = 1;
     p->trees = 1;
     p->leaf_max_size = LEAF_MAX_SIZE;
-    p->log_level = FLANN_LOG_NONE;
-    p->random_seed = seed; /* > 0 makes the C API call srand(seed) */
+    p->log_level = build ? FLANN_LOG_NONE : (enum flann_log_level_t)-1; /* < 0: FLANN leaves its logger */
+    p->random_seed = build ? BUILD_SEED : 0;                              /* > 0: FLANN calls srand() */
 }
 
 static int coord_ok(double c) { return isfinite(c) && fabs(c) <= COORD_MAX; }
@@ -106,7 +111,7 @@ surface_photon_map *surface_map_build(const photon *ph, size_t n, dp_error *err)
     }
     for (size_t i = 0; i < n; i++) memcpy(m->pts + 3 * i, ph[i].pos, 3 * sizeof(float));
     struct FLANNParameters p;
-    flann_params(&p, BUILD_SEED);
+    flann_params(&p, 1);
     float speedup = 0.0f;
     m->index = flann_build_index_float(m->pts, (int)n, 3, &speedup, &p);
     if (!m->index) {
@@ -136,11 +141,18 @@ static double exact_d2(const float *p, vec3 x)
     return dx * dx + dy * dy + dz * dz;
 }
 
-static int cand_cmp(const void *pa, const void *pb)
+static int cand_before(cand a, cand b) { return a.d2 < b.d2 || (a.d2 == b.d2 && a.idx < b.idx); }
+
+/* Insertion sort by (d2, index): FLANN returns candidates sorted by its float distance, so they arrive
+ * nearly in order and this is close to linear. */
+static void cand_sort(cand *c, int n)
 {
-    const cand *a = pa, *b = pb;
-    if (a->d2 != b->d2) return a->d2 < b->d2 ? -1 : 1;
-    return (a->idx > b->idx) - (a->idx < b->idx);
+    for (int i = 1; i < n; i++) {
+        cand v = c[i];
+        int j = i;
+        for (; j > 0 && cand_before(v, c[j - 1]); j--) c[j] = c[j - 1];
+        c[j] = v;
+    }
 }
 
 /* The first k photons with d2 < R2 in (d2, index) order, by a scan, sorted into the caller's arrays. */
@@ -228,7 +240,7 @@ int photon_map_query_knn(const surface_photon_map *m, vec3 x, int k, double R, i
             double d = exact_d2(m->pts + 3 * (size_t)fi[i], x);
             if (d < R2) cd[kept++] = (cand){d, fi[i]};
         }
-        qsort(cd, (size_t)kept, sizeof *cd, cand_cmp);
+        cand_sort(cd, kept);
         int got = kept < k ? kept : k;
         int final = c < mm || mm >= n;
         if (!final) {

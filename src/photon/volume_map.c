@@ -4,8 +4,10 @@
  * Layout: a perfect binary tree in implicit (heap) order, node i having children 2i+1 and 2i+2; every leaf
  * sits at the same depth and holds at most LEAF_MAX photons. The photons of the node with index j on level
  * k are the contiguous range [j·n >> k, (j+1)·n >> k) of the tree-ordered arrays, so no ranges are stored.
- * The build splits each range at its middle along the largest extent of its photons (quickselect), and
- * each node keeps the float box of its photons grown by r plus a tiny padding that absorbs rounding.
+ * The build splits each range at its middle along the largest extent of its photons (a selection, not a
+ * sort: O(n) per level), and each node keeps the float box of its photons grown by r plus a tiny padding
+ * that absorbs rounding. Subtrees are built as OpenMP tasks; each is deterministic, so the map does not
+ * depend on the thread count.
  *
  * Query: iterative depth-first traversal (left child first, so the order is fixed by the map) with a slab
  * test that stays exact for zero direction components, then the photon test in double:
@@ -16,12 +18,17 @@
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/mman.h>
 
-#define LEAF_MAX 8                  /* photons per leaf, at most */
+#define LEAF_MAX 32                 /* photons per leaf, at most (bench/results/volume_map.md) */
 #define STACK_MAX 64                /* traversal stack; the tree depth is below 32 */
 #define PAD_REL 1e-12               /* box padding relative to coordinate size (~4500 double ulps) */
 #define TASK_MIN ((size_t)1 << 15)  /* ranges smaller than this are built without spawning tasks */
-#define INSERTION_MAX 16            /* quickselect finishes ranges this short by insertion sort */
+#define HUGE_PAGE ((size_t)2 << 20) /* arrays at least this big are aligned for transparent huge pages */
+#define INSERTION_MAX 16            /* selection finishes ranges this short by insertion sort */
+#define AXIS_SAMPLES 64             /* points looked at to choose a split axis */
+#define PIVOT_SAMPLES 255           /* keys sampled to place a pivot in long ranges */
+#define PIVOT_SAMPLE_MIN 4096       /* ranges at least this long use a sampled pivot */
 
 typedef struct {
     float lo[3], hi[3];
@@ -67,19 +74,23 @@ static int leaf_depth(size_t n)
     return depth;
 }
 
-static void range_bounds(const point_item *pts, size_t count, float mn[3], float mx[3])
+static void point_bounds(const point_item *pts, size_t count, size_t step, float mn[3], float mx[3])
 {
     for (int a = 0; a < 3; a++) mn[a] = mx[a] = pts[0].pos[a];
-    for (size_t i = 1; i < count; i++)
+    for (size_t i = step; i < count; i += step)
         for (int a = 0; a < 3; a++) {
             float x = pts[i].pos[a];
-            if (x < mn[a]) mn[a] = x;
-            if (x > mx[a]) mx[a] = x;
+            mn[a] = x < mn[a] ? x : mn[a];
+            mx[a] = x > mx[a] ? x : mx[a];
         }
 }
 
-static int widest_axis(const float mn[3], const float mx[3])
+/* Axis of largest extent, estimated from about AXIS_SAMPLES evenly strided points (it only steers the
+ * split; node boxes are exact). */
+static int split_axis(const point_item *pts, size_t count)
 {
+    float mn[3], mx[3];
+    point_bounds(pts, count, count > AXIS_SAMPLES ? count / AXIS_SAMPLES : 1, mn, mx);
     double ext[3];
     for (int a = 0; a < 3; a++) ext[a] = (double)mx[a] - mn[a];
     return ext[0] >= ext[1] ? (ext[0] >= ext[2] ? 0 : 2) : (ext[1] >= ext[2] ? 1 : 2);
@@ -98,19 +109,22 @@ static float float_up(double x)
     return (double)f < x ? nextafterf(f, INFINITY) : f;
 }
 
-static void store_box(node_box *box, const float mn[3], const float mx[3], double pad)
+static void leaf_box(node_box *box, const point_item *pts, size_t count, double pad)
 {
+    float mn[3], mx[3];
+    point_bounds(pts, count, 1, mn, mx);
     for (int a = 0; a < 3; a++) {
         box->lo[a] = float_down((double)mn[a] - pad);
         box->hi[a] = float_up((double)mx[a] + pad);
     }
 }
 
-static void swap_items(point_item *a, point_item *b)
+static void union_box(node_box *box, const node_box *l, const node_box *r)
 {
-    point_item t = *a;
-    *a = *b;
-    *b = t;
+    for (int a = 0; a < 3; a++) {
+        box->lo[a] = fminf(l->lo[a], r->lo[a]);
+        box->hi[a] = fmaxf(l->hi[a], r->hi[a]);
+    }
 }
 
 static float median_of_three(float a, float b, float c)
@@ -118,6 +132,53 @@ static float median_of_three(float a, float b, float c)
     if (a > b) { float t = a; a = b; b = t; }
     if (b > c) b = c;
     return a > b ? a : b;
+}
+
+/* k-th smallest of keys[0, count) (quickselect; reorders keys). */
+static float select_key(float *keys, int count, int k)
+{
+    int lo = 0, hi = count - 1;
+    while (hi > lo) {
+        float pivot = median_of_three(keys[lo], keys[lo + (hi - lo) / 2], keys[hi]);
+        int i = lo, j = hi;
+        while (i <= j) {
+            while (keys[i] < pivot) i++;
+            while (keys[j] > pivot) j--;
+            if (i <= j) { float t = keys[i]; keys[i++] = keys[j]; keys[j--] = t; }
+        }
+        if (k <= j) hi = j;
+        else if (k >= i) lo = i;
+        else break;
+    }
+    return keys[k];
+}
+
+/* A pivot for finding rank k in pts[lo, hi]: the same rank among PIVOT_SAMPLES evenly strided keys, so
+ * that the first partition already lands close to k; median of three for short ranges. */
+static float pick_pivot(const point_item *pts, ptrdiff_t lo, ptrdiff_t hi, ptrdiff_t k, int axis)
+{
+    ptrdiff_t count = hi - lo + 1;
+    if (count < PIVOT_SAMPLE_MIN) return median_of_three(pts[lo].pos[axis], pts[lo + count / 2].pos[axis], pts[hi].pos[axis]);
+    float keys[PIVOT_SAMPLES];
+    ptrdiff_t step = count / PIVOT_SAMPLES;
+    for (int s = 0; s < PIVOT_SAMPLES; s++) keys[s] = pts[lo + s * step + step / 2].pos[axis];
+    return select_key(keys, PIVOT_SAMPLES, (int)((k - lo) * PIVOT_SAMPLES / count));
+}
+
+/* Moves the items of pts[lo, hi] whose key is < pivot (or <= pivot) to the front, keeping no order;
+ * returns the end of that group. Branch-free (Lomuto with a conditional advance): the comparison
+ * outcomes are unpredictable, and mispredictions would dominate. */
+static ptrdiff_t partition_below(point_item *pts, ptrdiff_t lo, ptrdiff_t hi, int axis, float pivot, int or_equal)
+{
+    ptrdiff_t end = lo;
+    for (ptrdiff_t i = lo; i <= hi; i++) {
+        point_item x = pts[i];
+        int below = or_equal ? x.pos[axis] <= pivot : x.pos[axis] < pivot;
+        pts[i] = pts[end];
+        pts[end] = x;
+        end += below;
+    }
+    return end;
 }
 
 static void insertion_sort(point_item *pts, ptrdiff_t lo, ptrdiff_t hi, int axis)
@@ -133,38 +194,37 @@ static void insertion_sort(point_item *pts, ptrdiff_t lo, ptrdiff_t hi, int axis
     }
 }
 
-/* Reorders pts[0, count) so that pts[k] holds the k-th smallest coordinate along axis, with nothing larger
- * before it and nothing smaller after it (Hoare partitions around a median of three; duplicates split
- * evenly because both scans stop on keys equal to the pivot). Deterministic. */
+/* Reorders pts[0, count) so that pts[k] holds the k-th smallest key along axis, with nothing larger
+ * before it and nothing smaller after it. Each round splits the range into < pivot, == pivot, > pivot
+ * (the pivot is a key of the range, so every round shrinks it, duplicates included). Deterministic. */
 static void select_nth(point_item *pts, size_t count, size_t k, int axis)
 {
     ptrdiff_t lo = 0, hi = (ptrdiff_t)count - 1, kk = (ptrdiff_t)k;
     while (hi - lo >= INSERTION_MAX) {
-        float pivot = median_of_three(pts[lo].pos[axis], pts[lo + (hi - lo) / 2].pos[axis], pts[hi].pos[axis]);
-        ptrdiff_t i = lo, j = hi;
-        while (i <= j) {
-            while (pts[i].pos[axis] < pivot) i++;
-            while (pts[j].pos[axis] > pivot) j--;
-            if (i <= j) swap_items(&pts[i++], &pts[j--]);
+        float pivot = pick_pivot(pts, lo, hi, kk, axis);
+        ptrdiff_t less_end = partition_below(pts, lo, hi, axis, pivot, 0);
+        if (kk < less_end) {
+            hi = less_end - 1;
+            continue;
         }
-        /* now [lo, j] <= pivot <= [i, hi], and everything strictly between j and i equals pivot */
-        if (kk <= j) hi = j;
-        else if (kk >= i) lo = i;
-        else return;
+        ptrdiff_t equal_end = partition_below(pts, less_end, hi, axis, pivot, 1);
+        if (kk < equal_end) return;
+        lo = equal_end;
     }
     insertion_sort(pts, lo, hi, axis);
 }
 
-/* Builds the subtree of node (the j-th node of level): its box, then a median split and the children. */
+/* Builds the subtree of node (the j-th node of level): median split, children, then the node's box as
+ * the union of theirs; a leaf's box is its photons' bounds grown by the padding. */
 static void build_node(const builder *b, size_t node, int level, size_t j)
 {
     size_t lo = range_start(b->n, j, level), hi = range_start(b->n, j + 1, level);
-    float mn[3], mx[3];
-    range_bounds(b->points + lo, hi - lo, mn, mx);
-    store_box(&b->boxes[node], mn, mx, b->pad);
-    if (level == b->depth) return;
+    if (level == b->depth) {
+        leaf_box(&b->boxes[node], b->points + lo, hi - lo, b->pad);
+        return;
+    }
     size_t mid = range_start(b->n, 2 * j + 1, level + 1);
-    select_nth(b->points + lo, hi - lo, mid - lo, widest_axis(mn, mx));
+    select_nth(b->points + lo, hi - lo, mid - lo, split_axis(b->points + lo, hi - lo));
     if (hi - lo >= TASK_MIN) {
 #pragma omp task default(none) firstprivate(b, node, level, j)
         build_node(b, 2 * node + 1, level + 1, 2 * j);
@@ -174,6 +234,21 @@ static void build_node(const builder *b, size_t node, int level, size_t j)
         build_node(b, 2 * node + 1, level + 1, 2 * j);
         build_node(b, 2 * node + 2, level + 1, 2 * j + 1);
     }
+    union_box(&b->boxes[node], &b->boxes[2 * node + 1], &b->boxes[2 * node + 2]);
+}
+
+/* malloc, but big arrays come 2 MiB-aligned and ask for transparent huge pages: a 10^7-photon map then
+ * takes hundreds of page faults instead of ~10^5 to fill, and queries miss the TLB far less. */
+static void *alloc_array(size_t count, size_t size)
+{
+    size_t bytes = count * size;
+    if (bytes < HUGE_PAGE) return malloc(bytes);
+    bytes = (bytes + HUGE_PAGE - 1) / HUGE_PAGE * HUGE_PAGE;
+    void *p = aligned_alloc(HUGE_PAGE, bytes);
+#ifdef MADV_HUGEPAGE
+    if (p) madvise(p, bytes, MADV_HUGEPAGE); /* only a hint: ignoring its failure is fine */
+#endif
+    return p;
 }
 
 /* Copies the positions into build items; fails on a non-finite one. Returns the largest |coordinate|. */
@@ -226,9 +301,9 @@ volume_photon_map *volume_map_build(const photon *ph, size_t n, double r, dp_err
     if (n == 0) return m;
     m->depth = leaf_depth(n);
     size_t node_count = ((size_t)2 << m->depth) - 1;
-    m->boxes = malloc(node_count * sizeof *m->boxes);
-    m->points = malloc(n * sizeof *m->points);
-    m->photons = malloc(n * sizeof *m->photons);
+    m->boxes = alloc_array(node_count, sizeof *m->boxes);
+    m->points = alloc_array(n, sizeof *m->points);
+    m->photons = alloc_array(n, sizeof *m->photons);
     if (!m->boxes || !m->points || !m->photons) {
         dp_fail(err, "volume photon map: out of memory for %zu photons", n);
         volume_map_free(m);
@@ -308,19 +383,26 @@ static int beam_meets_box(const beam *q, const node_box *box)
     return enter <= leave;
 }
 
+/* Tests a leaf's photons and visits the accepted ones in order. Acceptance is collected without branches
+ * (about a third of the tested photons pass, so a branch per photon would mostly mispredict). */
 static void visit_leaf(const volume_photon_map *m, const beam *q, size_t first, size_t end, beam_visit_fn visit,
                        void *ctx)
 {
+    double ts[LEAF_MAX], d2s[LEAF_MAX];
+    int accepted[LEAF_MAX], count = 0;
     for (size_t i = first; i < end; i++) {
         const float *p = m->points[i].pos;
         double wx = p[0] - q->o[0], wy = p[1] - q->o[1], wz = p[2] - q->o[2];
         double t = wx * q->d[0] + wy * q->d[1] + wz * q->d[2];
-        if (!(t >= 0.0 && t <= q->tmax)) continue;
         /* perpendicular offset v = w - t·d; |v|^2 is |w|^2 - t^2 without the cancellation */
         double vx = wx - t * q->d[0], vy = wy - t * q->d[1], vz = wz - t * q->d[2];
         double d2 = vx * vx + vy * vy + vz * vz;
-        if (d2 <= q->r2) visit(ctx, &m->photons[i], t, d2);
+        ts[count] = t;
+        d2s[count] = d2;
+        accepted[count] = (int)(i - first);
+        count += (t >= 0.0) & (t <= q->tmax) & (d2 <= q->r2);
     }
+    for (int k = 0; k < count; k++) visit(ctx, &m->photons[first + (size_t)accepted[k]], ts[k], d2s[k]);
 }
 
 void photon_map_query_beam(const volume_photon_map *m, vec3 o, vec3 d, double tmax, beam_visit_fn visit, void *ctx)
