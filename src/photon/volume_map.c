@@ -17,10 +17,9 @@
 #include <float.h>
 #include <stdint.h>
 #include <stdlib.h>
-#include <string.h>
 #include <sys/mman.h>
 
-#define LEAF_MAX 32                 /* photons per leaf, at most (bench/results/volume_map.md) */
+#define LEAF_MAX 16                 /* photons per leaf, at most (tuning: bench/results/volume_map.md) */
 #define STACK_MAX 64                /* traversal stack; the tree depth is below 32 */
 #define PAD_REL 1e-12               /* box padding relative to coordinate size (~4500 double ulps) */
 #define TASK_MIN ((size_t)1 << 15)  /* ranges smaller than this are built without spawning tasks */
