@@ -116,6 +116,12 @@ typedef struct {
     int radius_schedule_3d;         /* radius_schedule: "2d" (default) or "3d" (reference cube root) */
 } integrator_settings;
 
+/* Does a path of `segments` segments (light connection included) count? (DESIGN §4) */
+static inline int path_counts(const integrator_settings *in, int segments)
+{
+    return segments <= in->max_bounces && segments - 1 >= in->min_bounces;
+}
+
 typedef struct {
     long spp;                /* progressive passes; 0 = no limit */
     double timeout_seconds;  /* 0 = no limit */

@@ -21,11 +21,6 @@ typedef struct {
     int b_cam;       /* camera segments including this one */
 } beam_ctx;
 
-static int counts(const integrator_settings *in, int segments)
-{
-    return segments <= in->max_bounces && segments - 1 >= in->min_bounces;
-}
-
 static void splat(pixel_ctx *c, double t, vec3 contrib)
 {
     if (v3_is_zero(contrib)) return;
@@ -39,7 +34,7 @@ static void visit_volume_photon(void *ctx, const photon *p, double t, double d2)
 {
     beam_ctx *b = ctx;
     const scene *s = b->c->s;
-    if (!counts(&s->integrator, p->bounce + b->b_cam)) return;
+    if (!path_counts(&s->integrator, p->bounce + b->b_cam)) return;
     double r2 = b->c->g->r_vol * b->c->g->r_vol;
     double u = 1.0 - d2 / r2;
     double K = 3.0 / (M_PI * r2) * u * u;
@@ -67,7 +62,7 @@ static void gather_surface(pixel_ctx *c, vec3 x, vec3 n_in, const bsdf *b, vec3 
     for (int i = 0; i < n; i++) {
         const photon *p = &g->surf_photons[idx[i]];
         if (v3_dot(photon_vec(p->dir), n_in) >= 0.0) continue; /* arrived on the other side */
-        if (!counts(&c->s->integrator, p->bounce + b_cam)) continue;
+        if (!path_counts(&c->s->integrator, p->bounce + b_cam)) continue;
         splat(c, t_cam + p->time, v3_mul(v3_mul(thr, f), photon_vec(p->power)));
     }
 }

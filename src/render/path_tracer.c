@@ -25,11 +25,6 @@ typedef struct {
     double rays;
 } pixel_ctx;
 
-static int counts(const integrator_settings *in, int segments)
-{
-    return segments <= in->max_bounces && segments - 1 >= in->min_bounces;
-}
-
 static void splat(pixel_ctx *c, double t, vec3 contrib)
 {
     if (v3_is_zero(contrib)) return;
@@ -89,7 +84,7 @@ static int scatter_medium(pixel_ctx *c, path_state *ps, double t, int *medium_ev
     ps->depth++;
     if (++*medium_events > m->max_bounces) return 0;
     phase_ctx pc = {&m->phase, ps->d};
-    if (counts(&s->integrator, ps->depth + 1)) connect_lights(c, ps, ps->o, eval_phase, &pc);
+    if (path_counts(&s->integrator, ps->depth + 1)) connect_lights(c, ps, ps->o, eval_phase, &pc);
     ps->d = phase_sample(&m->phase, ps->d, rng_uniform(c->rng), rng_uniform(c->rng));
     return 1;
 }
@@ -115,7 +110,7 @@ static int scatter_surface(pixel_ctx *c, path_state *ps, const hit_record *h, in
         lambert_ctx lc = {n_in};
         path_state at = *ps;
         at.beta = v3_mul(ps->beta, b->albedo);
-        if (counts(&s->integrator, ps->depth + 1))
+        if (path_counts(&s->integrator, ps->depth + 1))
             connect_lights(c, &at, offset_ray_origin(h->p, n_in), eval_lambert_cos, &lc);
         vec3 l = sample_cosine_hemisphere(rng_uniform(c->rng), rng_uniform(c->rng)), t1, t2;
         v3_basis(n_in, &t1, &t2);
