@@ -21,6 +21,9 @@ typedef struct {
 /* printf-style; returns -1 so callers can `return dp_fail(err, ...)`. */
 int dp_fail(dp_error *err, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
 
+/* Monotonic wall-clock seconds (for budgets, progress and stage timings). */
+double dp_seconds(void);
+
 /* ---- 3-vectors (double: geometry and time are accumulated in double) ---- */
 typedef struct {
     double x, y, z;

@@ -31,6 +31,8 @@ int film_splat(film *f, size_t px, double t, vec3 c);
 int film_image(const film *f, int k, image_rgb *img, dp_error *err);
 
 /* ---- driver ---- */
+struct render_stats;
+
 typedef struct {
     int threads;            /* 0: all cores */
     uint64_t seed;
@@ -38,9 +40,13 @@ typedef struct {
     double time_limit;      /* seconds; < 0: as the scene says */
     int progress;           /* progress line on stderr */
     volatile sig_atomic_t *stop; /* set asynchronously (SIGINT): finish the current pass and return */
+    /* Called after every completed pass with the film and statistics so far (checkpoints, error logs).
+     * A non-zero return stops the render with that error. May be NULL. */
+    int (*after_pass)(void *ctx, const film *f, const struct render_stats *st, dp_error *err);
+    void *after_pass_ctx;
 } render_options;
 
-typedef struct {
+typedef struct render_stats {
     long passes;
     double seconds;
     double camera_rays;     /* primary rays traced */
@@ -50,6 +56,7 @@ typedef struct {
     double photon_paths;    /* light paths traced (photon points) */
     double stored_photons;  /* volume + surface photons stored, summed over iterations */
     double r_vol, r_surf;   /* radii of the last iteration */
+    double t_photon, t_maps, t_gather; /* seconds spent in the photon pass, map builds, sensor pass */
 } render_stats;
 
 /* Renders the scene with its integrator into f (initialised here). */

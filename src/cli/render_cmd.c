@@ -4,6 +4,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "dartspp/cli.h"
 #include "dartspp/render.h"
@@ -14,6 +15,7 @@ typedef struct {
     const char **sets;
     int set_count;
     int verbose, quiet;
+    double checkpoint; /* seconds between checkpoints; < 0: as the scene says; 0: none */
     render_options ro;
 } render_args;
 
@@ -45,6 +47,7 @@ static int parse_number(const char *opt, const char *val, double lo, double *out
 static int parse_args(int argc, char **argv, render_args *a)
 {
     a->ro = (render_options){.threads = 0, .seed = 1, .spp = -1, .time_limit = -1, .progress = 1};
+    a->checkpoint = -1;
     a->sets = calloc((size_t)argc + 1, sizeof(char *));
     for (int i = 0; i < argc; i++) {
         const char *o = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
@@ -57,6 +60,9 @@ static int parse_args(int argc, char **argv, render_args *a)
             else if (!strcmp(o, "--seed")) a->ro.seed = (uint64_t)d;
             else if (!strcmp(o, "--spp")) a->ro.spp = (long)d;
             else a->ro.time_limit = d;
+            i++;
+        } else if (!strcmp(o, "--checkpoint")) {
+            if (parse_number(o, v, 0, &a->checkpoint)) return bad_arg(o, v, "expected seconds (0: no checkpoints)");
             i++;
         } else if (!strcmp(o, "--output")) {
             if (!v) return bad_arg(o, v, "expected a path");
@@ -90,6 +96,27 @@ static void output_path(const render_args *a, const scene *s, char *out, size_t 
 
 static void print_written(const char *path) { printf("wrote %s\n", path); }
 
+/* Checkpoints: every `every` seconds of rendering, the outputs of all completed passes, written atomically
+ * (an interrupted or killed render keeps the last complete set). */
+typedef struct {
+    const scene *s;
+    const char *out;
+    double every, last;
+    int quiet;
+} checkpoint_ctx;
+
+static int write_checkpoint(void *ctx, const film *f, const render_stats *st, dp_error *err)
+{
+    checkpoint_ctx *c = ctx;
+    if (c->every <= 0 || st->seconds - c->last < c->every) return 0;
+    c->last = st->seconds;
+    if (render_write_outputs(c->s, f, c->out, c->s->integrator.type_name, NULL, err)) return -1;
+    if (!c->quiet)
+        fprintf(stderr, "%scheckpoint: %ld passes, %.1f s -> %s\n", isatty(2) ? "\r\033[K" : "", st->passes,
+                st->seconds, c->out);
+    return 0;
+}
+
 static void print_summary(const scene *s, const render_stats *st)
 {
     const time_window *tw = &s->integrator.window;
@@ -100,6 +127,11 @@ static void print_summary(const scene *s, const render_stats *st)
     printf("rendered %ld passes in %.2f s (%.2f M camera rays/s, %.2f M rays/s)%s; non-finite samples suppressed: %ld\n",
            st->passes, st->seconds, st->seconds > 0 ? st->camera_rays / st->seconds * 1e-6 : 0.0,
            st->seconds > 0 ? st->rays / st->seconds * 1e-6 : 0.0, st->interrupted ? " (interrupted)" : "", st->nonfinite);
+    if (st->photon_paths > 0)
+        printf("photon points: %.3g photon paths (%.2f M/s in the photon pass), %.3g photons stored; "
+               "time in photon pass %.2f s, map builds %.2f s, sensor pass %.2f s; last radii r_vol %.4g, R_surf %.4g\n",
+               st->photon_paths, st->t_photon > 0 ? st->photon_paths / st->t_photon * 1e-6 : 0.0, st->stored_photons,
+               st->t_photon, st->t_maps, st->t_gather, st->r_vol, st->r_surf);
 }
 
 int cli_render(int argc, char **argv)
@@ -125,6 +157,10 @@ int cli_render(int argc, char **argv)
     signal(SIGTERM, on_signal);
     a.ro.progress = !a.quiet;
     a.ro.stop = &stop_requested;
+    checkpoint_ctx cp = {.s = &s, .out = out, .quiet = a.quiet,
+                         .every = a.checkpoint >= 0 ? a.checkpoint : s.renderer.checkpoint_seconds};
+    a.ro.after_pass = write_checkpoint;
+    a.ro.after_pass_ctx = &cp;
     film f = {0};
     render_stats st;
     rc = render_scene(&s, &a.ro, &f, &st, &err) ? 2 : 0;

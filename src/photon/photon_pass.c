@@ -84,7 +84,9 @@ static void trace_light_path(const scene *s, dp_rng *rng, thread_bufs *tb, path_
                 time += s->media[med].eta * t;
                 bounce++;
                 if (++medium_events > s->media[med].max_bounces) return;
-                if (time < t_end) store(tb, &tb->vol, &pc->n_vol, o, d, beta, bounce, time);
+                /* low_order_scattering off: no photon at the first medium vertex after a light or surface */
+                if (time < t_end && (in->low_order_scattering || medium_events > 1))
+                    store(tb, &tb->vol, &pc->n_vol, o, d, beta, bounce, time);
                 d = phase_sample(&s->media[med].phase, d, rng_uniform(rng), rng_uniform(rng));
                 goto roulette;
             }

@@ -13,7 +13,9 @@ int photon_points_pass(const scene *s, film *f, uint64_t seed, long iteration, r
 {
     const integrator_settings *in = &s->integrator;
     photon_set ps;
+    double t0 = dp_seconds();
     if (photon_pass(s, seed, iteration, &ps, err)) return -1;
+    double t1 = dp_seconds();
     gather_input g = {.k_surf = in->gather_photon_count, .camera_leg_projected = in->camera_leg_projected};
     g.r_vol = progressive_radius(in->volume_gather_radius, in->volume_alpha, iteration, in->radius_schedule_3d ? 3 : 2);
     g.r_surf = progressive_radius(in->gather_radius, in->alpha, iteration, 2);
@@ -22,6 +24,7 @@ int photon_points_pass(const scene *s, film *f, uint64_t seed, long iteration, r
     int rc = 0;
     if (ps.n_vol > 0 && !(vm = volume_map_build(ps.vol, ps.n_vol, g.r_vol, err))) rc = -1;
     if (!rc && ps.n_surf > 0 && !(sm = surface_map_build(ps.surf, ps.n_surf, err))) rc = -1;
+    double t2 = dp_seconds();
     if (!rc) {
         g.vol = vm;
         g.surf = sm;
@@ -32,6 +35,9 @@ int photon_points_pass(const scene *s, film *f, uint64_t seed, long iteration, r
         st->r_vol = g.r_vol;
         st->r_surf = g.r_surf;
         f->nonfinite += ps.nonfinite;
+        st->t_photon += t1 - t0;
+        st->t_maps += t2 - t1;
+        st->t_gather += dp_seconds() - t2;
     }
     volume_map_free(vm);
     surface_map_free(sm);

@@ -4,15 +4,7 @@
 
 #include <omp.h>
 #include <stdio.h>
-#include <time.h>
 #include <unistd.h>
-
-static double now_seconds(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return ts.tv_sec + 1e-9 * ts.tv_nsec;
-}
 
 typedef struct {
     int tty;
@@ -66,7 +58,7 @@ int render_scene(const scene *s, const render_options *opt, film *f, render_stat
     long spp = opt->spp >= 0 ? opt->spp : s->renderer.spp;
     double limit = opt->time_limit >= 0 ? opt->time_limit : s->renderer.timeout_seconds;
     progress_line pl = {.tty = isatty(2), .last_print = -1e9};
-    double t0 = now_seconds();
+    double t0 = dp_seconds();
     while (keep_going(st, spp, limit, opt->stop)) {
         if (s->integrator.type == INTEGRATOR_PATH_TRACER)
             st->rays += path_tracer_pass(s, f, opt->seed, st->passes, &f->nonfinite);
@@ -76,8 +68,12 @@ int render_scene(const scene *s, const render_options *opt, film *f, render_stat
         }
         st->camera_rays += (double)s->cam.width * s->cam.height;
         f->passes = ++st->passes;
-        st->seconds = now_seconds() - t0;
+        st->seconds = dp_seconds() - t0;
         if (opt->progress) progress_print(&pl, st, spp, limit, 0);
+        if (opt->after_pass && opt->after_pass(opt->after_pass_ctx, f, st, err)) {
+            film_free(f);
+            return -1;
+        }
     }
     st->nonfinite = f->nonfinite;
     st->interrupted = opt->stop && *opt->stop;

@@ -150,6 +150,9 @@ static int parse_photon_keys(json_ctx *c, const cJSON *v, integrator_settings *i
         jget_bool(c, v, w, "strict_time_width", 0, &in->strict_time_width))
         return -1;
     if (k < 1 || k > 256) return jfail(c, w, "gather_photon_count", "must be in [1, 256] (got %ld)", k);
+    if (!in->fixed_volume_radius && cJSON_GetObjectItemCaseSensitive(v, "fixed_volume_radius"))
+        jwarn(c, "integrator.fixed_volume_radius: false (k-NN radii) is not supported; every volume photon "
+                 "gets the progressive radius from volume_gather_radius");
     const char *leg = "euclidean", *sched = "2d";
     if (jget_string(c, v, w, "camera_leg", &leg) < 0 || jget_string(c, v, w, "radius_schedule", &sched) < 0) return -1;
     if (strcmp(leg, "euclidean") && strcmp(leg, "projected"))
