@@ -21,7 +21,7 @@ SAN_FLAGS = -O1 -fsanitize=address,undefined -fno-omit-frame-pointer -fno-saniti
 SAN_OBJ  = $(LIB_SRC:src/%.c=build/san/obj/%.o)
 TEST_BIN = $(TEST_SRC:tests/%.c=build/san/tests/%)
 
-.PHONY: all deps test run clean stress
+.PHONY: all deps test run clean stress reference
 all: build/dartspp
 
 deps: $(DEPS_STAMP)
@@ -67,6 +67,10 @@ test: build/dartspp build/san/dartspp $(TEST_BIN)
 # The demo: fog-filled Cornell box, pulsed point light, a gate where multiple scattering dominates.
 run: build/dartspp
 	./build/dartspp render scenes/fogbox/fogbox.json --time 30 --output out/fogbox.exr
+
+# A path-tracer reference: make reference SCENE=path.json [TIME=600] [OUT=refs/stem-pt.exr]
+reference: build/dartspp
+	bench/reference.sh $(SCENE) $(or $(TIME),600) $(or $(OUT),refs/$(basename $(notdir $(SCENE)))-pt.exr)
 
 clean:
 	rm -rf build out

@@ -11,6 +11,7 @@ typedef struct {
     float dir[3];     /* propagation direction of the segment arriving at pos (unit) */
     float power[3];   /* already divided by the number of light paths (DESIGN / reference §8.3) */
     int bounce;       /* path segments from the light to this photon */
+    int frame;        /* DARTS frame mode: the only frame this photon may be gathered in; -1: any */
     double time;      /* light-to-photon path time (optical path length) */
 } photon;
 
@@ -50,6 +51,7 @@ typedef struct {
     long vol_paths;        /* paths the volume powers are divided by */
     long surf_paths;
     long nonfinite;        /* photons dropped for a non-finite power */
+    long early_exits;      /* paths ended by the DARTS early exit */
 } photon_set;
 
 struct scene;

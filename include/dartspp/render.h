@@ -25,8 +25,9 @@ typedef struct {
 int film_init(film *f, int width, int height, const time_window *tw, dp_error *err);
 void film_free(film *f);
 /* Adds contribution c arriving at path time t to pixel index px (not thread-safe for one pixel).
+ * frame >= 0 (DARTS frame mode): c counts only if t falls in that frame, in the frames and the gate image.
  * Returns 0 when c was non-finite and was dropped (the caller counts it). */
-int film_splat(film *f, size_t px, double t, vec3 c);
+int film_splat(film *f, size_t px, double t, vec3 c, int frame);
 /* Gate image (k < 0) or frame k, as the mean over passes. */
 int film_image(const film *f, int k, image_rgb *img, dp_error *err);
 

@@ -21,10 +21,10 @@ typedef struct {
     int b_cam;       /* camera segments including this one */
 } beam_ctx;
 
-static void splat(pixel_ctx *c, double t, vec3 contrib)
+static void splat(pixel_ctx *c, double t, vec3 contrib, int frame)
 {
     if (v3_is_zero(contrib)) return;
-    if (!film_splat(c->f, c->px, t, contrib)) c->nonfinite++;
+    if (!film_splat(c->f, c->px, t, contrib, frame)) c->nonfinite++;
 }
 
 static vec3 photon_vec(const float *v) { return v3(v[0], v[1], v[2]); }
@@ -43,7 +43,7 @@ static void visit_volume_photon(void *ctx, const photon *p, double t, double d2)
     double time = b->t_cam + p->time + b->m->eta * leg;
     double f = K * phase_eval(&b->m->phase, photon_vec(p->dir), v3_neg(b->d));
     vec3 tr = v3_exp_neg(v3_scale(b->m->sigma_t, t));
-    splat(b->c, time, v3_scale(v3_mul(v3_mul(b->thr, tr), photon_vec(p->power)), f));
+    splat(b->c, time, v3_scale(v3_mul(v3_mul(b->thr, tr), photon_vec(p->power)), f), p->frame);
 }
 
 /* Surface estimate at a Lambertian hit: k nearest within R, box kernel over the disc of the k-th. */
@@ -63,7 +63,7 @@ static void gather_surface(pixel_ctx *c, vec3 x, vec3 n_in, const bsdf *b, vec3 
         const photon *p = &g->surf_photons[idx[i]];
         if (v3_dot(photon_vec(p->dir), n_in) >= 0.0) continue; /* arrived on the other side */
         if (!path_counts(&c->s->integrator, p->bounce + b_cam)) continue;
-        splat(c, t_cam + p->time, v3_mul(v3_mul(thr, f), photon_vec(p->power)));
+        splat(c, t_cam + p->time, v3_mul(v3_mul(thr, f), photon_vec(p->power)), p->frame);
     }
 }
 

@@ -5,6 +5,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "dartspp/darts.h"
 #include "dartspp/photon.h"
 #include "dartspp/scene.h"
 
@@ -36,89 +37,167 @@ typedef struct {
 
 typedef struct {
     uint32_t n_vol, n_surf;    /* photons this path stored */
+    int early_exit;            /* ended by the DARTS early exit */
     int thread;                /* whose buffers hold them */
     size_t off_vol, off_surf;  /* where they start there */
 } path_count;
 
-static void make_photon(photon *ph, vec3 x, vec3 d, vec3 beta, int bounce, double time)
+static void make_photon(photon *ph, vec3 x, vec3 d, vec3 beta, int bounce, double time, int frame)
 {
     ph->pos[0] = (float)x.x, ph->pos[1] = (float)x.y, ph->pos[2] = (float)x.z;
     ph->dir[0] = (float)d.x, ph->dir[1] = (float)d.y, ph->dir[2] = (float)d.z;
     ph->power[0] = (float)beta.x, ph->power[1] = (float)beta.y, ph->power[2] = (float)beta.z;
     ph->bounce = bounce;
+    ph->frame = frame;
     ph->time = time;
 }
 
-static void store(thread_bufs *tb, photon_buf *b, uint32_t *count, vec3 x, vec3 d, vec3 beta, int bounce, double t)
+/* One light path in flight: where it is, what it carries, and (DARTS) the bin it aims at. */
+typedef struct {
+    const scene *s;
+    const darts_guide *g;  /* g->active: DARTS samplers on */
+    thread_bufs *tb;
+    path_count *pc;
+    dp_rng *rng;
+    darts_bin bin;         /* target bin; gate mode: the gate with pdf 1 */
+    ellipse_record rec;    /* of the current vertex (DARTS, in a medium) */
+    vec3 o, d, beta;
+    int med, bounce, medium_events;
+    double time;
+} light_path;
+
+static void store(light_path *lp, photon_buf *b, uint32_t *count, vec3 x, vec3 d, vec3 power, int bounce, double t)
 {
-    if (!v3_is_finite(beta)) {
-        tb->nonfinite++;
+    if (!v3_is_finite(power)) {
+        lp->tb->nonfinite++;
         return;
     }
+    if (v3_is_zero(power)) return;
     photon ph;
-    make_photon(&ph, x, d, beta, bounce, t);
-    if (buf_push(b, &ph)) tb->oom = 1;
+    make_photon(&ph, x, d, v3_scale(power, 1.0 / lp->bin.pdf), bounce, t, lp->bin.frame);
+    if (buf_push(b, &ph)) lp->tb->oom = 1;
     else (*count)++;
 }
 
-/* One light path; bounce = segments from the light. Stops when no later photon could count. */
-static void trace_light_path(const scene *s, dp_rng *rng, thread_bufs *tb, path_count *pc)
+/* A new vertex at lp->o: the ellipse record its samplers share (DARTS, inside a medium). */
+static void new_vertex(light_path *lp)
+{
+    if (!lp->g->active || lp->med == MEDIUM_VACUUM) return;
+    const medium *m = &lp->s->media[lp->med];
+    ellipse_record_init(&lp->rec, lp->g, &lp->bin, lp->o, lp->time, m->eta, lp->s->integrator.ellipse_residual,
+                        v3_avg(m->sigma_t), rng_uniform(lp->rng));
+}
+
+/* Surface photons with DARTS: the straight-line lower bound of the full path time must be before the bin
+ * end, and in strict mode not before its start (reference §8.2). */
+static int surface_time_ok(const light_path *lp, vec3 x)
+{
+    if (!lp->g->active) return 1;
+    double t_lb = lp->time + lp->g->eta_lb * v3_len(v3_sub(lp->g->cam, x));
+    return t_lb < lp->bin.end && (!lp->s->integrator.strict_time_width || t_lb >= lp->bin.start);
+}
+
+/* One medium segment up to tmax: the control vertex (elliptical), then the distance sample. Returns 1 for
+ * a medium event (lp advanced to the scattering vertex), 0 for the surface at tmax, -1 to end the path. */
+static int medium_segment(light_path *lp, double tmax)
+{
+    const integrator_settings *in = &lp->s->integrator;
+    const medium *m = &lp->s->media[lp->med];
+    int darts = lp->g->active;
+    if (darts && in->enable_elliptical) {
+        double t, pdf;
+        if (ellipse_control_vertex(&lp->rec, lp->d, tmax, &t, &pdf)) { /* W = σs e^{−σt t}/p(t) (§6) */
+            vec3 w = v3_scale(v3_mul(m->sigma_s, v3_exp_neg(v3_scale(m->sigma_t, t))), 1.0 / pdf);
+            store(lp, &lp->tb->vol, &lp->pc->n_vol, v3_add(lp->o, v3_scale(lp->d, t)), lp->d, v3_mul(lp->beta, w),
+                  lp->bounce + 1, lp->time + m->eta * t);
+        }
+    }
+    int event;
+    double t;
+    if (darts && in->enable_guiding && (lp->rec.valid || lp->rec.S_reach > lp->rec.C)) {
+        da_sample ds;
+        da_sample_distance(m, &lp->rec, lp->d, tmax, lp->rng, &ds);
+        lp->beta = v3_mul(lp->beta, ds.weight);
+        t = ds.t;
+        event = ds.medium_event;
+    } else {
+        t = medium_sample_free_flight(m, tmax, lp->rng, &lp->beta, &event);
+    }
+    if (!event) return 0;
+    lp->o = v3_add(lp->o, v3_scale(lp->d, t));
+    lp->time += m->eta * t;
+    lp->bounce++;
+    if (++lp->medium_events > m->max_bounces) return -1;
+    /* classic photons (no control vertices); low_order_scattering off: none at the first vertex after a
+     * light or surface */
+    if (!(darts && in->enable_elliptical) && (in->low_order_scattering || lp->medium_events > 1))
+        store(lp, &lp->tb->vol, &lp->pc->n_vol, lp->o, lp->d, lp->beta, lp->bounce, lp->time);
+    new_vertex(lp);
+    lp->d = phase_sample(&m->phase, lp->d, rng_uniform(lp->rng), rng_uniform(lp->rng));
+    return 1;
+}
+
+/* Scattering at a surface hit; returns 0 to end the path. */
+static int surface_event(light_path *lp, const hit_record *h)
+{
+    const scene *s = lp->s;
+    const surface *sf = &s->surfaces[h->surface];
+    const bsdf *b = &s->bsdfs[sf->bsdf];
+    vec3 n_in = v3_dot(lp->d, h->ng) < 0.0 ? h->ng : v3_neg(h->ng);
+    if (bsdf_is_passthrough(b)) {
+        lp->med = surface_next_medium(sf, lp->med, lp->d, h->ng);
+        lp->o = offset_ray_origin(h->p, v3_neg(n_in));
+        new_vertex(lp);
+        return 1;
+    }
+    lp->bounce++;
+    lp->medium_events = 0;
+    if (b->type == BSDF_MIRROR) lp->d = v3_sub(lp->d, v3_scale(h->ng, 2.0 * v3_dot(lp->d, h->ng)));
+    else {
+        if (s->integrator.include_surfaces && surface_time_ok(lp, h->p))
+            store(lp, &lp->tb->surf, &lp->pc->n_surf, h->p, lp->d, lp->beta, lp->bounce, lp->time);
+        vec3 l = sample_cosine_hemisphere(rng_uniform(lp->rng), rng_uniform(lp->rng)), t1, t2;
+        v3_basis(n_in, &t1, &t2);
+        lp->d = v3_norm(v3_add(v3_add(v3_scale(t1, l.x), v3_scale(t2, l.y)), v3_scale(n_in, l.z)));
+    }
+    lp->beta = v3_mul(lp->beta, b->albedo);
+    lp->med = surface_next_medium(sf, lp->med, lp->d, h->ng);
+    lp->o = offset_ray_origin(h->p, n_in);
+    new_vertex(lp);
+    return 1;
+}
+
+/* One light path; bounce = segments from the light. Stops when no later photon could count: past the
+ * window end, or (DARTS) when even a straight line to the camera arrives after the target bin (early exit). */
+static void trace_light_path(const scene *s, const darts_guide *g, dp_rng *rng, thread_bufs *tb, path_count *pc)
 {
     const integrator_settings *in = &s->integrator;
     int li = (int)(rng_uniform(rng) * s->light_count);
     if (li >= s->light_count) li = s->light_count - 1;
     const point_light *L = &s->lights[li];
-    vec3 o = L->pos, d = sample_uniform_sphere(rng_uniform(rng), rng_uniform(rng));
-    vec3 beta = v3_scale(L->intensity, 4.0 * M_PI * s->light_count);
-    int med = L->medium, bounce = 0, medium_events = 0;
-    double time = 0.0, t_end = in->window.gated ? time_window_end(&in->window) : INFINITY;
-    while (bounce + 1 < in->max_bounces && time < t_end && !v3_is_zero(beta)) {
+    light_path lp = {.s = s, .g = g, .tb = tb, .pc = pc, .rng = rng, .o = L->pos, .med = L->medium,
+                     .bin = {.start = -INFINITY, .end = INFINITY, .pdf = 1.0, .frame = -1}};
+    if (g->active && !darts_sample_bin(g, L->pos, rng_uniform(rng), &lp.bin)) return;
+    lp.d = sample_uniform_sphere(rng_uniform(rng), rng_uniform(rng));
+    lp.beta = v3_scale(L->intensity, 4.0 * M_PI * s->light_count);
+    double t_end = in->window.gated ? time_window_end(&in->window) : INFINITY;
+    new_vertex(&lp);
+    while (lp.bounce + 1 < in->max_bounces && lp.time < t_end && !v3_is_zero(lp.beta)) {
+        if (g->active && !darts_can_reach(g, &lp.bin, lp.o, lp.time)) {
+            pc->early_exit = 1;
+            return;
+        }
         hit_record h;
-        int hit = scene_intersect(s, o, d, INFINITY, &h);
+        int hit = scene_intersect(s, lp.o, lp.d, INFINITY, &h);
         double tmax = hit ? h.t : INFINITY;
-        if (med != MEDIUM_VACUUM) {
-            int event;
-            double t = medium_sample_free_flight(&s->media[med], tmax, rng, &beta, &event);
-            if (event) {
-                o = v3_add(o, v3_scale(d, t));
-                time += s->media[med].eta * t;
-                bounce++;
-                if (++medium_events > s->media[med].max_bounces) return;
-                /* low_order_scattering off: no photon at the first medium vertex after a light or surface */
-                if (time < t_end && (in->low_order_scattering || medium_events > 1))
-                    store(tb, &tb->vol, &pc->n_vol, o, d, beta, bounce, time);
-                d = phase_sample(&s->media[med].phase, d, rng_uniform(rng), rng_uniform(rng));
-                goto roulette;
-            }
+        if (lp.med != MEDIUM_VACUUM) {
+            int ev = medium_segment(&lp, tmax);
+            if (ev < 0) return;
+            if (ev > 0) continue;
         }
         if (!hit) return;
-        time += medium_eta(s, med) * h.t;
-        const surface *sf = &s->surfaces[h.surface];
-        const bsdf *b = &s->bsdfs[sf->bsdf];
-        vec3 n_in = v3_dot(d, h.ng) < 0.0 ? h.ng : v3_neg(h.ng);
-        if (bsdf_is_passthrough(b)) {
-            med = surface_next_medium(sf, med, d, h.ng);
-            o = offset_ray_origin(h.p, v3_neg(n_in));
-            continue;
-        }
-        bounce++;
-        medium_events = 0;
-        if (b->type == BSDF_MIRROR) d = v3_sub(d, v3_scale(h.ng, 2.0 * v3_dot(d, h.ng)));
-        else {
-            if (in->include_surfaces && time < t_end) store(tb, &tb->surf, &pc->n_surf, h.p, d, beta, bounce, time);
-            vec3 l = sample_cosine_hemisphere(rng_uniform(rng), rng_uniform(rng)), t1, t2;
-            v3_basis(n_in, &t1, &t2);
-            d = v3_norm(v3_add(v3_add(v3_scale(t1, l.x), v3_scale(t2, l.y)), v3_scale(n_in, l.z)));
-        }
-        beta = v3_mul(beta, b->albedo);
-        med = surface_next_medium(sf, med, d, h.ng);
-        o = offset_ray_origin(h.p, n_in);
-    roulette:
-        if (bounce >= 5 && in->enable_rr) {
-            double q = fmin(1.0, v3_max(beta));
-            if (rng_uniform(rng) >= q) return;
-            beta = v3_scale(beta, 1.0 / q);
-        }
+        lp.time += medium_eta(s, lp.med) * h.t;
+        if (!surface_event(&lp, &h)) return;
     }
 }
 
@@ -157,6 +236,9 @@ int photon_pass(const scene *s, uint64_t seed, long iteration, photon_set *out, 
     budget_state bv = {.budget = (size_t)s->integrator.volume_photon_count};
     budget_state bsf = {.budget = (size_t)s->integrator.photon_count};
     photon_buf vol = {0}, surf = {0};
+    darts_guide guide;
+    darts_guide_init(s, &guide);
+    long early = 0;
     int nt = omp_get_max_threads();
     thread_bufs *tb = calloc((size_t)nt, sizeof(thread_bufs));
     path_count *pc = malloc(BATCH * sizeof(path_count));
@@ -172,11 +254,12 @@ int photon_pass(const scene *s, uint64_t seed, long iteration, photon_set *out, 
             for (long i = 0; i < nb; i++) {
                 dp_rng rng = rng_stream(seed ^ 0x70686f746f6eULL, (uint64_t)iteration, (uint64_t)(next + i));
                 pc[i] = (path_count){.thread = omp_get_thread_num(), .off_vol = mine->vol.n, .off_surf = mine->surf.n};
-                trace_light_path(s, &rng, mine, &pc[i]);
+                trace_light_path(s, &guide, &rng, mine, &pc[i]);
             }
         }
         for (long i = 0; i < nb && !rc; i++) { /* merge in path order */
             const thread_bufs *src = &tb[pc[i].thread];
+            early += pc[i].early_exit;
             rc |= merge_path(&vol, &bv, &src->vol, pc[i].off_vol, pc[i].n_vol);
             rc |= merge_path(&surf, &bsf, &src->surf, pc[i].off_surf, pc[i].n_surf);
         }
@@ -196,6 +279,7 @@ int photon_pass(const scene *s, uint64_t seed, long iteration, photon_set *out, 
         return dp_fail(err, "%s: out of memory in the photon pass", s->path);
     }
     out->paths = next;
+    out->early_exits = early;
     out->vol_paths = bv.full ? bv.paths : next;
     out->surf_paths = bsf.full ? bsf.paths : next;
     scale_powers(vol.p, vol.n, out->vol_paths);

@@ -33,7 +33,7 @@ void film_free(film *f)
     memset(f, 0, sizeof *f);
 }
 
-int film_splat(film *f, size_t px, double t, vec3 c)
+int film_splat(film *f, size_t px, double t, vec3 c, int frame)
 {
     if (!v3_is_finite(c)) return 0;
     const time_window *tw = &f->window;
@@ -47,6 +47,7 @@ int film_splat(film *f, size_t px, double t, vec3 c)
     double rel = (t - tw->start) / tw->width;
     int frames = tw->frame_count > 0 ? tw->frame_count : 1;
     if (!(rel >= 0.0 && rel < frames)) return 1;
+    if (frame >= 0 && (int)rel != frame) return 1; /* aimed at another frame (DESIGN §5.22) */
     double wg = 1.0 / (tw->width * frames);
     s[0] += c.x * wg;
     s[1] += c.y * wg;

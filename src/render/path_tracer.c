@@ -28,7 +28,7 @@ typedef struct {
 static void splat(pixel_ctx *c, double t, vec3 contrib)
 {
     if (v3_is_zero(contrib)) return;
-    if (!film_splat(c->f, c->px, t, contrib)) c->nonfinite++;
+    if (!film_splat(c->f, c->px, t, contrib, -1)) c->nonfinite++;
 }
 
 /* NEE to every point light from x; f_eval(w_to_light) is the phase function or BSDF·cos. */

@@ -11,7 +11,7 @@ static const char *const integrator_keys[] = {
     "enable_volume_light_sampling", "photon_count", "volume_photon_count", "gather_photon_count",
     "gather_radius", "volume_gather_radius", "volume_photon_type", "alpha", "volume_alpha",
     "fixed_volume_radius", "include_surfaces", "low_order_scattering", "enable_guiding", "enable_elliptical",
-    "strict_time_width", "camera_leg", "radius_schedule", "enable_consistency_checks", "enable_two_sided_shading", "exclude_non_mis", "use_grid",
+    "strict_time_width", "camera_leg", "radius_schedule", "ellipse_residual", "enable_consistency_checks", "enable_two_sided_shading", "exclude_non_mis", "use_grid",
     NULL};
 static const char *const renderer_keys[] = {"spp", "spp_step", "timeout", "checkpoint_interval", "output_file",
                                             "hdr_output_file", "output_buffers", "overwrite_output_files",
@@ -153,8 +153,13 @@ static int parse_photon_keys(json_ctx *c, const cJSON *v, integrator_settings *i
     if (!in->fixed_volume_radius && cJSON_GetObjectItemCaseSensitive(v, "fixed_volume_radius"))
         jwarn(c, "integrator.fixed_volume_radius: false (k-NN radii) is not supported; every volume photon "
                  "gets the progressive radius from volume_gather_radius");
-    const char *leg = "euclidean", *sched = "2d";
-    if (jget_string(c, v, w, "camera_leg", &leg) < 0 || jget_string(c, v, w, "radius_schedule", &sched) < 0) return -1;
+    const char *leg = "euclidean", *sched = "2d", *resid = "uniform";
+    if (jget_string(c, v, w, "camera_leg", &leg) < 0 || jget_string(c, v, w, "radius_schedule", &sched) < 0 ||
+        jget_string(c, v, w, "ellipse_residual", &resid) < 0)
+        return -1;
+    if (strcmp(resid, "uniform") && strcmp(resid, "exponential"))
+        return jfail(c, w, "ellipse_residual", "'%s' is not one of uniform, exponential", resid);
+    in->ellipse_residual = !strcmp(resid, "exponential");
     if (strcmp(leg, "euclidean") && strcmp(leg, "projected"))
         return jfail(c, w, "camera_leg", "'%s' is not one of euclidean, projected", leg);
     if (strcmp(sched, "2d") && strcmp(sched, "3d"))

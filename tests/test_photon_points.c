@@ -1,0 +1,429 @@
+/* Progressive photon points (volume_photon_type "points"): the radius schedule against its closed form,
+ * thread-count independence of the image, the total of a single-scattering image against an independent
+ * quadrature, and consistency against the reference path tracer on a small fog box. Every tolerance below
+ * is derived from a noise estimate measured in the same test (spread over independent seeds) plus a stated
+ * bias budget; no expected value comes from an earlier run of this code. */
+#include "test_util.h"
+
+#include <omp.h>
+
+#include "dartspp/gather.h"
+#include "dartspp/photon.h"
+#include "dartspp/render.h"
+
+/* ---------------------------------------------------------------------------------------------------- */
+/* helpers                                                                                              */
+
+typedef struct {
+    char *dir;
+    char path[512];
+} tmp_scene;
+
+static void tmp_scene_write(tmp_scene *t, const char *text)
+{
+    t->dir = test_tmpdir();
+    assert_non_null(t->dir);
+    snprintf(t->path, sizeof t->path, "%s/scene.json", t->dir);
+    test_write_file(t->path, text);
+}
+
+static void tmp_scene_remove(tmp_scene *t)
+{
+    char cmd[600];
+    snprintf(cmd, sizeof cmd, "rm -rf %s", t->dir);
+    (void)!system(cmd);
+    free(t->dir);
+    t->dir = NULL;
+}
+
+static void load_scene(const char *path, const char *const *sets, int nsets, scene *s)
+{
+    dp_error err;
+    scene_load_options lo = {.sets = sets, .set_count = nsets};
+    if (scene_load(path, &lo, s, &err)) fail_msg("%s", err.msg);
+}
+
+static void render_passes(const scene *s, int threads, uint64_t seed, long passes, film *f, render_stats *st)
+{
+    dp_error err;
+    render_options ro = {.threads = threads, .seed = seed, .spp = passes, .time_limit = 0};
+    if (render_scene(s, &ro, f, st, &err)) fail_msg("%s", err.msg);
+    assert_int_equal(st->passes, passes);
+    assert_int_equal(st->nonfinite, 0);
+}
+
+/* Mean image of a render as doubles (film sum / passes), 3 values per pixel. */
+static double *render_mean(const scene *s, int threads, uint64_t seed, long passes)
+{
+    film f;
+    render_stats st;
+    render_passes(s, threads, seed, passes, &f, &st);
+    size_t n = (size_t)s->cam.width * s->cam.height * 3;
+    double *m = malloc(n * sizeof(double));
+    assert_non_null(m);
+    for (size_t i = 0; i < n; i++) m[i] = f.sum[i] / (double)f.passes;
+    film_free(&f);
+    return m;
+}
+
+/* A fog box open towards the camera: Lambertian floor, ceiling, back and side walls (2 × 2 × 2), fog
+ * everywhere (camera and light in it), a point light inside, camera outside the box looking in. */
+static void box_scene_text(char *text, size_t len, int res, const char *integrator)
+{
+    snprintf(text, len,
+             "{ \"media\": [ { \"name\": \"fog\", \"type\": \"homogeneous\", \"sigma_s\": [0.45, 0.4, 0.5],"
+             "    \"sigma_a\": [0.05, 0.08, 0.03], \"phase_function\": { \"type\": \"henyey_greenstein\", \"g\": 0.3 } } ],"
+             "  \"bsdfs\": [ { \"name\": \"white\", \"type\": \"lambert\", \"albedo\": 0.7 },"
+             "               { \"name\": \"red\", \"type\": \"lambert\", \"albedo\": [0.7, 0.15, 0.1] },"
+             "               { \"name\": \"green\", \"type\": \"lambert\", \"albedo\": [0.15, 0.6, 0.2] } ],"
+             "  \"primitives\": ["
+             "    { \"type\": \"quad\", \"bsdf\": \"white\", \"transform\": { \"position\": [0, 0, 0], \"scale\": [2, 1, 2] } },"
+             "    { \"type\": \"quad\", \"bsdf\": \"white\", \"transform\": { \"position\": [0, 2, 0], \"scale\": [2, 1, 2],"
+             "      \"rotation\": [180, 0, 0] } },"
+             "    { \"type\": \"quad\", \"bsdf\": \"white\", \"transform\": { \"position\": [0, 1, 1], \"scale\": [2, 1, 2],"
+             "      \"rotation\": [-90, 0, 0] } },"
+             "    { \"type\": \"quad\", \"bsdf\": \"green\", \"transform\": { \"position\": [-1, 1, 0], \"scale\": [2, 1, 2],"
+             "      \"rotation\": [0, 0, -90] } },"
+             "    { \"type\": \"quad\", \"bsdf\": \"red\", \"transform\": { \"position\": [1, 1, 0], \"scale\": [2, 1, 2],"
+             "      \"rotation\": [0, 0, 90] } },"
+             "    { \"type\": \"point\", \"emission\": [4, 4, 4], \"ext_medium\": \"fog\","
+             "      \"transform\": { \"position\": [0.3, 1.5, 0.2] } } ],"
+             "  \"camera\": { \"type\": \"pinhole\", \"resolution\": [%d, %d], \"fov\": 45, \"medium\": \"fog\","
+             "    \"transform\": { \"position\": [0, 1, -3], \"look_at\": [0, 1, 0], \"up\": [0, 1, 0] } },"
+             "  \"integrator\": { %s },"
+             "  \"renderer\": { \"spp\": 1 } }",
+             res, res, integrator);
+}
+
+/* ---------------------------------------------------------------------------------------------------- */
+/* 1. radius schedule                                                                                    */
+
+/* r0 · (Π_{j=1..i} (j+α)/(j+1))^{1/dims} with the product as Γ(i+1+α) / (Γ(1+α) Γ(i+2)), via lgamma:
+ * Π (j+α) for j = 1..i is Γ(i+1+α)/Γ(1+α) and Π (j+1) is (i+1)! = Γ(i+2). */
+static double radius_closed_form(double r0, double alpha, long i, int dims)
+{
+    double log_prod = lgamma(i + 1.0 + alpha) - lgamma(1.0 + alpha) - lgamma(i + 2.0);
+    return r0 * exp(log_prod / dims);
+}
+
+static void test_radius_schedule_closed_form(void **state)
+{
+    (void)state;
+    const double alphas[] = {0.1, 0.3, 2.0 / 3.0, 0.9, 1.0};
+    const long iters[] = {0, 1, 2, 10, 1000, 100000};
+    const double r0 = 0.037;
+    for (int dims = 2; dims <= 3; dims++)
+        for (size_t a = 0; a < sizeof alphas / sizeof *alphas; a++)
+            for (size_t k = 0; k < sizeof iters / sizeof *iters; k++) {
+                double alpha = alphas[a];
+                long i = iters[k];
+                double got = progressive_radius(r0, alpha, i, dims), want = radius_closed_form(r0, alpha, i, dims);
+                /* lgamma of arguments up to 1e5 (values ~1e6) is good to a few ulp (~1e-10 absolute), and
+                 * the sum of 1e5 logs in the library to ~1e5 · 1e-16: 1e-8 relative covers both. */
+                if (fabs(got - want) > 1e-8 * want)
+                    fail_msg("progressive_radius(%g, %g, %ld, %d) = %.17g, closed form %.17g", r0, alpha, i, dims, got, want);
+                if (i == 0) assert_true(got == r0); /* the first iteration uses r0 exactly */
+            }
+    /* i = 1 by hand: ((1+α)/2)^{1/dims} */
+    assert_float_equal(progressive_radius(1.0, 0.5, 1, 2), sqrt(0.75), 1e-15);
+    assert_float_equal(progressive_radius(1.0, 0.5, 1, 3), cbrt(0.75), 1e-15);
+    /* α < 1: strictly decreasing; α = 1: constant; dims 3 shrinks slower than dims 2 */
+    for (size_t a = 0; a < sizeof alphas / sizeof *alphas; a++) {
+        double prev2 = progressive_radius(r0, alphas[a], 0, 2), prev3 = progressive_radius(r0, alphas[a], 0, 3);
+        for (long i = 1; i <= 300; i++) {
+            double r2 = progressive_radius(r0, alphas[a], i, 2), r3 = progressive_radius(r0, alphas[a], i, 3);
+            if (alphas[a] < 1.0) {
+                assert_true(r2 < prev2);
+                assert_true(r3 < prev3);
+                assert_true(r3 > r2);
+            } else {
+                assert_float_equal(r2, r0, 1e-15);
+                assert_float_equal(r3, r0, 1e-15);
+            }
+            prev2 = r2;
+            prev3 = r3;
+        }
+    }
+    /* the asymptote: r_i^dims ~ r0^dims · i^{α-1} / Γ(1+α) */
+    double alpha = 2.0 / 3.0, i = 1e5;
+    double asym = 0.037 * pow(pow(i, alpha - 1.0) / tgamma(1.0 + alpha), 0.5);
+    assert_float_equal(progressive_radius(0.037, alpha, (long)i, 2), asym, 1e-4 * asym);
+}
+
+/* The integrator uses that schedule: after N passes the last radii are those of iteration N-1, the volume
+ * radius from volume_gather_radius / volume_alpha / radius_schedule, the surface one from gather_radius /
+ * alpha in 2D. */
+static void test_radius_schedule_used_by_integrator(void **state)
+{
+    (void)state;
+    for (int dims = 2; dims <= 3; dims++) {
+        char integ[1024], text[8192];
+        snprintf(integ, sizeof integ,
+                 "\"type\": \"progressive_transient_photon_map\", \"volume_photon_type\": \"points\","
+                 " \"photon_count\": 500, \"volume_photon_count\": 2000, \"gather_radius\": 0.08,"
+                 " \"volume_gather_radius\": 0.05, \"alpha\": 0.5, \"volume_alpha\": 0.8, \"radius_schedule\": \"%s\","
+                 " \"max_bounces\": 4, \"transient_time_center\": 5, \"transient_time_width\": 1",
+                 dims == 2 ? "2d" : "3d");
+        box_scene_text(text, sizeof text, 8, integ);
+        tmp_scene t;
+        tmp_scene_write(&t, text);
+        scene s;
+        load_scene(t.path, NULL, 0, &s);
+        film f;
+        render_stats st;
+        render_passes(&s, 2, 5, 6, &f, &st);
+        assert_float_equal(st.r_vol, radius_closed_form(0.05, 0.8, 5, dims), 1e-12);
+        assert_float_equal(st.r_surf, radius_closed_form(0.08, 0.5, 5, 2), 1e-12);
+        film_free(&f);
+        scene_free(&s);
+        tmp_scene_remove(&t);
+    }
+}
+
+/* ---------------------------------------------------------------------------------------------------- */
+/* 2. thread count                                                                                       */
+
+static void test_threads_bit_identical(void **state)
+{
+    (void)state;
+    /* 20000 light paths (three photon-pass batches of 8192) against a volume budget of 12000 photons, so
+     * the budget cut by path index is exercised too; multiple scattering so both maps are populated. */
+    char text[8192];
+    box_scene_text(text, sizeof text, 32,
+                   "\"type\": \"progressive_transient_photon_map\", \"volume_photon_type\": \"points\","
+                   " \"photon_count\": 20000, \"volume_photon_count\": 12000, \"gather_photon_count\": 16,"
+                   " \"gather_radius\": 0.15, \"volume_gather_radius\": 0.08, \"alpha\": 0.7, \"volume_alpha\": 0.7,"
+                   " \"max_bounces\": 8, \"transient_time_center\": 5, \"transient_time_width\": 1.5");
+    tmp_scene t;
+    tmp_scene_write(&t, text);
+    scene s;
+    load_scene(t.path, NULL, 0, &s);
+
+    /* the photon pass on its own first: same photons, same order, whatever the thread count */
+    photon_set p1, p2;
+    dp_error err;
+    omp_set_num_threads(1);
+    if (photon_pass(&s, 9, 1, &p1, &err)) fail_msg("%s", err.msg);
+    omp_set_num_threads(2);
+    if (photon_pass(&s, 9, 1, &p2, &err)) fail_msg("%s", err.msg);
+    print_message("  photon pass: %zu volume photons (%ld of %ld paths), %zu surface photons (%ld paths)\n", p1.n_vol,
+                  p1.vol_paths, p1.paths, p1.n_surf, p1.surf_paths);
+    assert_true(p1.n_vol > 0 && p1.n_surf > 0);
+    assert_true(p1.vol_paths < p1.paths); /* the volume budget was reached */
+    assert_int_equal(p1.n_vol, p2.n_vol);
+    assert_int_equal(p1.n_surf, p2.n_surf);
+    assert_int_equal(p1.vol_paths, p2.vol_paths);
+    assert_int_equal(p1.surf_paths, p2.surf_paths);
+    assert_memory_equal(p1.vol, p2.vol, p1.n_vol * sizeof(photon));
+    assert_memory_equal(p1.surf, p2.surf, p1.n_surf * sizeof(photon));
+    photon_set_free(&p1);
+    photon_set_free(&p2);
+
+    film a, b, c;
+    render_stats sa, sb, sc;
+    render_passes(&s, 1, 7, 3, &a, &sa);
+    render_passes(&s, 2, 7, 3, &b, &sb);
+    size_t n = (size_t)s.cam.width * s.cam.height * 3, lit = 0;
+    for (size_t i = 0; i < n; i++) lit += a.sum[i] > 0;
+    assert_true(lit > n / 2); /* not a comparison of two black images */
+    assert_memory_equal(a.sum, b.sum, n * sizeof(double));
+    image_rgb ia, ib;
+    assert_int_equal(film_image(&a, -1, &ia, &err), 0);
+    assert_int_equal(film_image(&b, -1, &ib, &err), 0);
+    assert_memory_equal(ia.rgb, ib.rgb, n * sizeof(float));
+    assert_true(sa.stored_photons == sb.stored_photons);
+    render_passes(&s, 2, 8, 3, &c, &sc); /* a different seed does change the image */
+    assert_true(memcmp(a.sum, c.sum, n * sizeof(double)) != 0);
+    image_free(&ia);
+    image_free(&ib);
+    film_free(&a);
+    film_free(&b);
+    film_free(&c);
+    scene_free(&s);
+    tmp_scene_remove(&t);
+}
+
+/* ---------------------------------------------------------------------------------------------------- */
+/* 3. single scattering against quadrature                                                               */
+
+/* Gauss–Legendre nodes and weights on [-1, 1] by Newton's method on P_n. */
+static void gauss_legendre(int n, double *x, double *w)
+{
+    for (int i = 0; i < n; i++) {
+        double z = cos(M_PI * (i + 0.75) / (n + 0.5)), dp = 1;
+        for (int it = 0; it < 100; it++) {
+            double p0 = 1, p1 = z;
+            for (int k = 2; k <= n; k++) {
+                double p2 = ((2 * k - 1) * z * p1 - (k - 1) * p0) / k;
+                p0 = p1;
+                p1 = p2;
+            }
+            dp = n * (z * p1 - p0) / (z * z - 1);
+            double dz = p1 / dp;
+            z -= dz;
+            if (fabs(dz) < 1e-16) break;
+        }
+        x[i] = z;
+        w[i] = 2 / ((1 - z * z) * dp * dp);
+    }
+}
+
+typedef struct {
+    vec3 light, I, ss, st;
+    double g, eta, g0, g1; /* HG asymmetry, refractive index, gate [g0, g1) */
+} ss_case;
+
+/* Camera at the origin. Along direction psi, distance s, the light is at R(s) = |s psi - l| and the path
+ * time is eta (s + R). For tau = t / eta >= |l| the distance with eta (s + R) = t solves
+ * s + sqrt(s^2 - 2 s psi.l + |l|^2) = tau, i.e. s = (tau^2 - |l|^2) / (2 (tau - psi.l)). */
+static double ss_distance_at_time(const ss_case *a, vec3 psi, double t)
+{
+    double tau = t / a->eta, D2 = v3_dot(a->light, a->light);
+    if (tau * tau <= D2) return 0;
+    return (tau * tau - D2) / (2 * (tau - v3_dot(psi, a->light)));
+}
+
+/* Gate-averaged single-scattered radiance along psi, all three channels. */
+static vec3 ss_ray_radiance(const ss_case *a, vec3 psi, int nodes, const double *x, const double *w, int panels)
+{
+    double s0 = ss_distance_at_time(a, psi, a->g0), s1 = ss_distance_at_time(a, psi, a->g1);
+    double h = (s1 - s0) / panels, acc[3] = {0, 0, 0};
+    for (int p = 0; p < panels; p++)
+        for (int k = 0; k < nodes; k++) {
+            double s = s0 + h * (p + 0.5 + 0.5 * x[k]);
+            vec3 to_light = v3_sub(a->light, v3_scale(psi, s));
+            double R = v3_len(to_light);
+            /* photon travels light -> x (direction -to_light/R), scatters towards the camera (-psi) */
+            double mu = v3_dot(v3_scale(to_light, -1.0 / R), v3_neg(psi));
+            double ph = (1 - a->g * a->g) / (4 * M_PI * pow(1 + a->g * a->g - 2 * a->g * mu, 1.5));
+            for (int c = 0; c < 3; c++)
+                acc[c] += 0.5 * h * w[k] * v3_comp(a->ss, c) * ph * v3_comp(a->I, c) *
+                          exp(-v3_comp(a->st, c) * (s + R)) / (R * R);
+        }
+    double inv = 1.0 / (a->g1 - a->g0);
+    return v3(acc[0] * inv, acc[1] * inv, acc[2] * inv);
+}
+
+/* Sum over all pixels of the expected pixel values: the integral of the radiance over the image plane in
+ * pixel units, a tensor Gauss rule (q × q per pixel) times composite Gauss along each ray. */
+static vec3 ss_image_total(const ss_case *a, const camera *cam, int q, int nodes, int panels)
+{
+    double qx[16], qw[16], x[16], w[16];
+    gauss_legendre(q, qx, qw);
+    gauss_legendre(nodes, x, w);
+    vec3 tot = v3s(0);
+    for (int py = 0; py < cam->height; py++)
+        for (int px = 0; px < cam->width; px++)
+            for (int i = 0; i < q; i++)
+                for (int j = 0; j < q; j++) {
+                    vec3 psi = camera_ray_dir(cam, px + 0.5 + 0.5 * qx[i], py + 0.5 + 0.5 * qx[j]);
+                    vec3 L = ss_ray_radiance(a, psi, nodes, x, w, panels);
+                    tot = v3_add(tot, v3_scale(L, 0.25 * qw[i] * qw[j]));
+                }
+    return tot;
+}
+
+#define SS_PATHS 20000
+
+static void ss_scene_text(char *text, size_t len, double r_vol)
+{
+    snprintf(text, len,
+             "{ \"media\": [ { \"name\": \"fog\", \"type\": \"homogeneous\", \"sigma_s\": [0.4, 0.3, 0.5],"
+             "  \"sigma_a\": [0.05, 0.1, 0.02], \"speed_of_light\": 0.8,"
+             "  \"phase_function\": { \"type\": \"henyey_greenstein\", \"g\": 0.3 } } ],"
+             "  \"primitives\": [ { \"type\": \"point\", \"emission\": [2, 1.5, 1], \"ext_medium\": \"fog\","
+             "    \"transform\": { \"position\": [1.2, 0.9, 2.2] } } ],"
+             "  \"camera\": { \"type\": \"pinhole\", \"resolution\": [32, 24], \"fov\": 50, \"medium\": \"fog\","
+             "    \"transform\": { \"position\": [0, 0, 0], \"look_at\": [0, 0, 1], \"up\": [0, 1, 0] } },"
+             "  \"integrator\": { \"type\": \"progressive_transient_photon_map\", \"volume_photon_type\": \"points\","
+             "    \"photon_count\": %d, \"volume_photon_count\": 1e6, \"volume_gather_radius\": %.17g,"
+             "    \"volume_alpha\": 0.7, \"min_bounces\": 1, \"max_bounces\": 2,"
+             "    \"transient_time_center\": 4.375, \"transient_time_width\": 0.75 },"
+             "  \"renderer\": { \"spp\": 1 } }",
+             SS_PATHS, r_vol);
+}
+
+#define SS_SEEDS 8
+#define SS_ITERS 24
+
+static void ss_totals(const char *path, int seeds, long iters, vec3 *tot)
+{
+    scene s;
+    load_scene(path, NULL, 0, &s);
+    size_t npx = (size_t)s.cam.width * s.cam.height;
+    for (int k = 0; k < seeds; k++) {
+        double *m = render_mean(&s, 2, 500 + k, iters);
+        double c[3] = {0, 0, 0};
+        for (size_t p = 0; p < npx; p++)
+            for (int ch = 0; ch < 3; ch++) c[ch] += m[3 * p + ch];
+        tot[k] = v3(c[0], c[1], c[2]);
+        free(m);
+    }
+    scene_free(&s);
+}
+
+static void test_single_scatter_total(void **state)
+{
+    (void)state;
+    const double r = 0.04;
+    char text[4096];
+    tmp_scene t1, t2;
+    ss_scene_text(text, sizeof text, r);
+    tmp_scene_write(&t1, text);
+    ss_scene_text(text, sizeof text, 2 * r);
+    tmp_scene_write(&t2, text);
+    scene s;
+    load_scene(t1.path, NULL, 0, &s);
+    ss_case a = {.light = s.lights[0].pos, .I = s.lights[0].intensity, .ss = s.media[0].sigma_s,
+                 .st = s.media[0].sigma_t, .g = 0.3, .eta = 1.0 / 0.8, .g0 = 4.0, .g1 = 4.75};
+    double t0 = dp_seconds();
+    vec3 Q = ss_image_total(&a, &s.cam, 4, 8, 16);
+    vec3 Q2 = ss_image_total(&a, &s.cam, 6, 12, 32);
+    print_message("quadrature %.10g %.10g %.10g  (finer %.10g %.10g %.10g) %.2f s\n", Q.x, Q.y, Q.z, Q2.x, Q2.y, Q2.z, dp_seconds() - t0);
+    vec3 A[SS_SEEDS], B[SS_SEEDS];
+    t0 = dp_seconds();
+    ss_totals(t1.path, SS_SEEDS, SS_ITERS, A);
+    print_message("r: %.2f s\n", dp_seconds() - t0);
+    t0 = dp_seconds();
+    ss_totals(t2.path, SS_SEEDS, SS_ITERS, B);
+    print_message("2r: %.2f s\n", dp_seconds() - t0);
+    for (int ch = 0; ch < 3; ch++) {
+        double ma = 0, mb = 0, md = 0, va = 0, vd = 0;
+        for (int k = 0; k < SS_SEEDS; k++) {
+            ma += v3_comp(A[k], ch) / SS_SEEDS;
+            mb += v3_comp(B[k], ch) / SS_SEEDS;
+            md += (v3_comp(B[k], ch) - v3_comp(A[k], ch)) / SS_SEEDS;
+        }
+        for (int k = 0; k < SS_SEEDS; k++) {
+            va += pow(v3_comp(A[k], ch) - ma, 2) / (SS_SEEDS - 1);
+            vd += pow(v3_comp(B[k], ch) - v3_comp(A[k], ch) - md, 2) / (SS_SEEDS - 1);
+        }
+        double q = v3_comp(Q, ch), sea = sqrt(va / SS_SEEDS), sed = sqrt(vd / SS_SEEDS);
+        print_message("ch %d: Q %.6g  PP(r) %.6g (se %.3g, rel %.3g, z %.2f)  PP(2r) %.6g  d %.3g (se %.3g) rel %.3g\n", ch, q, ma, sea,
+                      sea / q, (ma - q) / sea, mb, md, sed, md / q);
+    }
+    scene_free(&s);
+    tmp_scene_remove(&t1);
+    tmp_scene_remove(&t2);
+}
+
+/* ---------------------------------------------------------------------------------------------------- */
+/* 4. consistency against the path tracer                                                                */
+
+static void test_consistency_vs_path_tracer(void **state)
+{
+    (void)state;
+    /* TODO */
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_radius_schedule_closed_form),
+        cmocka_unit_test(test_radius_schedule_used_by_integrator),
+        cmocka_unit_test(test_threads_bit_identical),
+        cmocka_unit_test(test_single_scatter_total),
+        cmocka_unit_test(test_consistency_vs_path_tracer),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
