@@ -57,6 +57,7 @@ typedef struct render_stats {
     double photon_paths;    /* light paths traced (photon points) */
     double stored_photons;  /* volume + surface photons stored, summed over iterations */
     double r_vol, r_surf;   /* radii of the last iteration */
+    double early_exits;     /* light paths ended by the DARTS early exit */
     double t_photon, t_maps, t_gather; /* seconds spent in the photon pass, map builds, sensor pass */
 } render_stats;
 
@@ -73,6 +74,19 @@ double progressive_radius(double r0, double alpha, long iteration, int dims);
 
 /* One iteration of photon points: photon pass, maps, sensor pass into f. Returns 0 or -1 with err. */
 int photon_points_pass(const scene *s, film *f, uint64_t seed, long iteration, render_stats *st, dp_error *err);
+
+/* ---- error log (issue: error against run time) ----
+ * CSV rows "seconds,iterations,photon_paths,stored_photons,r_vol,r_surf,mse,rel_mse,mse_q99,nonfinite_pixels"
+ * of the running image against a reference image (EXR/PFM, same size), at most one every `every` seconds
+ * of render time (0: every pass). In frame mode, reference frames "<ref stem>_NNNN<ext>" that exist are
+ * compared too, into "<csv stem>_frames.csv" (seconds,iterations,frame,mse,rel_mse,mse_q99,nonfinite_pixels). */
+typedef struct error_log error_log;
+error_log *error_log_open(const char *csv_path, const char *ref_path, int width, int height, int frame_count,
+                          double every, dp_error *err);
+/* Logs the film after a pass if a row is due (or force); a pass is never logged twice. */
+int error_log_pass(error_log *l, const film *f, const struct render_stats *st, int force, dp_error *err);
+double error_log_overhead(const error_log *l); /* seconds spent computing and writing rows */
+void error_log_close(error_log *l);
 
 /* ---- outputs ----
  * Writes the gate image to `path` (.exr or .pfm), a PNG preview `<stem>.png`, and in frame mode one image

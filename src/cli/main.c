@@ -9,6 +9,7 @@ static void usage(FILE *f)
     fprintf(f,
             "usage: dartspp render SCENE.json [--threads N] [--seed S] [--spp N] [--time SECONDS]\n"
             "                      [--output PATH.exr|.pfm] [--checkpoint SECONDS] [--set key=value ...]\n"
+            "                      [--reference REF.exr --log RUN.csv [--log-every SECONDS]]\n"
             "                      [--verbose] [--quiet]\n"
             "       dartspp compare IMAGE REFERENCE [--csv]      (EXR or PFM)\n"
             "See README.md for the scene keys, outputs and units.\n");

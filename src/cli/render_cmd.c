@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include "dartspp/cli.h"
+#include "dartspp/darts.h"
 #include "dartspp/render.h"
 
 typedef struct {
@@ -16,6 +17,8 @@ typedef struct {
     int set_count;
     int verbose, quiet;
     double checkpoint; /* seconds between checkpoints; < 0: as the scene says; 0: none */
+    const char *reference, *log;
+    double log_every;
     render_options ro;
 } render_args;
 
@@ -48,6 +51,7 @@ static int parse_args(int argc, char **argv, render_args *a)
 {
     a->ro = (render_options){.threads = 0, .seed = 1, .spp = -1, .time_limit = -1, .progress = 1};
     a->checkpoint = -1;
+    a->log_every = 1.0;
     a->sets = calloc((size_t)argc + 1, sizeof(char *));
     for (int i = 0; i < argc; i++) {
         const char *o = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
@@ -64,6 +68,12 @@ static int parse_args(int argc, char **argv, render_args *a)
         } else if (!strcmp(o, "--checkpoint")) {
             if (parse_number(o, v, 0, &a->checkpoint)) return bad_arg(o, v, "expected seconds (0: no checkpoints)");
             i++;
+        } else if (!strcmp(o, "--log-every")) {
+            if (parse_number(o, v, 0, &a->log_every)) return bad_arg(o, v, "expected seconds (0: every pass)");
+            i++;
+        } else if (!strcmp(o, "--reference") || !strcmp(o, "--log")) {
+            if (!v) return bad_arg(o, v, "expected a path");
+            *(!strcmp(o, "--log") ? &a->log : &a->reference) = argv[++i];
         } else if (!strcmp(o, "--output")) {
             if (!v) return bad_arg(o, v, "expected a path");
             a->output = argv[++i];
@@ -75,6 +85,7 @@ static int parse_args(int argc, char **argv, render_args *a)
         else a->scene_path = o;
     }
     if (!a->scene_path) return bad_arg("", NULL, "missing SCENE.json");
+    if (!a->log != !a->reference) return bad_arg(a->log ? "--log" : "--reference", NULL, "--log and --reference go together");
     /* --time alone renders for that long; --spp alone renders that many passes */
     if (a->ro.time_limit >= 0 && a->ro.spp < 0) a->ro.spp = 0;
     if (a->ro.spp >= 0 && a->ro.time_limit < 0) a->ro.time_limit = 0;
@@ -103,11 +114,13 @@ typedef struct {
     const char *out;
     double every, last;
     int quiet;
-} checkpoint_ctx;
+    error_log *log;    /* --log: error against --reference (may be NULL) */
+} after_pass_ctx;
 
-static int write_checkpoint(void *ctx, const film *f, const render_stats *st, dp_error *err)
+static int after_pass(void *ctx, const film *f, const render_stats *st, dp_error *err)
 {
-    checkpoint_ctx *c = ctx;
+    after_pass_ctx *c = ctx;
+    if (error_log_pass(c->log, f, st, 0, err)) return -1;
     if (c->every <= 0 || st->seconds - c->last < c->every) return 0;
     c->last = st->seconds;
     if (render_write_outputs(c->s, f, c->out, c->s->integrator.type_name, NULL, err)) return -1;
@@ -115,6 +128,23 @@ static int write_checkpoint(void *ctx, const film *f, const render_stats *st, dp
         fprintf(stderr, "%scheckpoint: %ld passes, %.1f s -> %s\n", isatty(2) ? "\r\033[K" : "", st->passes,
                 st->seconds, c->out);
     return 0;
+}
+
+/* Which photon-pass samplers run (DESIGN §4: the summary says which parts are active). */
+static void print_samplers(const scene *s)
+{
+    const integrator_settings *in = &s->integrator;
+    darts_guide g;
+    darts_guide_init(s, &g);
+    if (!g.active) {
+        printf("photon pass: baseline (free-flight distances, photons at scattering vertices)%s\n",
+               (in->enable_guiding || in->enable_elliptical) ? "; DARTS samplers off: the scene has no medium or no gate" : "");
+        return;
+    }
+    printf("photon pass: DARTS, %s target bins; DA distance sampling %s; elliptical control vertices %s (residual %s); "
+           "strict time %s\n", g.frames ? "per-frame" : "gate", in->enable_guiding ? "on" : "off",
+           in->enable_elliptical ? "on" : "off", in->ellipse_residual ? "exponential" : "uniform",
+           in->strict_time_width ? "on" : "off");
 }
 
 static void print_summary(const scene *s, const render_stats *st)
@@ -127,6 +157,10 @@ static void print_summary(const scene *s, const render_stats *st)
     printf("rendered %ld passes in %.2f s (%.2f M camera rays/s, %.2f M rays/s)%s; non-finite samples suppressed: %ld\n",
            st->passes, st->seconds, st->seconds > 0 ? st->camera_rays / st->seconds * 1e-6 : 0.0,
            st->seconds > 0 ? st->rays / st->seconds * 1e-6 : 0.0, st->interrupted ? " (interrupted)" : "", st->nonfinite);
+    if (s->integrator.type == INTEGRATOR_PHOTON_POINTS) print_samplers(s);
+    if (st->early_exits > 0)
+        printf("early exit: %.1f%% of the light paths ended as soon as no photon could reach their bin\n",
+               100.0 * st->early_exits / st->photon_paths);
     if (st->photon_paths > 0)
         printf("photon points: %.3g photon paths (%.2f M/s in the photon pass), %.3g photons stored; "
                "time in photon pass %.2f s, map builds %.2f s, sensor pass %.2f s; last radii r_vol %.4g, R_surf %.4g\n",
@@ -157,18 +191,30 @@ int cli_render(int argc, char **argv)
     signal(SIGTERM, on_signal);
     a.ro.progress = !a.quiet;
     a.ro.stop = &stop_requested;
-    checkpoint_ctx cp = {.s = &s, .out = out, .quiet = a.quiet,
+    after_pass_ctx cp = {.s = &s, .out = out, .quiet = a.quiet,
                          .every = a.checkpoint >= 0 ? a.checkpoint : s.renderer.checkpoint_seconds};
-    a.ro.after_pass = write_checkpoint;
+    if (a.log && !(cp.log = error_log_open(a.log, a.reference, s.cam.width, s.cam.height,
+                                           s.integrator.window.frame_count, a.log_every, &err))) {
+        fprintf(stderr, "dartspp render: %s\n", err.msg);
+        scene_free(&s);
+        free(a.sets);
+        return 2;
+    }
+    a.ro.after_pass = after_pass;
     a.ro.after_pass_ctx = &cp;
     film f = {0};
     render_stats st;
     rc = render_scene(&s, &a.ro, &f, &st, &err) ? 2 : 0;
+    if (!rc && cp.log && error_log_pass(cp.log, &f, &st, 1, &err)) rc = 1;
     if (!rc) {
         print_summary(&s, &st);
+        if (cp.log)
+            printf("error log: %s (%.3f s spent logging, %.2f%% of the render)\n", a.log, error_log_overhead(cp.log),
+                   st.seconds > 0 ? 100.0 * error_log_overhead(cp.log) / st.seconds : 0.0);
         if (render_write_outputs(&s, &f, out, s.integrator.type_name, print_written, &err)) rc = 1;
     }
     if (rc) fprintf(stderr, "dartspp render: %s\n", err.msg);
+    error_log_close(cp.log);
     film_free(&f);
     scene_free(&s);
     free(a.sets);

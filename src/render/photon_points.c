@@ -31,6 +31,7 @@ int photon_points_pass(const scene *s, film *f, uint64_t seed, long iteration, r
         g.surf_photons = ps.surf;
         st->rays += sensor_pass(s, &g, f, seed, iteration, &f->nonfinite);
         st->photon_paths += (double)ps.paths;
+        st->early_exits += (double)ps.early_exits;
         st->stored_photons += (double)(ps.n_vol + ps.n_surf);
         st->r_vol = g.r_vol;
         st->r_surf = g.r_surf;
