@@ -269,8 +269,11 @@ static void gauss_legendre(int n, double *x, double *w)
 }
 
 typedef struct {
+    const camera *cam;
     vec3 light, I, ss, st;
     double g, eta, g0, g1; /* HG asymmetry, refractive index, gate [g0, g1) */
+    double x[16], w[16];   /* Gauss–Legendre rule along the ray */
+    int nodes, panels;
 } ss_case;
 
 /* Camera at the origin. Along direction psi, distance s, the light is at R(s) = |s psi - l| and the path
@@ -283,137 +286,260 @@ static double ss_distance_at_time(const ss_case *a, vec3 psi, double t)
     return (tau * tau - D2) / (2 * (tau - v3_dot(psi, a->light)));
 }
 
-/* Gate-averaged single-scattered radiance along psi, all three channels. */
-static vec3 ss_ray_radiance(const ss_case *a, vec3 psi, int nodes, const double *x, const double *w, int panels)
+/* Along psi, over the distances s whose path time is in the gate, the single-scattered radiance integrand
+ * l(s) (gate-averaged, per channel): m[k] = ∫ l(s) s^-k ds for k = 0, 1, 2 (k = 0 is the radiance). */
+static void ss_ray_moments(const ss_case *a, vec3 psi, vec3 m[3])
 {
     double s0 = ss_distance_at_time(a, psi, a->g0), s1 = ss_distance_at_time(a, psi, a->g1);
-    double h = (s1 - s0) / panels, acc[3] = {0, 0, 0};
-    for (int p = 0; p < panels; p++)
-        for (int k = 0; k < nodes; k++) {
-            double s = s0 + h * (p + 0.5 + 0.5 * x[k]);
+    double h = (s1 - s0) / a->panels, acc[3][3] = {{0}};
+    for (int p = 0; p < a->panels; p++)
+        for (int k = 0; k < a->nodes; k++) {
+            double s = s0 + h * (p + 0.5 + 0.5 * a->x[k]);
             vec3 to_light = v3_sub(a->light, v3_scale(psi, s));
             double R = v3_len(to_light);
-            /* photon travels light -> x (direction -to_light/R), scatters towards the camera (-psi) */
+            /* the photon travels light -> x (direction -to_light/R) and scatters towards the camera (-psi) */
             double mu = v3_dot(v3_scale(to_light, -1.0 / R), v3_neg(psi));
             double ph = (1 - a->g * a->g) / (4 * M_PI * pow(1 + a->g * a->g - 2 * a->g * mu, 1.5));
-            for (int c = 0; c < 3; c++)
-                acc[c] += 0.5 * h * w[k] * v3_comp(a->ss, c) * ph * v3_comp(a->I, c) *
-                          exp(-v3_comp(a->st, c) * (s + R)) / (R * R);
+            for (int c = 0; c < 3; c++) {
+                double l = 0.5 * h * a->w[k] * v3_comp(a->ss, c) * ph * v3_comp(a->I, c) *
+                           exp(-v3_comp(a->st, c) * (s + R)) / (R * R) / (a->g1 - a->g0);
+                acc[0][c] += l;
+                acc[1][c] += l / s;
+                acc[2][c] += l / (s * s);
+            }
         }
-    double inv = 1.0 / (a->g1 - a->g0);
-    return v3(acc[0] * inv, acc[1] * inv, acc[2] * inv);
+    for (int k = 0; k < 3; k++) m[k] = v3(acc[k][0], acc[k][1], acc[k][2]);
 }
 
-/* Sum over all pixels of the expected pixel values: the integral of the radiance over the image plane in
- * pixel units, a tensor Gauss rule (q × q per pixel) times composite Gauss along each ray. */
-static vec3 ss_image_total(const ss_case *a, const camera *cam, int q, int nodes, int panels)
+/* Continuous pixel coordinate (axis 0: x, 1: y) of the direction d; inverse of camera_ray_dir. */
+static double ss_pixel_coord(const camera *c, vec3 d, int axis)
 {
-    double qx[16], qw[16], x[16], w[16];
+    double z = v3_dot(d, c->forward) / c->plane_dist;
+    if (axis == 0) return (v3_dot(d, c->right) / z + 1.0) * c->width / 2.0;
+    return ((double)c->height / c->width - v3_dot(d, c->up) / z) * c->width / 2.0;
+}
+
+/* |grad p|^2 of pixel coordinate p (axis) with respect to a small rotation of the unit direction psi,
+ * i.e. pixels^2 per radian^2 across the ray, by central differences in two perpendicular directions. */
+static double ss_pixel_jacobian2(const camera *c, vec3 psi, int axis)
+{
+    vec3 e1, e2;
+    v3_basis(psi, &e1, &e2);
+    const double eps = 1e-6;
+    double g = 0;
+    vec3 es[2] = {e1, e2};
+    for (int k = 0; k < 2; k++) {
+        double p1 = ss_pixel_coord(c, v3_norm(v3_add(psi, v3_scale(es[k], eps))), axis);
+        double p0 = ss_pixel_coord(c, v3_norm(v3_sub(psi, v3_scale(es[k], eps))), axis);
+        g += pow((p1 - p0) / (2 * eps), 2);
+    }
+    return g;
+}
+
+typedef struct {
+    vec3 total;    /* sum over all pixels of the expected pixel values */
+    vec3 interior; /* bound on the kernel bias of photons away from the image border, per unit r^2 */
+    vec3 edge;     /* first-order kernel bias at the image border, per unit r^2 */
+} ss_expectation;
+
+/* The image total is the integral of the radiance over the image plane in pixel units: a tensor Gauss
+ * rule (q × q per pixel) times composite Gauss along each ray. The bias terms are explained in
+ * test_single_scatter_total. */
+static ss_expectation ss_expected(const ss_case *a, int q)
+{
+    const camera *cam = a->cam;
+    double qx[16], qw[16];
     gauss_legendre(q, qx, qw);
-    gauss_legendre(nodes, x, w);
-    vec3 tot = v3s(0);
+    ss_expectation e = {v3s(0), v3s(0), v3s(0)};
     for (int py = 0; py < cam->height; py++)
         for (int px = 0; px < cam->width; px++)
             for (int i = 0; i < q; i++)
                 for (int j = 0; j < q; j++) {
-                    vec3 psi = camera_ray_dir(cam, px + 0.5 + 0.5 * qx[i], py + 0.5 + 0.5 * qx[j]);
-                    vec3 L = ss_ray_radiance(a, psi, nodes, x, w, panels);
-                    tot = v3_add(tot, v3_scale(L, 0.25 * qw[i] * qw[j]));
+                    vec3 m[3];
+                    ss_ray_moments(a, camera_ray_dir(cam, px + 0.5 + 0.5 * qx[i], py + 0.5 + 0.5 * qx[j]), m);
+                    double wq = 0.25 * qw[i] * qw[j];
+                    e.total = v3_add(e.total, v3_scale(m[0], wq));
+                    /* (10 + sigma_t s) / (8 s^2) per unit r^2, weighted by the integrand */
+                    e.interior = v3_add(e.interior, v3_scale(v3_add(v3_scale(m[2], 10.0 / 8), v3_mul(a->st, v3_scale(m[1], 1.0 / 8))), wq));
                 }
-    return tot;
+    /* Border flux: on each side, -(1/16) ∮ d/dn [ J_n(psi) ∫ l(s) s^-2 ds ] dl per unit r^2, with n the
+     * inward normal and J_n the squared pixel Jacobian along n; one-sided 3-point differences. */
+    const double hstep = 0.05;
+    for (int side = 0; side < 4; side++) {
+        int axis = side < 2 ? 0 : 1;                 /* 0,1: left/right borders (x); 2,3: top/bottom (y) */
+        double len = axis == 0 ? cam->height : cam->width, sign = (side % 2 == 0) ? 1.0 : -1.0;
+        double base = (side % 2 == 0) ? 0.0 : (axis == 0 ? cam->width : cam->height);
+        for (int seg = 0; seg < (int)len; seg++)
+            for (int i = 0; i < q; i++) {
+                double along = seg + 0.5 + 0.5 * qx[i], G[3][3];
+                for (int k = 0; k < 3; k++) {
+                    double across = base + sign * k * hstep;
+                    vec3 psi = axis == 0 ? camera_ray_dir(cam, across, along) : camera_ray_dir(cam, along, across);
+                    vec3 m[3];
+                    ss_ray_moments(a, psi, m);
+                    double J = ss_pixel_jacobian2(cam, psi, axis);
+                    for (int c = 0; c < 3; c++) G[k][c] = J * v3_comp(m[2], c);
+                }
+                for (int c = 0; c < 3; c++) {
+                    double dn = (-3 * G[0][c] + 4 * G[1][c] - G[2][c]) / (2 * hstep);
+                    double v = -0.5 * qw[i] * dn / 16.0;
+                    if (c == 0) e.edge.x += v;
+                    else if (c == 1) e.edge.y += v;
+                    else e.edge.z += v;
+                }
+            }
+    }
+    return e;
 }
 
 #define SS_PATHS 20000
+#define SS_SEEDS 8
+#define SS_ITERS 24
+#define SS_R0 0.08
 
-static void ss_scene_text(char *text, size_t len, double r_vol)
+static void ss_scene_text(char *text, size_t len)
 {
     snprintf(text, len,
              "{ \"media\": [ { \"name\": \"fog\", \"type\": \"homogeneous\", \"sigma_s\": [0.4, 0.3, 0.5],"
              "  \"sigma_a\": [0.05, 0.1, 0.02], \"speed_of_light\": 0.8,"
              "  \"phase_function\": { \"type\": \"henyey_greenstein\", \"g\": 0.3 } } ],"
              "  \"primitives\": [ { \"type\": \"point\", \"emission\": [2, 1.5, 1], \"ext_medium\": \"fog\","
-             "    \"transform\": { \"position\": [1.2, 0.9, 2.2] } } ],"
-             "  \"camera\": { \"type\": \"pinhole\", \"resolution\": [32, 24], \"fov\": 50, \"medium\": \"fog\","
+             "    \"transform\": { \"position\": [0.4, 0.25, 1.8] } } ],"
+             "  \"camera\": { \"type\": \"pinhole\", \"resolution\": [32, 24], \"fov\": 60, \"medium\": \"fog\","
              "    \"transform\": { \"position\": [0, 0, 0], \"look_at\": [0, 0, 1], \"up\": [0, 1, 0] } },"
              "  \"integrator\": { \"type\": \"progressive_transient_photon_map\", \"volume_photon_type\": \"points\","
              "    \"photon_count\": %d, \"volume_photon_count\": 1e6, \"volume_gather_radius\": %.17g,"
              "    \"volume_alpha\": 0.7, \"min_bounces\": 1, \"max_bounces\": 2,"
-             "    \"transient_time_center\": 4.375, \"transient_time_width\": 0.75 },"
+             "    \"transient_time_center\": 3.5, \"transient_time_width\": 1.0 },"
              "  \"renderer\": { \"spp\": 1 } }",
-             SS_PATHS, r_vol);
-}
-
-#define SS_SEEDS 8
-#define SS_ITERS 24
-
-static void ss_totals(const char *path, int seeds, long iters, vec3 *tot)
-{
-    scene s;
-    load_scene(path, NULL, 0, &s);
-    size_t npx = (size_t)s.cam.width * s.cam.height;
-    for (int k = 0; k < seeds; k++) {
-        double *m = render_mean(&s, 2, 500 + k, iters);
-        double c[3] = {0, 0, 0};
-        for (size_t p = 0; p < npx; p++)
-            for (int ch = 0; ch < 3; ch++) c[ch] += m[3 * p + ch];
-        tot[k] = v3(c[0], c[1], c[2]);
-        free(m);
-    }
-    scene_free(&s);
+             SS_PATHS, SS_R0);
 }
 
 static void test_single_scatter_total(void **state)
 {
     (void)state;
-    const double r = 0.04;
     char text[4096];
-    tmp_scene t1, t2;
-    ss_scene_text(text, sizeof text, r);
-    tmp_scene_write(&t1, text);
-    ss_scene_text(text, sizeof text, 2 * r);
-    tmp_scene_write(&t2, text);
+    tmp_scene t;
+    ss_scene_text(text, sizeof text);
+    tmp_scene_write(&t, text);
     scene s;
-    load_scene(t1.path, NULL, 0, &s);
-    ss_case a = {.light = s.lights[0].pos, .I = s.lights[0].intensity, .ss = s.media[0].sigma_s,
-                 .st = s.media[0].sigma_t, .g = 0.3, .eta = 1.0 / 0.8, .g0 = 4.0, .g1 = 4.75};
+    load_scene(t.path, NULL, 0, &s);
+    ss_case a = {.cam = &s.cam, .light = s.lights[0].pos, .I = s.lights[0].intensity, .ss = s.media[0].sigma_s,
+                 .st = s.media[0].sigma_t, .g = 0.3, .eta = 1.0 / 0.8, .g0 = 3.0, .g1 = 4.0, .nodes = 8, .panels = 8};
+    gauss_legendre(a.nodes, a.x, a.w);
     double t0 = dp_seconds();
-    vec3 Q = ss_image_total(&a, &s.cam, 4, 8, 16);
-    vec3 Q2 = ss_image_total(&a, &s.cam, 6, 12, 32);
-    print_message("quadrature %.10g %.10g %.10g  (finer %.10g %.10g %.10g) %.2f s\n", Q.x, Q.y, Q.z, Q2.x, Q2.y, Q2.z, dp_seconds() - t0);
-    vec3 A[SS_SEEDS], B[SS_SEEDS];
+    ss_expectation e = ss_expected(&a, 4);
+    print_message("quad %.3f s: total %.10g %.10g %.10g interior %.4g %.4g %.4g edge %.4g %.4g %.4g\n", dp_seconds() - t0,
+                  e.total.x, e.total.y, e.total.z, e.interior.x, e.interior.y, e.interior.z, e.edge.x, e.edge.y, e.edge.z);
+    a.nodes = 12;
+    a.panels = 24;
+    gauss_legendre(a.nodes, a.x, a.w);
+    ss_expectation e2 = ss_expected(&a, 8);
+    print_message("finer: total %.10g %.10g %.10g interior %.4g %.4g %.4g edge %.4g %.4g %.4g\n",
+                  e2.total.x, e2.total.y, e2.total.z, e2.interior.x, e2.interior.y, e2.interior.z, e2.edge.x, e2.edge.y, e2.edge.z);
+    vec3 A[SS_SEEDS];
+    size_t npx = (size_t)s.cam.width * s.cam.height;
     t0 = dp_seconds();
-    ss_totals(t1.path, SS_SEEDS, SS_ITERS, A);
-    print_message("r: %.2f s\n", dp_seconds() - t0);
-    t0 = dp_seconds();
-    ss_totals(t2.path, SS_SEEDS, SS_ITERS, B);
-    print_message("2r: %.2f s\n", dp_seconds() - t0);
+    for (int k = 0; k < SS_SEEDS; k++) {
+        double *m = render_mean(&s, 2, 500 + k, SS_ITERS);
+        double c[3] = {0, 0, 0};
+        for (size_t p = 0; p < npx; p++)
+            for (int ch = 0; ch < 3; ch++) c[ch] += m[3 * p + ch];
+        A[k] = v3(c[0], c[1], c[2]);
+        free(m);
+    }
+    print_message("render %.2f s\n", dp_seconds() - t0);
+    double r2 = 0;
+    for (long i = 0; i < SS_ITERS; i++) r2 += pow(radius_closed_form(SS_R0, 0.7, i, 2), 2) / SS_ITERS;
     for (int ch = 0; ch < 3; ch++) {
-        double ma = 0, mb = 0, md = 0, va = 0, vd = 0;
-        for (int k = 0; k < SS_SEEDS; k++) {
-            ma += v3_comp(A[k], ch) / SS_SEEDS;
-            mb += v3_comp(B[k], ch) / SS_SEEDS;
-            md += (v3_comp(B[k], ch) - v3_comp(A[k], ch)) / SS_SEEDS;
-        }
-        for (int k = 0; k < SS_SEEDS; k++) {
-            va += pow(v3_comp(A[k], ch) - ma, 2) / (SS_SEEDS - 1);
-            vd += pow(v3_comp(B[k], ch) - v3_comp(A[k], ch) - md, 2) / (SS_SEEDS - 1);
-        }
-        double q = v3_comp(Q, ch), sea = sqrt(va / SS_SEEDS), sed = sqrt(vd / SS_SEEDS);
-        print_message("ch %d: Q %.6g  PP(r) %.6g (se %.3g, rel %.3g, z %.2f)  PP(2r) %.6g  d %.3g (se %.3g) rel %.3g\n", ch, q, ma, sea,
-                      sea / q, (ma - q) / sea, mb, md, sed, md / q);
+        double ma = 0, va = 0;
+        for (int k = 0; k < SS_SEEDS; k++) ma += v3_comp(A[k], ch) / SS_SEEDS;
+        for (int k = 0; k < SS_SEEDS; k++) va += pow(v3_comp(A[k], ch) - ma, 2) / (SS_SEEDS - 1);
+        double q = v3_comp(e.total, ch), se = sqrt(va / SS_SEEDS);
+        double bias_edge = r2 * v3_comp(e.edge, ch), bias_int = r2 * v3_comp(e.interior, ch);
+        print_message("ch %d: Q %.6g  PP %.6g (se %.3g, rel %.3g, z %.2f) edge bias %.3g (rel %.3g) interior bound %.3g (rel %.3g); (PP-Q-edge)/se %.2f\n", ch, q, ma, se,
+                      se / q, (ma - q) / se, bias_edge, bias_edge / q, bias_int, bias_int / q, (ma - q - bias_edge) / se);
     }
     scene_free(&s);
-    tmp_scene_remove(&t1);
-    tmp_scene_remove(&t2);
+    tmp_scene_remove(&t);
 }
 
 /* ---------------------------------------------------------------------------------------------------- */
 /* 4. consistency against the path tracer                                                                */
 
+#define CO_RES 24
+#define CO_SEEDS 4
+#define CO_PT_PASSES 256
+
+static void co_integrator(char *out, size_t len, int pt)
+{
+    const char *common = "\"max_bounces\": 6, \"transient_time_center\": 5.0, \"transient_time_width\": 1.0";
+    if (pt) snprintf(out, len, "\"type\": \"path_tracer\", %s", common);
+    else
+        snprintf(out, len,
+                 "\"type\": \"progressive_transient_photon_map\", \"volume_photon_type\": \"points\","
+                 " \"photon_count\": 20000, \"volume_photon_count\": 1e6, \"gather_photon_count\": 64,"
+                 " \"gather_radius\": 0.1, \"volume_gather_radius\": 0.06, \"alpha\": 0.7, \"volume_alpha\": 0.7, %s",
+                 common);
+}
+
 static void test_consistency_vs_path_tracer(void **state)
 {
     (void)state;
-    /* TODO */
+    char integ[1024], text[8192];
+    tmp_scene tp, tq;
+    co_integrator(integ, sizeof integ, 1);
+    box_scene_text(text, sizeof text, CO_RES, integ);
+    tmp_scene_write(&tp, text);
+    co_integrator(integ, sizeof integ, 0);
+    box_scene_text(text, sizeof text, CO_RES, integ);
+    tmp_scene_write(&tq, text);
+    scene sp, sq;
+    load_scene(tp.path, NULL, 0, &sp);
+    load_scene(tq.path, NULL, 0, &sq);
+    size_t n = (size_t)CO_RES * CO_RES * 3;
+    double t0 = dp_seconds();
+    double *h1 = render_mean(&sp, 2, 101, CO_PT_PASSES / 2), *h2 = render_mean(&sp, 2, 202, CO_PT_PASSES / 2);
+    print_message("PT %.2f s\n", dp_seconds() - t0);
+    double *ref = malloc(n * sizeof(double)), ref2 = 0, vref = 0;
+    for (size_t i = 0; i < n; i++) {
+        ref[i] = 0.5 * (h1[i] + h2[i]);
+        ref2 += ref[i] * ref[i];
+        vref += 0.25 * (h1[i] - h2[i]) * (h1[i] - h2[i]);
+    }
+    const long iters[2] = {4, 64};
+    double nmse[2], vpp[2];
+    for (int c = 0; c < 2; c++) {
+        t0 = dp_seconds();
+        double *sum = calloc(n, sizeof(double)), *sq2 = calloc(n, sizeof(double));
+        for (int k = 0; k < CO_SEEDS; k++) {
+            double *m = render_mean(&sq, 2, 300 + k, iters[c]);
+            for (size_t i = 0; i < n; i++) {
+                sum[i] += m[i];
+                sq2[i] += m[i] * m[i];
+            }
+            free(m);
+        }
+        double err = 0, var = 0;
+        for (size_t i = 0; i < n; i++) {
+            double mean = sum[i] / CO_SEEDS;
+            err += (mean - ref[i]) * (mean - ref[i]);
+            var += (sq2[i] - CO_SEEDS * mean * mean) / (CO_SEEDS - 1) / CO_SEEDS;
+        }
+        nmse[c] = err / ref2;
+        vpp[c] = var / ref2;
+        print_message("PP %ld iters: %.2f s, nmse %.4g, pp noise %.4g, ref noise %.4g, ratio %.3g\n", iters[c], dp_seconds() - t0,
+                      nmse[c], vpp[c], vref / ref2, nmse[c] / (vpp[c] + vref / ref2));
+        free(sum);
+        free(sq2);
+    }
+    free(h1);
+    free(h2);
+    free(ref);
+    scene_free(&sp);
+    scene_free(&sq);
+    tmp_scene_remove(&tp);
+    tmp_scene_remove(&tq);
 }
 
 int main(void)

@@ -5,5 +5,6 @@
 
 int cli_render(int argc, char **argv);
 int cli_compare(int argc, char **argv);
+int cli_patch_mean(int argc, char **argv);
 
 #endif

@@ -11,7 +11,8 @@
  * Offsets inside the strata: the additive recurrence frac((r·8 + j)·φ), φ the golden ratio conjugate. */
 static double candidate_uniform(int row, int j, double rotation)
 {
-    double offset = fmod((row * M_CAND + j) * 0.6180339887498949, 1.0);
+    double k = (row * M_CAND + j) * 0.6180339887498949;
+    double offset = k - floor(k);
     double u = (j + offset) / M_CAND + rotation;
     return u >= 1.0 ? u - 1.0 : u;
 }

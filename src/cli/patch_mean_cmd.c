@@ -1,0 +1,56 @@
+/* `dartspp patch-mean IMAGE X0 Y0 X1 Y1`: mean over channels and pixels of [X0, X1) × [Y0, Y1), row 0 at the
+ * top (for transient curves). Non-finite pixels are left out and reported on stderr. */
+#include <errno.h>
+#include <stdio.h>
+#include <stdlib.h>
+
+#include "dartspp/cli.h"
+#include "dartspp/io.h"
+
+static int parse_int(const char *s, long *out)
+{
+    char *end;
+    errno = 0;
+    long v = strtol(s, &end, 10);
+    if (end == s || *end || errno) return -1;
+    *out = v;
+    return 0;
+}
+
+int cli_patch_mean(int argc, char **argv)
+{
+    long r[4];
+    if (argc != 5 || parse_int(argv[1], &r[0]) || parse_int(argv[2], &r[1]) || parse_int(argv[3], &r[2]) ||
+        parse_int(argv[4], &r[3])) {
+        fprintf(stderr, "usage: dartspp patch-mean IMAGE X0 Y0 X1 Y1   (integers, pixel rectangle [X0,X1) x [Y0,Y1))\n");
+        return 2;
+    }
+    image_rgb img = {0};
+    dp_error err;
+    if (image_read(argv[0], &img, &err)) {
+        fprintf(stderr, "dartspp patch-mean: %s\n", err.msg);
+        return 2;
+    }
+    if (r[0] < 0 || r[1] < 0 || r[2] > img.width || r[3] > img.height || r[0] >= r[2] || r[1] >= r[3]) {
+        fprintf(stderr, "dartspp patch-mean: %s: rectangle [%ld,%ld) x [%ld,%ld) is empty or outside the %dx%d image\n",
+                argv[0], r[0], r[2], r[1], r[3], img.width, img.height);
+        image_free(&img);
+        return 2;
+    }
+    double sum = 0.0;
+    long n = 0, bad = 0;
+    for (long y = r[1]; y < r[3]; y++)
+        for (long x = r[0]; x < r[2]; x++) {
+            const float *p = &img.rgb[3 * ((size_t)y * img.width + x)];
+            if (!isfinite(p[0]) || !isfinite(p[1]) || !isfinite(p[2])) {
+                bad++;
+                continue;
+            }
+            sum += (double)p[0] + p[1] + p[2];
+            n += 3;
+        }
+    if (bad) fprintf(stderr, "dartspp patch-mean: %s: %ld non-finite pixels left out\n", argv[0], bad);
+    printf("%.9g\n", n ? sum / n : 0.0);
+    image_free(&img);
+    return 0;
+}
