@@ -21,7 +21,7 @@ SAN_FLAGS = -O1 -fsanitize=address,undefined -fno-omit-frame-pointer -fno-saniti
 SAN_OBJ  = $(LIB_SRC:src/%.c=build/san/obj/%.o)
 TEST_BIN = $(TEST_SRC:tests/%.c=build/san/tests/%)
 
-.PHONY: all deps test run clean stress reference
+.PHONY: all deps test run clean stress reference bench-quick
 all: build/dartspp
 
 deps: $(DEPS_STAMP)
@@ -71,6 +71,10 @@ run: build/dartspp
 # A path-tracer reference: make reference SCENE=path.json [TIME=600] [OUT=refs/stem-pt.exr]
 reference: build/dartspp
 	bench/reference.sh $(SCENE) $(or $(TIME),600) $(or $(OUT),refs/$(basename $(notdir $(SCENE)))-pt.exr)
+
+# Benchmarks in under 5 minutes on 2 cores: reference, equal-time table, convergence plot, transient curve.
+bench-quick: build/dartspp
+	bench/quick.sh
 
 clean:
 	rm -rf build out

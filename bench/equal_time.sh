@@ -1,5 +1,5 @@
 #!/bin/sh
-# Equal-time comparison: bench/equal_time.sh SCENE.json REFERENCE.exr SECONDS [NAME] [SEEDS]
+# Equal-time comparison: bench/equal_time.sh SCENE.json REFERENCE.exr SECONDS [NAME] [SEEDS] [render args...]
 # Renders the scene for the same wall time with the path tracer, baseline photon points, DARTS photon points
 # and the DARTS ablations (elliptical only, DA only), each logging its error against REFERENCE, and prints
 # a Markdown table of the final errors and their ratios to DARTS (mean over SEEDS seeds, default 1).
@@ -8,6 +8,8 @@
 set -eu
 [ $# -ge 3 ] || { echo "usage: $0 SCENE.json REFERENCE.exr SECONDS [NAME] [SEEDS]" >&2; exit 2; }
 scene=$1; ref=$2; secs=$3; name=${4:-$(basename "$scene" .json)}; seeds=${5:-1}
+[ $# -ge 5 ] && shift 5 || shift $#
+extra="$*"
 bin=${DARTSPP:-build/dartspp}
 [ -x "$bin" ] || make build/dartspp >&2
 out=bench/results/$name; mkdir -p "$out"
@@ -22,13 +24,13 @@ echo "$methods" | while IFS='|' read -r label sets; do
     s=1
     while [ "$s" -le "$seeds" ]; do
         # shellcheck disable=SC2086
-        "$bin" render "$scene" $sets --time "$secs" --seed "$s" --quiet --output "$out/$label-s$s.exr" \
+        "$bin" render "$scene" $sets $extra --time "$secs" --seed "$s" --quiet --output "$out/$label-s$s.exr" \
             --reference "$ref" --log "$out/$label-s$s.csv" --log-every 1 > "$out/$label-s$s.txt"
         s=$((s + 1))
     done
 done
 {
-    echo "Equal time: \`$scene\`, $secs s per run, $seeds seed(s), against \`$ref\`"
+    echo "Equal time: \`$scene\` ${extra:+(\`$extra\`) }$secs s per run, $seeds seed(s), against \`$ref\`"
     echo "($(date -u +%Y-%m-%d), $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ *//'))"
     echo
     echo "| method | iterations | photon paths | early exits | MSE | relative MSE | MSE/q99² | MSE ÷ DARTS MSE |"

@@ -35,6 +35,22 @@ static cJSON *override_value(const char *text)
     return cJSON_CreateString(text);
 }
 
+static int override_resolution(json_ctx *c, cJSON *root, const char *set, const char *text)
+{
+    char *end;
+    long w = strtol(text, &end, 10), h = w;
+    if (*end == 'x') h = strtol(end + 1, &end, 10);
+    if (end == text || *end || w < 1 || h < 1 || w > 65536 || h > 65536)
+        return dp_fail(c->err, "%s: --set %s: expected resolution=W or resolution=WxH (1 to 65536)", c->file, set);
+    cJSON *cam = cJSON_GetObjectItemCaseSensitive(root, "camera");
+    if (!cJSON_IsObject(cam)) return jfail(c, "camera", NULL, "expected an object");
+    cJSON_DeleteItemFromObjectCaseSensitive(cam, "resolution");
+    cJSON *r = cJSON_AddArrayToObject(cam, "resolution");
+    cJSON_AddItemToArray(r, cJSON_CreateNumber((double)w));
+    cJSON_AddItemToArray(r, cJSON_CreateNumber((double)h));
+    return 0;
+}
+
 int settings_apply_overrides(json_ctx *c, cJSON *root, const char *const *sets, int count)
 {
     for (int i = 0; i < count; i++) {
@@ -45,6 +61,10 @@ int settings_apply_overrides(json_ctx *c, cJSON *root, const char *const *sets, 
         if (n >= sizeof key) return dp_fail(c->err, "%s: --set %s: key too long", c->file, sets[i]);
         memcpy(key, sets[i], n);
         key[n] = 0;
+        if (!strcmp(key, "resolution")) { /* camera resolution: W or WxH */
+            if (override_resolution(c, root, sets[i], eq + 1)) return -1;
+            continue;
+        }
         const char *section = in_list(renderer_keys, key) ? "renderer" : "integrator";
         if (!in_list(renderer_keys, key) && !in_list(integrator_keys, key))
             return dp_fail(c->err, "%s: --set %s: unknown integrator or renderer key '%s'", c->file, sets[i], key);
