@@ -64,6 +64,19 @@ int darts_can_reach(const darts_guide *g, const darts_bin *b, vec3 x, double tau
  * pdf(t) = p(T)·(T − C·cosθ)/(T − t). The photon weight is σs·e^{−σt·t}/pdf(t). */
 int ellipse_control_vertex(const ellipse_record *r, vec3 d, double tmax, double *t, double *pdf_t);
 
+/* Density in t of ellipse_control_vertex at distance t along d (residual density × dS/dt), 0 outside. */
+double ellipse_control_vertex_pdf(const ellipse_record *r, vec3 d, double t, residual_sampling mode, double sigma);
+
+/* The control vertex with multiple importance sampling (our addition, DESIGN-level decision): the
+ * elliptical technique alone has weight ∝ (T − t)/(T − C·cosθ), which is unbounded when ω points almost at
+ * the camera and T is close to C (the ellipsoid point rushes along the ray for a tiny change of T), giving
+ * fireflies of infinite variance. One-sample MIS of the elliptical technique with a σ-exponential in t over
+ * the same admissible interval [t(S_lo), t(S_hi)] — every sample still lands exactly in the bin — with the
+ * balance heuristic bounds the weight by 2σs/σ̄ (σ = the residual/exponential rate, the mean σt).
+ * Returns 1 with (t, mixture pdf) when 0 < t < tmax. */
+int control_vertex_sample(const ellipse_record *r, vec3 d, double tmax, residual_sampling mode, double sigma,
+                          double u_select, double u_t, double *t, double *pdf_t);
+
 /* ---- DA distance sampling (reference §5 with DESIGN §5.4–5.5) ----
  * One segment from r->x along d, next surface at tmax (may be INFINITY), channel chosen by u_channel.
  * Surface event by free flight (probability e^{−σt_c·tmax}); a medium event is resampled from 8

@@ -106,7 +106,11 @@ static int medium_segment(light_path *lp, double tmax)
     int darts = lp->g->active;
     if (darts && in->enable_elliptical) {
         double t, pdf;
-        if (ellipse_control_vertex(&lp->rec, lp->d, tmax, &t, &pdf)) { /* W = σs e^{−σt t}/p(t) (§6) */
+        double sigma = v3_avg(m->sigma_t), u1 = rng_uniform(lp->rng), u2 = rng_uniform(lp->rng);
+        int made = in->control_vertex_mis
+                       ? control_vertex_sample(&lp->rec, lp->d, tmax, in->ellipse_residual, sigma, u1, u2, &t, &pdf)
+                       : ellipse_control_vertex(&lp->rec, lp->d, tmax, &t, &pdf);
+        if (made) { /* W = σs e^{−σt t}/p(t) (§6) */
             vec3 w = v3_scale(v3_mul(m->sigma_s, v3_exp_neg(v3_scale(m->sigma_t, t))), 1.0 / pdf);
             store(lp, &lp->tb->vol, &lp->pc->n_vol, v3_add(lp->o, v3_scale(lp->d, t)), lp->d, v3_mul(lp->beta, w),
                   lp->bounce + 1, lp->time + m->eta * t);
