@@ -13,7 +13,7 @@ for t in "$dir"/test_*; do
   t0=$(date +%s)
   out=$("$t" 2>&1); rc=$?
   ok=$(printf '%s\n' "$out" | grep -c '^\[       OK \]')
-  run=$(printf '%s\n' "$out" | sed -n 's/^\[==========\] \([0-9]*\) test(s) run\./\1/p' | tail -1)
+  run=$(printf '%s\n' "$out" | sed -n 's/^\[==========\] \([0-9]*\) test(s) run\./\1/p' | awk '{ s += $1 } END { print s + 0 }')
   run=${run:-0}
   bad=$((run - ok))
   if [ "$rc" -ne 0 ] && [ "$bad" -eq 0 ]; then bad=1; fi   # crashed or sanitizer abort

@@ -12,6 +12,13 @@
 /* ---- helpers ---- */
 
 /* A photon at (x, y, z); the other fields are irrelevant to the map. */
+/* Every test runs twice: against the default BVH search and against the FLANN backend. */
+static int use_flann;
+static surface_photon_map *build_map(const photon *ph, size_t n, dp_error *err)
+{
+    return use_flann ? surface_map_build_flann(ph, n, err) : surface_map_build(ph, n, err);
+}
+
 static photon at(double x, double y, double z)
 {
     photon p;
@@ -157,8 +164,8 @@ static vec3 room_query(dp_rng *r, int i)
 static surface_photon_map *build_ok(const photon *ph, size_t n)
 {
     dp_error err = {{0}};
-    surface_photon_map *m = surface_map_build(ph, n, &err);
-    if (!m) fail_msg("surface_map_build(%zu): %s", n, err.msg);
+    surface_photon_map *m = build_map(ph, n, &err);
+    if (!m) fail_msg("build_map(%zu): %s", n, err.msg);
     return m;
 }
 
@@ -285,14 +292,14 @@ static void test_empty_map(void **state)
 {
     (void)state;
     dp_error err = {{0}};
-    surface_photon_map *m = surface_map_build(NULL, 0, &err);
+    surface_photon_map *m = build_map(NULL, 0, &err);
     assert_non_null(m);
     int idx[4];
     double d2[4];
     assert_int_equal(photon_map_query_knn(m, v3(0, 0, 0), 4, 1e30, idx, d2), 0);
     surface_map_free(m);
     photon p = at(1, 2, 3);
-    m = surface_map_build(&p, 0, &err);
+    m = build_map(&p, 0, &err);
     assert_non_null(m);
     assert_int_equal(photon_map_query_knn(m, v3(1, 2, 3), 4, 1.0, idx, d2), 0);
     surface_map_free(m);
@@ -439,14 +446,14 @@ static void test_build_rejects_bad_positions(void **state)
     photon ph[3] = {at(0, 0, 0), at(1, 1, 1), at(2, 2, 2)};
     ph[1].pos[2] = NAN;
     dp_error err = {{0}};
-    assert_null(surface_map_build(ph, 3, &err));
+    assert_null(build_map(ph, 3, &err));
     assert_non_null(strstr(err.msg, "photon 1"));
     ph[1].pos[2] = 1e30f;
     err.msg[0] = 0;
-    assert_null(surface_map_build(ph, 3, &err));
+    assert_null(build_map(ph, 3, &err));
     assert_non_null(strstr(err.msg, "photon 1"));
     err.msg[0] = 0;
-    assert_null(surface_map_build(NULL, 3, &err));
+    assert_null(build_map(NULL, 3, &err));
     assert_true(err.msg[0] != 0);
 }
 
@@ -552,5 +559,7 @@ int main(void)
         cmocka_unit_test(test_concurrent_queries),
         cmocka_unit_test(test_rebuild_is_deterministic),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    int failed = cmocka_run_group_tests_name("surface map, BVH search", tests, NULL, NULL);
+    use_flann = 1;
+    return failed + cmocka_run_group_tests_name("surface map, FLANN backend", tests, NULL, NULL);
 }

@@ -50,6 +50,7 @@
 
 struct surface_photon_map {
     size_t n;
+    volume_photon_map *tree; /* the default search (our BVH, r = 0); NULL with the FLANN backend */
     float *pts;          /* 3n floats: the FLANN dataset, also used for the exact distances */
     flann_index_t index; /* NULL when n == 0 */
 };
@@ -77,7 +78,7 @@ static void flann_params(struct FLANNParameters *p, int build)
 
 static int coord_ok(double c) { return isfinite(c) && fabs(c) <= COORD_MAX; }
 
-surface_photon_map *surface_map_build(const photon *ph, size_t n, dp_error *err)
+static surface_photon_map *build(const photon *ph, size_t n, int use_flann, dp_error *err)
 {
     if (n > 0 && !ph) {
         dp_fail(err, "surface photon map: no photon array for %zu photons", n);
@@ -103,6 +104,13 @@ surface_photon_map *surface_map_build(const photon *ph, size_t n, dp_error *err)
     }
     m->n = n;
     if (n == 0) return m;
+    if (!use_flann) {
+        if (!(m->tree = volume_map_build(ph, n, 0.0, err))) {
+            free(m);
+            return NULL;
+        }
+        return m;
+    }
     m->pts = malloc(n * 3 * sizeof *m->pts);
     if (!m->pts) {
         dp_fail(err, "surface photon map: out of memory for %zu photons", n);
@@ -123,9 +131,13 @@ surface_photon_map *surface_map_build(const photon *ph, size_t n, dp_error *err)
     return m;
 }
 
+surface_photon_map *surface_map_build(const photon *ph, size_t n, dp_error *err) { return build(ph, n, 0, err); }
+surface_photon_map *surface_map_build_flann(const photon *ph, size_t n, dp_error *err) { return build(ph, n, 1, err); }
+
 void surface_map_free(surface_photon_map *m)
 {
     if (!m) return;
+    volume_map_free(m->tree);
     if (m->index) {
         struct FLANNParameters p;
         flann_params(&p, 0);
@@ -197,6 +209,7 @@ int photon_map_query_knn(const surface_photon_map *m, vec3 x, int k, double R, i
     if (!m || m->n == 0 || k <= 0 || !(R > 0.0) || !v3_is_finite(x)) return 0;
     double R2 = R * R;
     if (!(R2 > 0.0)) return 0; /* R*R underflows: nothing has d2 < 0 */
+    if (m->tree) return photon_map_query_knn_tree(m->tree, x, k, R, idx, d2);
     int n = (int)m->n;
     if (k > n) k = n;
     if (!coord_ok(x.x) || !coord_ok(x.y) || !coord_ok(x.z)) return query_linear(m, x, k, R2, idx, d2);

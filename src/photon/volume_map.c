@@ -424,3 +424,75 @@ void photon_map_query_beam(const volume_photon_map *m, vec3 o, vec3 d, double tm
         visit_leaf(m, &q, range_start(m->n, leaf, m->depth), range_start(m->n, leaf + 1, m->depth), visit, ctx);
     }
 }
+
+/* ---- k nearest neighbours (the surface map's search) ----
+ * Exact: the k smallest (d2, source index) pairs among the photons with d2 < R², d2 computed in double from
+ * the float position and the double query. Nodes are visited nearer child first and skipped when their box
+ * (a superset of their photons, rounded outward) is farther than the current k-th distance (or R), so the
+ * answer does not depend on the visit order. */
+typedef struct {
+    int k, n;
+    double *d2;
+    int *idx;
+} knn_heap; /* sorted ascending by (d2, idx); n <= k */
+
+static void knn_insert(knn_heap *h, double d2, int idx)
+{
+    if (h->n == h->k && (d2 > h->d2[h->n - 1] || (d2 == h->d2[h->n - 1] && idx > h->idx[h->n - 1]))) return;
+    int i = h->n < h->k ? h->n++ : h->n - 1;
+    while (i > 0 && (h->d2[i - 1] > d2 || (h->d2[i - 1] == d2 && h->idx[i - 1] > idx))) {
+        h->d2[i] = h->d2[i - 1];
+        h->idx[i] = h->idx[i - 1];
+        i--;
+    }
+    h->d2[i] = d2;
+    h->idx[i] = idx;
+}
+
+static double box_dist2(const node_box *b, const double x[3])
+{
+    double s = 0.0;
+    for (int a = 0; a < 3; a++) {
+        double e = fmax(fmax((double)b->lo[a] - x[a], x[a] - (double)b->hi[a]), 0.0);
+        s += e * e;
+    }
+    return s;
+}
+
+int photon_map_query_knn_tree(const volume_photon_map *m, vec3 x, int k, double R, int *idx, double *d2)
+{
+    if (!m || m->n == 0 || k <= 0 || !(R > 0.0) || !v3_is_finite(x)) return 0;
+    double q[3] = {x.x, x.y, x.z}, R2 = R * R;
+    knn_heap h = {k, 0, d2, idx};
+    size_t first_leaf = ((size_t)1 << m->depth) - 1;
+    size_t stack[STACK_MAX];
+    double stack_d[STACK_MAX];
+    int top = 0;
+    stack[top] = 0;
+    stack_d[top++] = box_dist2(&m->boxes[0], q);
+    while (top > 0) {
+        size_t node = stack[--top];
+        double bound = h.n == k ? h.d2[k - 1] : R2;
+        if (stack_d[top] > bound || stack_d[top] >= R2) continue;
+        if (node < first_leaf) {
+            size_t a = 2 * node + 1, b = 2 * node + 2;
+            double da = box_dist2(&m->boxes[a], q), db = box_dist2(&m->boxes[b], q);
+            if (da < db) { /* push the farther child first: the nearer is visited next */
+                size_t t = a; a = b; b = t;
+                double td = da; da = db; db = td;
+            }
+            stack[top] = a, stack_d[top++] = da;
+            stack[top] = b, stack_d[top++] = db;
+            continue;
+        }
+        size_t leaf = node - first_leaf;
+        size_t end = range_start(m->n, leaf + 1, m->depth);
+        for (size_t i = range_start(m->n, leaf, m->depth); i < end; i++) {
+            const float *p = m->points[i].pos;
+            double dx = p[0] - q[0], dy = p[1] - q[1], dz = p[2] - q[2];
+            double e2 = dx * dx + dy * dy + dz * dz;
+            if (e2 < R2) knn_insert(&h, e2, (int)m->points[i].src);
+        }
+    }
+    return h.n;
+}
