@@ -52,13 +52,14 @@ static void test_threads_bit_identical(void **state)
 static void test_frames_sum_to_union_gate(void **state)
 {
     (void)state;
-    const char *frames[] = {"frame_num=4", "start_time=7", "transient_time_width=0.5"};
-    const char *gate[] = {"transient_time_center=8", "transient_time_width=2"};
-    const char *gate1[] = {"transient_time_center=7.25", "transient_time_width=0.5"};
+    /* the path tracer: the same random numbers whatever the window (DARTS aims each path at one frame) */
+    const char *frames[] = {"frame_num=4", "start_time=7", "transient_time_width=0.5", "type=path_tracer"};
+    const char *gate[] = {"transient_time_center=8", "transient_time_width=2", "type=path_tracer"};
+    const char *gate1[] = {"transient_time_center=7.25", "transient_time_width=0.5", "type=path_tracer"};
     scene sf, sg, s1;
-    load("scenes/fogbox/fogbox.json", frames, 3, &sf);
-    load("scenes/fogbox/fogbox.json", gate, 2, &sg);
-    load("scenes/fogbox/fogbox.json", gate1, 2, &s1);
+    load("scenes/fogbox/fogbox.json", frames, 4, &sf);
+    load("scenes/fogbox/fogbox.json", gate, 3, &sg);
+    load("scenes/fogbox/fogbox.json", gate1, 3, &s1);
     sf.cam.width = sg.cam.width = s1.cam.width = 32;
     sf.cam.height = sg.cam.height = s1.cam.height = 32;
     film ff, fg, f1;
@@ -95,6 +96,37 @@ static void test_frames_sum_to_union_gate(void **state)
     scene_free(&sf);
     scene_free(&sg);
     scene_free(&s1);
+}
+
+/* DARTS in frame mode (one target frame per path): the union-window image is still exactly the mean of the
+ * frames, and every frame receives light. */
+static void test_darts_frames_sum_to_union(void **state)
+{
+    (void)state;
+    const char *frames[] = {"frame_num=4", "start_time=6", "transient_time_width=0.25", "photon_count=20000",
+                            "volume_photon_count=4000"};
+    scene s;
+    load("scenes/fogbox/fogbox.json", frames, 5, &s);
+    s.cam.width = s.cam.height = 24;
+    film f;
+    render(&s, 2, 5, 3, &f);
+    dp_error err;
+    image_rgb u, fr[4];
+    assert_int_equal(film_image(&f, -1, &u, &err), 0);
+    double frame_total[4] = {0};
+    for (int k = 0; k < 4; k++) assert_int_equal(film_image(&f, k, &fr[k], &err), 0);
+    for (size_t i = 0; i < 24 * 24 * 3; i++) {
+        double sum = 0;
+        for (int k = 0; k < 4; k++) sum += fr[k].rgb[i], frame_total[k] += fr[k].rgb[i];
+        assert_true(fabs(sum / 4 - u.rgb[i]) <= 1e-5 * fabs(u.rgb[i]) + 1e-30);
+    }
+    for (int k = 0; k < 4; k++) {
+        assert_true(frame_total[k] > 0);
+        image_free(&fr[k]);
+    }
+    image_free(&u);
+    film_free(&f);
+    scene_free(&s);
 }
 
 static void assert_all_finite(const char *path)
@@ -153,6 +185,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_threads_bit_identical),
         cmocka_unit_test(test_frames_sum_to_union_gate),
+        cmocka_unit_test(test_darts_frames_sum_to_union),
         cmocka_unit_test(test_cli_outputs_finite),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
