@@ -20,7 +20,9 @@ baseline|--set enable_guiding=false --set enable_elliptical=false
 elliptical_only|--set enable_guiding=false --set enable_elliptical=true
 da_only|--set enable_guiding=true --set enable_elliptical=false
 darts|--set enable_guiding=true --set enable_elliptical=true"
+only=${METHODS:-path_tracer baseline elliptical_only da_only darts} # METHODS="baseline darts" runs a subset
 echo "$methods" | while IFS='|' read -r label sets; do
+    case " $only " in *" $label "*) ;; *) continue ;; esac
     s=1
     while [ "$s" -le "$seeds" ]; do
         # shellcheck disable=SC2086
@@ -35,11 +37,11 @@ done
     echo
     echo "| method | iterations | photon paths | early exits | MSE | relative MSE | MSE/q99² | MSE ÷ DARTS MSE |"
     echo "|---|---|---|---|---|---|---|---|"
-    awk -F, -v seeds="$seeds" -v dir="$out" '
+    awk -F, -v seeds="$seeds" -v dir="$out" -v only="$only" '
         function last_row(file,   line, l) { l = ""; while ((getline line < file) > 0) l = line; close(file); return l }
         function early(file,   line, e) { e = "-"; while ((getline line < file) > 0) if (line ~ /^early exit:/) { split(line, a, " "); e = a[3] } close(file); return e }
         BEGIN {
-            n = split("path_tracer baseline elliptical_only da_only darts", m, " ")
+            n = split(only, m, " ")
             for (i = 1; i <= n; i++) {
                 it[i] = pp[i] = mse[i] = rel[i] = q[i] = 0
                 for (s = 1; s <= seeds; s++) {

@@ -17,12 +17,15 @@ static double candidate_uniform(int row, int j, double rotation)
     return u >= 1.0 ? u - 1.0 : u;
 }
 
-/* log Φ(s, ℓ) = −1.5·log(4Ds) − ℓ²/(4Ds) − σa·s: the DA Green's function of a point source up to constants
- * that cancel in RIS (paper eq. 9), in log space so that thick media never underflow. */
-static double log_phi(double s, double ell2, double D, double sigma_a)
+/* Φ(s, ℓ) = (4Ds)^{−3/2}·exp(−ℓ²/(4Ds) − σa·s), the DA Green's function of a point source up to constants
+ * that cancel in RIS (paper eq. 9), split as amplitude × exp(exponent): the weights are formed as
+ * amplitude_j·exp(exponent_j − max exponent), which never underflows to all zeros in thick media (the
+ * largest term keeps exp(0) = 1) and needs no logarithm. */
+static double phi_exponent(double s, double ell2, double D, double sigma_a, double *amplitude)
 {
     double fourDs = 4.0 * D * s;
-    return -1.5 * log(fourDs) - ell2 / fourDs - sigma_a * s;
+    *amplitude = 1.0 / (fourDs * sqrt(fourDs));
+    return -ell2 / fourDs - sigma_a * s;
 }
 
 /* σs·e^{−σt·t}·ris/(q(t)·α) with q·α = σt_c·e^{−σt_c·t}, written as σs·e^{−(σt − σt_c)t}/σt_c so that far
@@ -55,13 +58,13 @@ void da_sample_distance(const medium *m, const ellipse_record *r, vec3 d, double
     out->medium_event = 1;
     double alpha = isfinite(tmax) ? -expm1(-st * tmax) : 1.0; /* P(medium | c) */
     double D = 1.0 / (3.0 * (sa + ss * (1.0 - (m->phase.type == PHASE_ISOTROPIC ? 0.0 : m->phase.g))));
-    double t_c[M_CAND], logw[M_CAND];
+    double t_c[M_CAND], expo[M_CAND], amp[M_CAND];
     int ok[M_CAND], any = 0;
     double p_proj = r->C * v3_dot(d, r->e);                  /* (cam − x)·ω */
     double perp2 = fmax(0.0, r->C * r->C - p_proj * p_proj); /* squared distance of the camera to the ray */
     int row = (int)(rng_uniform(rng) * TABLE_ROWS);
     if (row >= TABLE_ROWS) row = TABLE_ROWS - 1;
-    double rot = rng_uniform(rng), logw_max = -INFINITY;
+    double rot = rng_uniform(rng), expo_max = -INFINITY;
     for (int j = 0; j < M_CAND; j++) {
         double u = candidate_uniform(row, j, rot);
         double t = -log1p(-u * alpha) / st;              /* truncated exponential on [0, tmax) */
@@ -75,11 +78,11 @@ void da_sample_distance(const medium *m, const ellipse_record *r, vec3 d, double
         ok[j] = s > 0.0;
         if (!ok[j]) continue;
         /* w_j = p̂/q with q(t) = σt e^{−σt t}/α: the e^{−σt t} cancels; σt and α are common factors */
-        logw[j] = log_phi(s, ell2, D, sa);
-        ok[j] = isfinite(logw[j]);
+        expo[j] = phi_exponent(s, ell2, D, sa, &amp[j]);
+        ok[j] = isfinite(expo[j]) && isfinite(amp[j]);
         if (ok[j]) {
             any = 1;
-            logw_max = fmax(logw_max, logw[j]);
+            expo_max = fmax(expo_max, expo[j]);
         }
     }
     if (!any) { /* nothing reachable: keep candidate 0 with its exponential weight σs e^{−σt t}/(q·α) */
@@ -90,7 +93,7 @@ void da_sample_distance(const medium *m, const ellipse_record *r, vec3 d, double
     }
     double w[M_CAND], W = 0.0;
     for (int j = 0; j < M_CAND; j++) {
-        w[j] = ok[j] ? exp(logw[j] - logw_max) : 0.0;  /* scaled by e^{−max}: RIS is scale-free */
+        w[j] = ok[j] ? amp[j] * exp(expo[j] - expo_max) : 0.0; /* scaled by e^{−max}: RIS is scale-free */
         W += w[j];
     }
     double key = (1.0 - rng_uniform(rng)) * W, acc = 0.0; /* key in (0, W] */
