@@ -21,7 +21,7 @@ set key autotitle columnhead
 set logscale xy
 set grid
 set xlabel 'render time (s)'
-set ylabel 'MSE against the path-tracer reference'
+set ylabel 'MSE against the reference image'
 set title '$title — $(date -u +%Y-%m-%d), $(nproc) cores'
 plot $plots
 GP

@@ -187,7 +187,7 @@ static void trace_light_path(const scene *s, const darts_guide *g, dp_rng *rng, 
     double t_end = in->window.gated ? time_window_end(&in->window) : INFINITY;
     new_vertex(&lp);
     while (lp.bounce + 1 < in->max_bounces && lp.time < t_end && !v3_is_zero(lp.beta)) {
-        if (g->active && !darts_can_reach(g, &lp.bin, lp.o, lp.time)) {
+        if (g->active && in->early_exit && !darts_can_reach(g, &lp.bin, lp.o, lp.time)) {
             pc->early_exit = 1;
             return;
         }
