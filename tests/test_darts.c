@@ -297,7 +297,7 @@ static double da_integrand(double t, const void *vp)
     return c->ss * exp(-c->st * t) * g_t(t, c->kg);
 }
 
-static int run_da_case(const da_case *k, int fixed_record, uint64_t seed)
+static int run_da_case(const da_case *k, int fixed_record, double defensive, uint64_t seed)
 {
     vec3 e = e_axis(), x = X0, cam = v3_add(X0, v3_scale(e, k->C)), d = dir_at(e, k->cos_t);
     darts_guide guide = {.active = 1, .cam = cam, .beg = k->start, .end = k->end, .width = k->end - k->start,
@@ -331,14 +331,14 @@ static int run_da_case(const da_case *k, int fixed_record, uint64_t seed)
     int grey = m.sigma_s.x == m.sigma_s.y && m.sigma_s.y == m.sigma_s.z && m.sigma_a.x == m.sigma_a.y &&
                m.sigma_a.y == m.sigma_a.z;
     const int grey_medium = grey;
-    long n_fallback_weight = 0;
+    long n_fallback_weight = 0, n_over_bound = 0;
     stats med[3] = {{0}}, surf[3] = {{0}}, tot[3] = {{0}};
     long n_med = 0, n_fallback = 0, n_bad_w = 0, n_fallback_reachable = 0, n_bad_t = 0, n_surf_inf_nonzero = 0;
     for (long i = 0; i < k->n; i++) {
         if (!fixed_record)
             ellipse_record_init(&rec, &guide, &bin, x, k->tau, k->eta, k->mode, k->sigma_res, rng_uniform(&rng));
         da_sample out;
-        da_sample_distance(&m, &rec, d, k->tmax, &rng, &out);
+        da_sample_distance(&m, &rec, d, k->tmax, defensive, &rng, &out);
         double w[3] = {out.weight.x, out.weight.y, out.weight.z};
         for (int c = 0; c < 3; c++)
             if (!isfinite(w[c]) || w[c] < 0.0) {
@@ -358,6 +358,9 @@ static int run_da_case(const da_case *k, int fixed_record, uint64_t seed)
                 /* a fallback is allowed only when nothing is reachable, so its own t is not (1e-12 slack) */
                 if (path_S(x, d, cam, out.t) < S_reach * (1.0 - 1e-12)) n_fallback_reachable++;
             }
+            /* the defensive selection bounds the RIS factor by 1/ε: weight <= σs/(σt·ε) (grey media) */
+            if (grey_medium && defensive > 0.0 && out.weight.x > m.sigma_s.x / (m.sigma_t.x * defensive) * (1 + 1e-12))
+                n_over_bound++;
             fm = reach ? g_t(out.t, k->kg) : 0.0;
         } else {
             if (out.t != k->tmax) n_bad_t++;
@@ -370,8 +373,8 @@ static int run_da_case(const da_case *k, int fixed_record, uint64_t seed)
             st_add(&tot[c], w[c] * (fm + fs));
         }
     }
-    printf(" %s, %s record (t_R %.4g, S_reach %.4g, C %.4g): medium %.3f, fallback %.4f\n", k->name,
-           fixed_record ? "fixed" : "fresh", tR, S_reach, k->C, (double)n_med / k->n, (double)n_fallback / k->n);
+    printf(" %s, %s record, defensive %.1f (t_R %.4g, S_reach %.4g, C %.4g): medium %.3f, fallback %.4f\n", k->name,
+           fixed_record ? "fixed" : "fresh", defensive, tR, S_reach, k->C, (double)n_med / k->n, (double)n_fallback / k->n);
     for (int c = 0; c < (grey ? 1 : 3); c++) {
         char what[128];
         snprintf(what, sizeof what, "ch %d medium part", c);
@@ -382,9 +385,9 @@ static int run_da_case(const da_case *k, int fixed_record, uint64_t seed)
         fail += check_z(what, &tot[c], ref_med[c] + ref_surf[c]);
     }
     printf("  weights non-finite/negative: %ld of %ld; fallbacks at a reachable t: %ld; bad t: %ld; "
-           "nonzero escape weight: %ld; fallback weight != sigma_s/sigma_t: %ld\n",
-           n_bad_w, 3 * k->n, n_fallback_reachable, n_bad_t, n_surf_inf_nonzero, n_fallback_weight);
-    if (n_bad_w || n_fallback_reachable || n_bad_t || n_surf_inf_nonzero || n_fallback_weight) fail++;
+           "nonzero escape weight: %ld; fallback weight != sigma_s/sigma_t: %ld; over the defensive bound: %ld\n",
+           n_bad_w, 3 * k->n, n_fallback_reachable, n_bad_t, n_surf_inf_nonzero, n_fallback_weight, n_over_bound);
+    if (n_bad_w || n_fallback_reachable || n_bad_t || n_surf_inf_nonzero || n_fallback_weight || n_over_bound) fail++;
     if (k->expect_no_fallback && n_fallback) {
         printf("  expected no fallback (every candidate is reachable), got %ld\n", n_fallback);
         fail++;
@@ -397,7 +400,9 @@ static const phase_function HG05 = {PHASE_HENYEY_GREENSTEIN, 0.5};
 
 static int run_da_both(const da_case *k, uint64_t seed)
 {
-    return run_da_case(k, 0, seed) + run_da_case(k, 1, seed + 1000);
+    /* plain RIS (ε = 0, the reference) and the defensive selection (ε = 0.2, our default) */
+    return run_da_case(k, 0, 0.0, seed) + run_da_case(k, 1, 0.0, seed + 1000) + run_da_case(k, 0, 0.2, seed + 2000) +
+           run_da_case(k, 1, 0.2, seed + 3000);
 }
 
 static void test_da_normal(void **state)

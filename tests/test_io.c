@@ -547,6 +547,47 @@ static void test_compare_hand_values(void **state)
     image_free(&ref);
 }
 
+/* Mean of independent renders and the variance of that mean, by hand: values {1, 3} and {2, 2, 5}. */
+static void test_mean_of_hand_values(void **state)
+{
+    (void)state;
+    image_rgb in[3], mean;
+    dp_error err;
+    double v;
+    const float a[3] = {1, 2, 0}, b[3] = {3, 2, 0}, c[3] = {0, 5, 0};
+    fill(&in[0], 1, 1, a);
+    fill(&in[1], 1, 1, b);
+    fill(&in[2], 1, 1, c);
+    /* k = 2: means (2, 2, 0); s² = (2, 0, 0); V = mean of s²/2 = (1 + 0 + 0)/3 */
+    assert_int_equal(image_mean_of(in, 2, &mean, &v, &err), 0);
+    assert_true(mean.rgb[0] == 2.0f && mean.rgb[1] == 2.0f && mean.rgb[2] == 0.0f);
+    assert_close(v, 1.0 / 3.0, 1e-15);
+    image_free(&mean);
+    /* k = 3: channel 0 {1,3,0}: mean 4/3, s² = (1/9 + 25/9 + 16/9)/2 = 7/3; channel 1 {2,2,5}: mean 3,
+     * s² = (1 + 1 + 4)/2 = 3; V = (7/3 + 3 + 0)/3/3 */
+    assert_int_equal(image_mean_of(in, 3, &mean, &v, &err), 0);
+    assert_close(mean.rgb[0], 4.0 / 3.0, 1e-7);
+    assert_close(mean.rgb[1], 3.0, 1e-7);
+    assert_close(v, (7.0 / 3.0 + 3.0) / 9.0, 1e-12);
+    image_free(&mean);
+    /* a NaN stays in the mean and is left out of V: channel 0 of image 3 */
+    in[2].rgb[0] = NAN;
+    assert_int_equal(image_mean_of(in, 3, &mean, &v, &err), 0);
+    assert_true(isnan(mean.rgb[0]));
+    assert_close(v, 3.0 / 3.0 / 2.0, 1e-12); /* (s²/k = 1 for channel 1, 0 for channel 2) over 2 values */
+    image_free(&mean);
+    /* one image, or different sizes: refused */
+    assert_int_equal(image_mean_of(in, 1, &mean, &v, &err), -1);
+    image_rgb big;
+    const float d[6] = {0};
+    fill(&big, 2, 1, d);
+    image_rgb pair[2] = {in[0], big};
+    assert_int_equal(image_mean_of(pair, 2, &mean, &v, &err), -1);
+    assert_non_null(strstr(err.msg, "2x1"));
+    image_free(&big);
+    for (int j = 0; j < 3; j++) image_free(&in[j]);
+}
+
 static void test_compare_nonfinite_excluded(void **state)
 {
     (void)state;
@@ -890,6 +931,7 @@ int main(void)
         cmocka_unit_test(test_atomic_open_commit_abort),
         cmocka_unit_test(test_frames_csv),
         cmocka_unit_test(test_image_dispatch_by_extension),
+        cmocka_unit_test(test_mean_of_hand_values),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

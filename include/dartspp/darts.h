@@ -93,6 +93,9 @@ typedef struct {
     int fallback;      /* medium event with no reachable candidate */
 } da_sample;
 
-void da_sample_distance(const medium *m, const ellipse_record *r, vec3 d, double tmax, dp_rng *rng, da_sample *out);
+/* defensive ∈ [0, 1): the share of uniform selection among the reachable candidates (0: plain RIS, as the
+ * reference); it bounds the RIS factor by 1/defensive at the cost of a little importance. */
+void da_sample_distance(const medium *m, const ellipse_record *r, vec3 d, double tmax, double defensive, dp_rng *rng,
+                        da_sample *out);
 
 #endif

@@ -67,6 +67,12 @@ typedef struct {
 
 int image_compare(const image_rgb *img, const image_rgb *ref, image_error *out, dp_error *err);
 
+/* The mean of k >= 2 independent renders of the same size (equal weights) and the variance of that mean,
+ * averaged over channels and pixels: V = mean of s²/k, s² the unbiased per-value sample variance. V is
+ * what a reference's own noise adds to the expected MSE of any image compared against it. Values that are
+ * non-finite in any input stay non-finite in the mean and are left out of V. */
+int image_mean_of(const image_rgb *imgs, int k, image_rgb *mean, double *var_of_mean, dp_error *err);
+
 /* Frame sidecar: "index,start,end" header and one line per frame k: k, start + k*w, start + (k+1)*w,
  * written with %.17g so that the time axis is exact. Atomic. */
 int frames_csv_write(const char *path, int frame_count, double start, double width, dp_error *err);

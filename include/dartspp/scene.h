@@ -114,6 +114,7 @@ typedef struct {
     int volume_beams;               /* volume_photon_type "beams": loads, refused at render time */
     int camera_leg_projected;       /* camera_leg: "euclidean" (reference, default) or "projected" */
     int radius_schedule_3d;         /* radius_schedule: "2d" (default) or "3d" (reference cube root) */
+    double da_defensive;            /* da_defensive: uniform share of the DA-RIS candidate selection (default 0.2) */
     int early_exit;                 /* early_exit: DARTS paths end once their bin is out of reach (default true) */
     int control_vertex_mis;         /* control_vertex_mis: MIS of the elliptical and exponential techniques (default true) */
     int ellipse_residual;           /* ellipse_residual: 0 "uniform" (reference), 1 "exponential" (paper eq. 21-22) */

@@ -13,6 +13,7 @@ static void usage(FILE *f)
             "                      [--verbose] [--quiet]\n"
             "       dartspp compare IMAGE REFERENCE [--csv]      (EXR or PFM)\n"
             "       dartspp patch-mean IMAGE X0 Y0 X1 Y1          (mean of a pixel rectangle)\n"
+            "       dartspp merge OUTPUT IMAGE IMAGE [IMAGE...]   (mean of independent renders, its variance)\n"
             "See README.md for the scene keys, outputs and units.\n");
 }
 
@@ -25,7 +26,8 @@ int main(int argc, char **argv)
     if (!strcmp(argv[1], "render")) return cli_render(argc - 2, argv + 2);
     if (!strcmp(argv[1], "compare")) return cli_compare(argc - 2, argv + 2);
     if (!strcmp(argv[1], "patch-mean")) return cli_patch_mean(argc - 2, argv + 2);
-    fprintf(stderr, "dartspp: unknown command '%s' (commands: render, compare, patch-mean)\n", argv[1]);
+    if (!strcmp(argv[1], "merge")) return cli_merge(argc - 2, argv + 2);
+    fprintf(stderr, "dartspp: unknown command '%s' (commands: render, compare, patch-mean, merge)\n", argv[1]);
     usage(stderr);
     return 2;
 }

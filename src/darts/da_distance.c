@@ -41,7 +41,8 @@ static vec3 medium_weight(const medium *m, int c, double t, double ris)
     return w;
 }
 
-void da_sample_distance(const medium *m, const ellipse_record *r, vec3 d, double tmax, dp_rng *rng, da_sample *out)
+void da_sample_distance(const medium *m, const ellipse_record *r, vec3 d, double tmax, double defensive, dp_rng *rng,
+                        da_sample *out)
 {
     *out = (da_sample){0};
     int c = (int)(rng_uniform(rng) * 3.0);
@@ -92,22 +93,31 @@ void da_sample_distance(const medium *m, const ellipse_record *r, vec3 d, double
         return;
     }
     double w[M_CAND], W = 0.0;
+    int valid = 0;
     for (int j = 0; j < M_CAND; j++) {
         w[j] = ok[j] ? amp[j] * exp(expo[j] - expo_max) : 0.0; /* scaled by e^{−max}: RIS is scale-free */
         W += w[j];
+        valid += w[j] > 0.0;
     }
-    double key = (1.0 - rng_uniform(rng)) * W, acc = 0.0; /* key in (0, W] */
+    /* Defensive selection: P_j = (1 − ε)·w_j/W + ε/valid over the reachable candidates. With the weight
+     * 1/(M·P_j) the estimate stays unbiased for any P_j > 0 wherever a contribution is possible
+     * (E = (1/M)Σ_j E[f(t_j)/q(t_j)]), and ε bounds it: 1/(M·P_j) <= valid/(M·ε) <= 1/ε. Plain RIS (ε = 0)
+     * has P_j = w_j/W, so a candidate with a tiny target weight is picked rarely but then carries
+     * W/(M·w_j): a heavy tail, since the Gaussian factor of Φ spans many orders of magnitude. */
+    double eps = defensive;
+    double key = (1.0 - rng_uniform(rng)), acc = 0.0; /* key in (0, 1] */
     int pick = -1;
+    double P = 0.0;
     for (int j = 0; j < M_CAND; j++) {
         if (w[j] <= 0.0) continue;
         pick = j;
-        acc += w[j];
+        P = (1.0 - eps) * w[j] / W + eps / valid;
+        acc += P;
         if (acc >= key) break;
     }
     double t = t_c[pick];
-    /* RIS: E[f(t)·(1/p̂(t))·(1/M)Σ p̂_j/q_j] = ∫f. With p̂/q = w·K, K = e^{max}·α/σt, the estimate of 1/q-density is
-     * (ΣW/M)/w_pick · 1/q(t); the medium-event weight is σs e^{−σt t}/α times that (reference §5.3 step 10). */
-    double ris = (W / M_CAND) / w[pick];
+    /* RIS (reference §5.3 step 10 when ε = 0): the medium-event weight is σs e^{−σt t}/(α·q(t)) × 1/(M·P_pick) */
+    double ris = 1.0 / (M_CAND * P);
     out->t = t;
     out->weight = medium_weight(m, c, t, ris);
 }

@@ -160,6 +160,32 @@ int image_compare(const image_rgb *img, const image_rgb *ref, image_error *out, 
     return 0;
 }
 
+int image_mean_of(const image_rgb *imgs, int k, image_rgb *mean, double *var_of_mean, dp_error *err)
+{
+    *var_of_mean = 0.0;
+    if (k < 2) return dp_fail(err, "merge: need at least two images (got %d)", k);
+    for (int j = 1; j < k; j++)
+        if (imgs[j].width != imgs[0].width || imgs[j].height != imgs[0].height)
+            return dp_fail(err, "merge: image %d is %dx%d but image 1 is %dx%d", j + 1, imgs[j].width,
+                           imgs[j].height, imgs[0].width, imgs[0].height);
+    if (image_alloc(mean, imgs[0].width, imgs[0].height, err)) return -1;
+    size_t n = 3 * (size_t)imgs[0].width * (size_t)imgs[0].height, used = 0;
+    double v = 0.0;
+    for (size_t i = 0; i < n; i++) {
+        double m = 0.0, m2 = 0.0;
+        for (int j = 0; j < k; j++) m += imgs[j].rgb[i];
+        m /= k;
+        for (int j = 0; j < k; j++) m2 += ((double)imgs[j].rgb[i] - m) * ((double)imgs[j].rgb[i] - m);
+        mean->rgb[i] = (float)m;
+        if (isfinite(m) && isfinite(m2)) {
+            v += m2 / (k - 1) / k;
+            used++;
+        }
+    }
+    *var_of_mean = used ? v / (double)used : 0.0;
+    return 0;
+}
+
 /* Case-insensitive test of the file name's extension (ext includes the dot). */
 static int has_ext(const char *path, const char *ext)
 {

@@ -120,7 +120,7 @@ static int medium_segment(light_path *lp, double tmax)
     double t;
     if (darts && in->enable_guiding && (lp->rec.valid || lp->rec.S_reach > lp->rec.C)) {
         da_sample ds;
-        da_sample_distance(m, &lp->rec, lp->d, tmax, lp->rng, &ds);
+        da_sample_distance(m, &lp->rec, lp->d, tmax, in->da_defensive, lp->rng, &ds);
         lp->beta = v3_mul(lp->beta, ds.weight);
         t = ds.t;
         event = ds.medium_event;

@@ -11,7 +11,7 @@ static const char *const integrator_keys[] = {
     "enable_volume_light_sampling", "photon_count", "volume_photon_count", "gather_photon_count",
     "gather_radius", "volume_gather_radius", "volume_photon_type", "alpha", "volume_alpha",
     "fixed_volume_radius", "include_surfaces", "low_order_scattering", "enable_guiding", "enable_elliptical",
-    "strict_time_width", "camera_leg", "radius_schedule", "ellipse_residual", "control_vertex_mis", "early_exit", "enable_consistency_checks", "enable_two_sided_shading", "exclude_non_mis", "use_grid",
+    "strict_time_width", "camera_leg", "radius_schedule", "ellipse_residual", "control_vertex_mis", "early_exit", "da_defensive", "enable_consistency_checks", "enable_two_sided_shading", "exclude_non_mis", "use_grid",
     NULL};
 static const char *const renderer_keys[] = {"spp", "spp_step", "timeout", "checkpoint_interval", "output_file",
                                             "hdr_output_file", "output_buffers", "overwrite_output_files",
@@ -162,6 +162,7 @@ static int parse_photon_keys(json_ctx *c, const cJSON *v, integrator_settings *i
         jget_number_range(c, v, w, "volume_gather_radius", in->gather_radius, 0, 0, &in->volume_gather_radius) ||
         jget_number_range(c, v, w, "alpha", 0.3, 0, 1, &in->alpha) ||
         jget_number_range(c, v, w, "volume_alpha", in->alpha, 0, 1, &in->volume_alpha) ||
+        jget_number_range(c, v, w, "da_defensive", 0.2, 0, 0.999, &in->da_defensive) ||
         jget_bool(c, v, w, "fixed_volume_radius", 0, &in->fixed_volume_radius) ||
         jget_bool(c, v, w, "include_surfaces", 1, &in->include_surfaces) ||
         jget_bool(c, v, w, "low_order_scattering", 1, &in->low_order_scattering) ||
