@@ -5,6 +5,11 @@
 # a Markdown table of the final errors and their ratios to DARTS (mean over SEEDS seeds, default 1).
 # Logs and images go to bench/results/NAME/ (NAME defaults to the scene stem); the table to
 # bench/results/NAME-equal-time-SECONDSs.md. Uses only the command line.
+# When REFERENCE.var exists (written by bench/reference.sh), the table also gives MSE − V_ref: the
+# expected MSE against the reference is the MSE against the truth plus the reference's own variance V_ref,
+# so subtracting it estimates the error against the truth, and the ratios are taken on that.
+# With SEEDS >= 2 the table also gives each method's own variance at that time, measured without any
+# reference from the spread of its seeds (MSE between seeds 1 and 2, halved), and its ratio to DARTS's.
 set -eu
 [ $# -ge 3 ] || { echo "usage: $0 SCENE.json REFERENCE.exr SECONDS [NAME] [SEEDS]" >&2; exit 2; }
 scene=$1; ref=$2; secs=$3; name=${4:-$(basename "$scene" .json)}; seeds=${5:-1}
@@ -31,13 +36,24 @@ echo "$methods" | while IFS='|' read -r label sets; do
         s=$((s + 1))
     done
 done
+vref=0
+[ -f "$ref.var" ] && vref=$(cat "$ref.var")
+# variance of each method from its first two seeds (no reference involved)
+for label in $only; do
+    v="-"
+    if [ "$seeds" -ge 2 ]; then
+        v=$("$bin" compare "$out/$label-s1.exr" "$out/$label-s2.exr" --csv | awk -F, '{ printf "%.6g", $1 / 2 }')
+    fi
+    echo "$label $v"
+done > "$out/seed-variance.txt"
 {
     echo "Equal time: \`$scene\` ${extra:+(\`$extra\`) }$secs s per run, $seeds seed(s), against \`$ref\`"
     echo "($(date -u +%Y-%m-%d), $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ *//'))"
+    if [ "$vref" != 0 ]; then echo "Reference noise V_ref = $vref (variance of the reference mean, from its chunks)."; fi
     echo
-    echo "| method | iterations | photon paths | early exits | MSE | relative MSE | MSE/q99² | MSE ÷ DARTS MSE |"
-    echo "|---|---|---|---|---|---|---|---|"
-    awk -F, -v seeds="$seeds" -v dir="$out" -v only="$only" '
+    echo "| method | iterations | photon paths | early exits | MSE | MSE − V_ref | relative MSE | MSE/q99² | (MSE − V_ref) ÷ DARTS's | variance (seeds) | ÷ DARTS's |"
+    echo "|---|---|---|---|---|---|---|---|---|---|---|"
+    awk -F, -v seeds="$seeds" -v dir="$out" -v only="$only" -v vref="$vref" '
         function last_row(file,   line, l) { l = ""; while ((getline line < file) > 0) l = line; close(file); return l }
         function early(file,   line, e) { e = "-"; while ((getline line < file) > 0) if (line ~ /^early exit:/) { split(line, a, " "); e = a[3] } close(file); return e }
         BEGIN {
@@ -50,7 +66,12 @@ done
                 }
                 ex[i] = early(dir "/" m[i] "-s1.txt")
             }
-            for (i = 1; i <= n; i++)
-                printf("| %s | %.0f | %.3g | %s | %.4g | %.4g | %.4g | %.2f |\n", m[i], it[i], pp[i], ex[i], mse[i], rel[i], q[i], mse[i] / mse[n])
+            while ((getline line < (dir "/seed-variance.txt")) > 0) { split(line, a, " "); sv[a[1]] = a[2] }
+            d = mse[n] - vref
+            for (i = 1; i <= n; i++) {
+                vr = (sv[m[i]] != "-" && sv[m[n]] + 0 > 0) ? sprintf("%.2f", sv[m[i]] / sv[m[n]]) : "-"
+                printf("| %s | %.0f | %.3g | %s | %.4g | %.4g | %.4g | %.4g | %.2f | %s | %s |\n", m[i], it[i], pp[i], ex[i],
+                       mse[i], mse[i] - vref, rel[i], q[i], d > 0 ? (mse[i] - vref) / d : 0, sv[m[i]], vr)
+            }
         }' /dev/null
 } | tee "$table"

@@ -1,8 +1,11 @@
 #!/bin/sh
 # Path-tracer reference image of a scene: bench/reference.sh SCENE.json [SECONDS] [OUT.exr] [extra render args]
-# Renders the scene with the reference path tracer (integrator type overridden) for SECONDS (default 600)
-# on all cores, with checkpoints every minute, and writes OUT (default refs/<scene stem>-pt.exr) plus a
-# sidecar OUT.txt recording the command, date, machine, passes and time: the reference's cost.
+# Renders the scene with the reference path tracer (integrator type overridden) for SECONDS in all
+# (default 600) on all cores, as CHUNKS (default 4) independent renders of SECONDS/CHUNKS with different
+# seeds, merged by `dartspp merge` into OUT (default refs/<scene stem>-pt.exr). The spread of the chunks
+# gives the variance of the reference's own noise, written to OUT.var (one number, per channel value):
+# every MSE measured against OUT is too high by about that much, and bench/equal_time.sh subtracts it.
+# A sidecar OUT.txt records the command, date, machine and passes: the reference's cost.
 # References live in refs/ (ignored by git).
 set -eu
 [ $# -ge 1 ] || { echo "usage: $0 SCENE.json [SECONDS] [OUT.exr] [render args...]" >&2; exit 2; }
@@ -10,13 +13,27 @@ scene=$1; secs=${2:-600}
 stem=$(basename "$scene" .json)
 out=${3:-refs/$stem-pt.exr}
 [ $# -ge 3 ] && shift 3 || shift $#
+chunks=${CHUNKS:-4}
+[ "$chunks" -ge 2 ] || { echo "$0: CHUNKS must be at least 2 (the noise estimate needs a spread)" >&2; exit 2; }
 bin=${DARTSPP:-build/dartspp}
 [ -x "$bin" ] || make build/dartspp >&2
 mkdir -p "$(dirname "$out")"
 log="$out.txt"
+per=$(awk -v s="$secs" -v k="$chunks" 'BEGIN { printf "%g", s / k }')
 {
-    echo "reference: $scene, path tracer, $secs s"
+    echo "reference: $scene, path tracer, $secs s as $chunks chunks of $per s"
     echo "date: $(date -u +%Y-%m-%dT%H:%MZ)  machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ *//')"
-    echo "command: $bin render $scene --set type=path_tracer --time $secs --seed 7919 --checkpoint 60 --output $out --quiet $*"
+    echo "command: $bin render $scene --set type=path_tracer --time $per --seed 7919+k --output ${out%.*}.chunkK.${out##*.} --quiet $*"
 } > "$log"
-"$bin" render "$scene" --set type=path_tracer --time "$secs" --seed 7919 --checkpoint 60 --output "$out" --quiet "$@" | tee -a "$log"
+parts=""
+k=0
+while [ "$k" -lt "$chunks" ]; do
+    part="${out%.*}.chunk$k.${out##*.}"
+    "$bin" render "$scene" --set type=path_tracer --time "$per" --seed $((7919 + k)) --checkpoint 60 --output "$part" \
+        --quiet "$@" | grep '^rendered' | sed "s/^/chunk $k: /" >> "$log"
+    parts="$parts $part"
+    k=$((k + 1))
+done
+# shellcheck disable=SC2086
+"$bin" merge "$out" $parts | tee -a "$log" | sed -n 's/.*variance of the mean \([^ ]*\).*/\1/p' > "$out.var"
+echo "reference noise (variance of the mean, per channel value): $(cat "$out.var")" | tee -a "$log"

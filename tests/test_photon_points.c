@@ -72,11 +72,11 @@ static double *render_mean(const scene *s, int threads, uint64_t seed, long pass
  * the fog itself, next-event estimation from a phase-sampled medium vertex has infinite variance (the
  * second moment of 1/d^2 over the volume near the light diverges), which would make the path tracer's
  * noise estimates below meaningless. */
-static void box_scene_text(char *text, size_t len, int res, const char *integrator)
+static void box_scene_text_g(char *text, size_t len, int res, const char *integrator, double g)
 {
     snprintf(text, len,
              "{ \"media\": [ { \"name\": \"fog\", \"type\": \"homogeneous\", \"sigma_s\": [0.45, 0.4, 0.5],"
-             "    \"sigma_a\": [0.05, 0.08, 0.03], \"phase_function\": { \"type\": \"henyey_greenstein\", \"g\": 0.3 } } ],"
+             "    \"sigma_a\": [0.05, 0.08, 0.03], \"phase_function\": { \"type\": \"henyey_greenstein\", \"g\": %g } } ],"
              "  \"bsdfs\": [ { \"name\": \"white\", \"type\": \"lambert\", \"albedo\": 0.7 },"
              "               { \"name\": \"red\", \"type\": \"lambert\", \"albedo\": [0.7, 0.15, 0.1] },"
              "               { \"name\": \"green\", \"type\": \"lambert\", \"albedo\": [0.15, 0.6, 0.2] } ],"
@@ -98,7 +98,12 @@ static void box_scene_text(char *text, size_t len, int res, const char *integrat
              "    \"transform\": { \"position\": [0, 1, -3], \"look_at\": [0, 1, 0], \"up\": [0, 1, 0] } },"
              "  \"integrator\": { %s },"
              "  \"renderer\": { \"spp\": 1 } }",
-             res, res, integrator);
+             g, res, res, integrator);
+}
+
+static void box_scene_text(char *text, size_t len, int res, const char *integrator)
+{
+    box_scene_text_g(text, len, res, integrator, 0.3);
 }
 
 /* ---------------------------------------------------------------------------------------------------- */
@@ -163,7 +168,7 @@ static void test_radius_schedule_used_by_integrator(void **state)
 {
     (void)state;
     for (int dims = 2; dims <= 3; dims++) {
-        char integ[1024], text[8192];
+        char integ[2048], text[8192];
         snprintf(integ, sizeof integ,
                  "\"type\": \"progressive_transient_photon_map\", \"volume_photon_type\": \"points\","
                  " \"photon_count\": 500, \"volume_photon_count\": 2000, \"gather_radius\": 0.08,"
@@ -205,11 +210,11 @@ static void photon_pass_thread_check(const scene *s, photon_set *p1)
 {
     dp_error err;
     omp_set_num_threads(1);
-    if (photon_pass(s, 9, 1, p1, &err)) fail_msg("%s", err.msg);
+    if (photon_pass(s, NULL, 9, 1, p1, &err)) fail_msg("%s", err.msg);
     for (int threads = 2; threads <= 3; threads++) {
         photon_set p2;
         omp_set_num_threads(threads);
-        if (photon_pass(s, 9, 1, &p2, &err)) fail_msg("%s", err.msg);
+        if (photon_pass(s, NULL, 9, 1, &p2, &err)) fail_msg("%s", err.msg);
         assert_int_equal(p1->paths, p2.paths);
         assert_int_equal(p1->n_vol, p2.n_vol);
         assert_int_equal(p1->n_surf, p2.n_surf);
@@ -555,16 +560,25 @@ static void test_single_scatter_total(void **state)
 #define CO_PT_CHUNKS 8
 #define CO_PT_PASSES 1024 /* per chunk */
 
-static void co_integrator(char *out, size_t len, int pt)
+typedef enum { CO_PATH_TRACER, CO_BASELINE, CO_DARTS, CO_DARTS_EDA } co_method;
+
+static char co_table_dir[600]; /* EDA tables of the test, in its temporary folder */
+
+static void co_integrator(char *out, size_t len, co_method m)
 {
     const char *common = "\"max_bounces\": 4, \"transient_time_center\": 5.0, \"transient_time_width\": 2.0";
-    if (pt) snprintf(out, len, "\"type\": \"path_tracer\", %s", common);
+    char darts[768] = "";
+    if (m >= CO_DARTS)
+        snprintf(darts, sizeof darts, ", \"enable_guiding\": true, \"enable_elliptical\": true, \"strict_time_width\": true%s%s%s",
+                 m == CO_DARTS_EDA ? ", \"eda\": true, \"eda_shape\": [32, 32, 64], \"eda_table_dir\": \"" : "",
+                 m == CO_DARTS_EDA ? co_table_dir : "", m == CO_DARTS_EDA ? "\"" : "");
+    if (m == CO_PATH_TRACER) snprintf(out, len, "\"type\": \"path_tracer\", %s", common);
     else
         snprintf(out, len,
                  "\"type\": \"progressive_transient_photon_map\", \"volume_photon_type\": \"points\","
                  " \"photon_count\": 10000, \"volume_photon_count\": 1e6, \"gather_photon_count\": 64,"
-                 " \"gather_radius\": 0.1, \"volume_gather_radius\": 0.06, \"alpha\": 0.7, \"volume_alpha\": 0.7, %s",
-                 common);
+                 " \"gather_radius\": 0.1, \"volume_gather_radius\": 0.06, \"alpha\": 0.7, \"volume_alpha\": 0.7, %s%s",
+                 common, darts);
 }
 
 /* Per-pixel mean over `runs` renders (seeds seed0, seed0+1, ...) and the variance of that mean estimated
@@ -590,38 +604,26 @@ static void co_mean_var(const scene *s, int runs, uint64_t seed0, long passes, d
 }
 
 /* A small gated fog box (24 × 24 pixels, volume and surface transport, up to 3 scattering events) rendered
- * by photon points after 4 and after 64 iterations (3 seeds each), against the path tracer (8 × 1024 passes,
- * rendered here). Error: normalised MSE, Σ(x - ref)² / Σ ref² over all pixels and channels. Its
+ * by photon points (baseline, DARTS, DARTS with EDA) after 4 and after 64 iterations (3 seeds each), against
+ * the path tracer (8 × 1024 passes, rendered here). Error: normalised MSE, Σ(x - ref)² / Σ ref² over all pixels and channels. Its
  * expectation is B² + V_pp + V_ref (squared bias, variance of the photon-points mean, variance of the
  * reference), the variances being measured from the spread over seeds and over reference chunks. */
-static void test_consistency_vs_path_tracer(void **state)
+static void consistency_check(co_method method, double g, const double *ref, double ref2, double Vref, double tr,
+                              double tr_se)
 {
-    (void)state;
-    char integ[1024], text[8192];
-    tmp_scene tp, tq;
-    co_integrator(integ, sizeof integ, 1);
-    box_scene_text(text, sizeof text, CO_RES, integ);
-    tmp_scene_write(&tp, text);
-    co_integrator(integ, sizeof integ, 0);
-    box_scene_text(text, sizeof text, CO_RES, integ);
+    char integ[2048], text[8192];
+    tmp_scene tq;
+    co_integrator(integ, sizeof integ, method);
+    box_scene_text_g(text, sizeof text, CO_RES, integ, g);
     tmp_scene_write(&tq, text);
-    scene sp, sq;
-    load_scene(tp.path, NULL, 0, &sp);
+    scene sq;
     load_scene(tq.path, NULL, 0, &sq);
     size_t n = (size_t)CO_RES * CO_RES * 3;
-    double *ref = malloc(n * sizeof(double)), *vref = malloc(n * sizeof(double));
     double *pp = malloc(n * sizeof(double)), *vpp = malloc(n * sizeof(double));
-    double tref[CO_PT_CHUNKS], tpp[CO_PP_SEEDS];
-    assert_true(ref && vref && pp && vpp);
-    co_mean_var(&sp, CO_PT_CHUNKS, 101, CO_PT_PASSES, ref, vref, tref);
-    double ref2 = 0, Vref = 0;
-    for (size_t i = 0; i < n; i++) {
-        ref2 += ref[i] * ref[i];
-        Vref += vref[i];
-    }
-    Vref /= ref2;
-    assert_true(ref2 > 0);
-
+    double tpp[CO_PP_SEEDS];
+    assert_true(pp && vpp);
+    print_message("  %s photon points, HG g = %g\n",
+                  method == CO_DARTS_EDA ? "DARTS with EDA" : method == CO_DARTS ? "DARTS" : "baseline", g);
     const long iters[2] = {4, 64};
     double nmse[2], Vpp[2], total[2], se_total[2];
     for (int c = 0; c < 2; c++) {
@@ -639,14 +641,11 @@ static void test_consistency_vs_path_tracer(void **state)
         total[c] = tm;
         se_total[c] = sqrt(tv);
     }
-    double tr = 0, trv = 0;
-    for (int k = 0; k < CO_PT_CHUNKS; k++) tr += tref[k] / CO_PT_CHUNKS;
-    for (int k = 0; k < CO_PT_CHUNKS; k++) trv += pow(tref[k] - tr, 2) / (CO_PT_CHUNKS - 1) / CO_PT_CHUNKS;
     for (int c = 0; c < 2; c++)
         print_message("  %2ld iterations: NMSE %.3g = noise %.3g (photon points %.3g + reference %.3g) %+.3g;"
                       " image total %.5g (se %.2g) vs path tracer %.5g (se %.2g)\n",
                       iters[c], nmse[c], Vpp[c] + Vref, Vpp[c], Vref, nmse[c] - Vpp[c] - Vref, total[c], se_total[c], tr,
-                      sqrt(trv));
+                      tr_se);
 
     /* The error falls. The photon-points part of it, E(n) = NMSE(n) - V_ref, is V_pp(n) + B(n)². With both
      * kernels 2D, one iteration's variance grows at most like 1/r_i² (the photons in a kernel ∝ r_i²), so
@@ -673,14 +672,60 @@ static void test_consistency_vs_path_tracer(void **state)
      * the estimated noise is good to a few percent. */
     assert_true(nmse[1] < 2 * (Vpp[1] + Vref));
 
-    free(ref);
-    free(vref);
     free(pp);
     free(vpp);
-    scene_free(&sp);
     scene_free(&sq);
-    tmp_scene_remove(&tp);
     tmp_scene_remove(&tq);
+}
+
+static void consistency_suite(double g, co_method first, co_method last)
+{
+    char integ[2048], text[8192];
+    tmp_scene tp;
+    co_integrator(integ, sizeof integ, CO_PATH_TRACER);
+    box_scene_text_g(text, sizeof text, CO_RES, integ, g);
+    tmp_scene_write(&tp, text);
+    scene sp;
+    load_scene(tp.path, NULL, 0, &sp);
+    size_t n = (size_t)CO_RES * CO_RES * 3;
+    double *ref = malloc(n * sizeof(double)), *vref = malloc(n * sizeof(double));
+    double tref[CO_PT_CHUNKS];
+    assert_true(ref && vref);
+    co_mean_var(&sp, CO_PT_CHUNKS, 101, CO_PT_PASSES, ref, vref, tref);
+    double ref2 = 0, Vref = 0;
+    for (size_t i = 0; i < n; i++) {
+        ref2 += ref[i] * ref[i];
+        Vref += vref[i];
+    }
+    Vref /= ref2;
+    assert_true(ref2 > 0);
+    double tr = 0, trv = 0;
+    for (int k = 0; k < CO_PT_CHUNKS; k++) tr += tref[k] / CO_PT_CHUNKS;
+    for (int k = 0; k < CO_PT_CHUNKS; k++) trv += pow(tref[k] - tr, 2) / (CO_PT_CHUNKS - 1) / CO_PT_CHUNKS;
+    /* baseline photon points, DARTS photon points (bin sampling, DA distance sampling, elliptical control
+     * vertices, strict time mode), and DARTS with EDA direction sampling (HG g = 0.3 here): all must
+     * converge to the path tracer's image */
+    snprintf(co_table_dir, sizeof co_table_dir, "%s/tables", tp.dir);
+    for (co_method method = first; method <= last; method++)
+        consistency_check(method, g, ref, ref2, Vref, tr, sqrt(trv));
+    free(ref);
+    free(vref);
+    scene_free(&sp);
+    tmp_scene_remove(&tp);
+}
+
+static void test_consistency_vs_path_tracer(void **state)
+{
+    (void)state;
+    consistency_suite(0.3, CO_BASELINE, CO_DARTS_EDA);
+}
+
+/* EDA with anisotropic fog, forward and backward scattering (issue: EDA direction sampling, end to end) */
+static void test_eda_consistency_anisotropic(void **state)
+{
+    (void)state;
+    consistency_suite(0.5, CO_DARTS_EDA, CO_DARTS_EDA);
+    consistency_suite(-0.3, CO_DARTS_EDA, CO_DARTS_EDA);
 }
 
 int main(void)
@@ -691,6 +736,7 @@ int main(void)
         cmocka_unit_test(test_threads_bit_identical),
         cmocka_unit_test(test_single_scatter_total),
         cmocka_unit_test(test_consistency_vs_path_tracer),
+        cmocka_unit_test(test_eda_consistency_anisotropic),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -98,4 +98,70 @@ typedef struct {
 void da_sample_distance(const medium *m, const ellipse_record *r, vec3 d, double tmax, double defensive, dp_rng *rng,
                         da_sample *out);
 
+/* ---- EDA direction sampling (reference §7; paper §5.1, eq. 17–20; DESIGN §5.7, §5.9–11) ----
+ * A table of CDFs over the angle θ between the new direction and the camera direction e, one per cell
+ * (C/S, S): how much diffusion-approximated radiance the medium inside the vertex's equal-time ellipsoid
+ * sends back along each direction,
+ *   I(C, S, θ) = ∫_0^{t_M(θ)} e^{−σt·t}·Φ(ℓ(t), S − t) dt,  t_M = (S² − C²)/(2(S − C cosθ)),
+ *   ℓ(t)² = C² − 2Ct·cosθ + t²,  Φ(ℓ, s) = (4πDs)^{−3/2}·exp(−ℓ²/(4Ds) − σa·s),  D = 1/(3(σa + σs(1 − g))).
+ * Reading convention (the authors' C++): row i ↔ C/S ∈ [r_lo + iΔ, r_lo + (i+1)Δ), Δ = (r_hi − r_lo)/n_ratio;
+ * column j ↔ S ∈ [j, j+1)·s_max/n_s; bin k ↔ cosθ ∈ [−1 + 2k/n_cos, −1 + 2(k+1)/n_cos), bin n_cos − 1 towards
+ * the camera; flat index (i·n_s + j)·n_cos + k; each run of n_cos floats a non-decreasing CDF ending at 1.
+ * Written by hand: no library tabulates this integral. */
+typedef struct eda_table {
+    int n_ratio, n_s, n_cos;      /* shape, e.g. 128 × 128 × 256 */
+    double sigma_s, sigma_a, g;   /* the medium the table is for */
+    double s_max;                 /* S range [0, s_max) (geometric length) */
+    double r_lo, r_hi;            /* C/S range [r_lo, r_hi) */
+    float *cdf;
+} eda_table;
+
+#define EDA_DEFAULT_R_LO 0.2
+#define EDA_DEFAULT_R_HI 0.999
+
+/* Computes the table (OpenMP over rows; deterministic: the same arguments give the same bits whatever the
+ * thread count). progress(ctx, rows_done, rows) may be NULL. */
+int eda_table_build(eda_table *t, double sigma_s, double sigma_a, double g, int n_ratio, int n_s, int n_cos,
+                    double s_max, double r_lo, double r_hi, void (*progress)(void *, int, int), void *ctx,
+                    dp_error *err);
+void eda_table_free(eda_table *t);
+/* Our file format (little-endian): "DPEDATAB", u32 version 1, u32 n_ratio, n_s, n_cos, f64 sigma_s,
+ * sigma_a, g, s_max, r_lo, r_hi, u64 FNV-1a hash of the float payload, then the floats. Written atomically. */
+int eda_table_save(const eda_table *t, const char *path, dp_error *err);
+/* Reads our format, checking size, hash and every CDF; a truncated or corrupted file is an error naming it. */
+int eda_table_load(eda_table *t, const char *path, dp_error *err);
+/* Reads the authors' headerless 128 × 128 × 256 float32 table (exactly 16,777,216 bytes), whose parameters
+ * come from the scene (max_T, dT_start, dT_end); checks every CDF. */
+int eda_table_load_raw(eda_table *t, const char *path, double s_max, double r_lo, double r_hi, dp_error *err);
+/* The cached table for these parameters: DIR/eda-<σs>-<σa>-<g>-<s_max>-<r_lo>-<r_hi>-<shape>.bin, built
+ * and stored there first when missing (announced on stderr with its build time). */
+int eda_table_cached(eda_table *t, const char *dir, double sigma_s, double sigma_a, double g, int n_ratio, int n_s,
+                     int n_cos, double s_max, double r_lo, double r_hi, dp_error *err);
+
+/* The CDF of the cell of a record, or NULL where the table does not cover it (record invalid, C/T outside
+ * [r_lo, r_hi)); the S index is clamped to the last column. */
+const float *eda_cell(const eda_table *t, const ellipse_record *r);
+/* Solid-angle density of the EDA branch in the cell: bin probability × n_cos/(4π). */
+double eda_pdf(const eda_table *t, const float *cell, vec3 e, vec3 w);
+/* A new direction at a medium vertex: with probability γ = (C/T)/(C/T + α) from the table (bin by inverse
+ * CDF, cosθ uniform in the bin, azimuth uniform about e), otherwise from the phase function; *weight =
+ * f/(γ·p_E + (1 − γ)·p_phase), the one-sample balance heuristic (f = p_phase: phase sampling is exact).
+ * Where eda_cell gives NULL: phase sampling, weight 1. u: four uniforms in [0, 1). */
+vec3 eda_sample_direction(const eda_table *t, double alpha, const phase_function *ph, vec3 w_in,
+                          const ellipse_record *r, const double u[4], double *weight);
+
+/* The EDA tables of one render, prepared once before the first iteration: table[i] for medium i, or NULL
+ * where EDA is off (phase not `ida` and integrator eda false, or the scene is not gated). */
+typedef struct eda_set {
+    eda_table *tables;       /* medium_count entries; unused ones zeroed */
+    const eda_table **table; /* medium_count pointers */
+    double *alpha;           /* α per medium */
+    int count, active;       /* active: at least one medium uses EDA */
+} eda_set;
+
+/* Loads (table_path), or takes from the cache folder integrator.eda_table_dir (building it there when
+ * missing), the table of every medium that uses EDA. A scene without EDA touches no file. */
+int eda_set_prepare(const scene *s, eda_set *set, dp_error *err);
+void eda_set_free(eda_set *set);
+
 #endif

@@ -63,7 +63,10 @@ typedef struct {
 } photon_set;
 
 struct scene;
-int photon_pass(const struct scene *s, uint64_t seed, long iteration, photon_set *out, dp_error *err);
+struct eda_set;
+/* eda: the render's EDA tables (darts.h), or NULL for phase-function sampling everywhere. */
+int photon_pass(const struct scene *s, const struct eda_set *eda, uint64_t seed, long iteration, photon_set *out,
+                dp_error *err);
 void photon_set_free(photon_set *ps);
 
 #endif

@@ -73,7 +73,9 @@ double path_tracer_pass(const scene *s, film *f, uint64_t seed, long pass, long 
 double progressive_radius(double r0, double alpha, long iteration, int dims);
 
 /* One iteration of photon points: photon pass, maps, sensor pass into f. Returns 0 or -1 with err. */
-int photon_points_pass(const scene *s, film *f, uint64_t seed, long iteration, render_stats *st, dp_error *err);
+struct eda_set;
+int photon_points_pass(const scene *s, const struct eda_set *eda, film *f, uint64_t seed, long iteration,
+                       render_stats *st, dp_error *err);
 
 /* ---- error log (issue: error against run time) ----
  * CSV rows "seconds,iterations,photon_paths,stored_photons,r_vol,r_surf,mse,rel_mse,mse_q99,nonfinite_pixels"

@@ -44,6 +44,12 @@ typedef struct medium {
     double eta;        /* refractive index = vacuum speed / `speed_of_light` (time per length) */
     int max_bounces;   /* medium events since the last surface */
     phase_function phase;
+    /* EDA direction sampling (phase "ida", or integrator eda = true on a guided medium) */
+    int eda;                   /* on at this medium's vertices when the DARTS pass runs */
+    double eda_alpha;          /* γ = (C/S)/(C/S + α); phase key alpha, else integrator eda_alpha */
+    double eda_r_lo, eda_r_hi; /* C/S range of the table (phase keys dT_start, dT_end; 0.2, 0.999) */
+    double eda_s_max;          /* S range [0, s_max) (phase key max_T); 0: from the time window */
+    char eda_table_path[512];  /* the authors' headerless table (phase key table_path); "": our cache */
 } medium;
 
 /* ---- geometry ---- */
@@ -114,6 +120,10 @@ typedef struct {
     int volume_beams;               /* volume_photon_type "beams": loads, refused at render time */
     int camera_leg_projected;       /* camera_leg: "euclidean" (reference, default) or "projected" */
     int radius_schedule_3d;         /* radius_schedule: "2d" (default) or "3d" (reference cube root) */
+    int eda;                        /* eda: EDA direction sampling in every medium (default false) */
+    double eda_alpha;               /* eda_alpha: α of the EDA/phase selection (default 0.5) */
+    char eda_table_dir[512];        /* eda_table_dir: the EDA table cache (default "tables") */
+    int eda_shape[3];               /* eda_shape: [C/S rows, S columns, cos bins] of built tables (128, 128, 256) */
     double da_defensive;            /* da_defensive: uniform share of the DA-RIS candidate selection (default 0.2) */
     int early_exit;                 /* early_exit: DARTS paths end once their bin is out of reach (default true) */
     int control_vertex_mis;         /* control_vertex_mis: MIS of the elliptical and exponential techniques (default true) */

@@ -14,6 +14,8 @@ static void usage(FILE *f)
             "       dartspp compare IMAGE REFERENCE [--csv]      (EXR or PFM)\n"
             "       dartspp patch-mean IMAGE X0 Y0 X1 Y1          (mean of a pixel rectangle)\n"
             "       dartspp merge OUTPUT IMAGE IMAGE [IMAGE...]   (mean of independent renders, its variance)\n"
+            "       dartspp table --sigma-s S --sigma-a A --g G [--shape R,S,C] [--s-max X] --output FILE\n"
+            "                                                     (EDA direction-sampling table)\n"
             "See README.md for the scene keys, outputs and units.\n");
 }
 
@@ -27,7 +29,8 @@ int main(int argc, char **argv)
     if (!strcmp(argv[1], "compare")) return cli_compare(argc - 2, argv + 2);
     if (!strcmp(argv[1], "patch-mean")) return cli_patch_mean(argc - 2, argv + 2);
     if (!strcmp(argv[1], "merge")) return cli_merge(argc - 2, argv + 2);
-    fprintf(stderr, "dartspp: unknown command '%s' (commands: render, compare, patch-mean, merge)\n", argv[1]);
+    if (!strcmp(argv[1], "table")) return cli_table(argc - 2, argv + 2);
+    fprintf(stderr, "dartspp: unknown command '%s' (commands: render, compare, patch-mean, merge, table)\n", argv[1]);
     usage(stderr);
     return 2;
 }

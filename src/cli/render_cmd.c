@@ -142,9 +142,17 @@ static void print_samplers(const scene *s)
         return;
     }
     printf("photon pass: DARTS, %s target bins; DA distance sampling %s; elliptical control vertices %s (residual %s); "
-           "strict time %s\n", g.frames ? "per-frame" : "gate", in->enable_guiding ? "on" : "off",
+           "strict time %s", g.frames ? "per-frame" : "gate", in->enable_guiding ? "on" : "off",
            in->enable_elliptical ? "on" : "off", in->ellipse_residual ? "exponential" : "uniform",
            in->strict_time_width ? "on" : "off");
+    const char *sep = "; EDA direction sampling in ";
+    for (int i = 0; i < s->medium_count; i++) {
+        const medium *m = &s->media[i];
+        if (!m->eda && !in->eda) continue;
+        printf("%s'%s' (alpha %g)", sep, m->name, m->eda_alpha > 0 ? m->eda_alpha : in->eda_alpha);
+        sep = ", ";
+    }
+    printf("%s\n", sep[0] == ';' ? "; EDA off" : "");
 }
 
 static void print_summary(const scene *s, const render_stats *st)

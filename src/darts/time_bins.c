@@ -7,7 +7,9 @@ void darts_guide_init(const scene *s, darts_guide *g)
     const integrator_settings *in = &s->integrator;
     const time_window *tw = &in->window;
     *g = (darts_guide){0};
-    g->active = tw->gated && (in->enable_guiding || in->enable_elliptical) && s->medium_count > 0;
+    int eda = in->eda;
+    for (int i = 0; i < s->medium_count; i++) eda |= s->media[i].eda;
+    g->active = tw->gated && (in->enable_guiding || in->enable_elliptical || eda) && s->medium_count > 0;
     g->cam = s->cam.pos;
     g->beg = tw->start;
     g->end = time_window_end(tw);

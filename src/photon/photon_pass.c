@@ -56,6 +56,7 @@ static void make_photon(photon *ph, vec3 x, vec3 d, vec3 beta, int bounce, doubl
 typedef struct {
     const scene *s;
     const darts_guide *g;  /* g->active: DARTS samplers on */
+    const eda_set *eda;    /* EDA tables per medium (may be NULL) */
     thread_bufs *tb;
     path_count *pc;
     dp_rng *rng;
@@ -137,7 +138,14 @@ static int medium_segment(light_path *lp, double tmax)
     if (!(darts && in->enable_elliptical) && (in->low_order_scattering || lp->medium_events > 1))
         store(lp, &lp->tb->vol, &lp->pc->n_vol, lp->o, lp->d, lp->beta, lp->bounce, lp->time);
     new_vertex(lp);
-    lp->d = phase_sample(&m->phase, lp->d, rng_uniform(lp->rng), rng_uniform(lp->rng));
+    const eda_table *et = darts && lp->eda ? lp->eda->table[lp->med] : NULL;
+    if (et) { /* EDA with MIS against the phase function (§7.2, eq. 20) */
+        double u[4] = {rng_uniform(lp->rng), rng_uniform(lp->rng), rng_uniform(lp->rng), rng_uniform(lp->rng)}, w;
+        lp->d = eda_sample_direction(et, lp->eda->alpha[lp->med], &m->phase, lp->d, &lp->rec, u, &w);
+        lp->beta = v3_scale(lp->beta, w);
+    } else {
+        lp->d = phase_sample(&m->phase, lp->d, rng_uniform(lp->rng), rng_uniform(lp->rng));
+    }
     return 1;
 }
 
@@ -173,13 +181,14 @@ static int surface_event(light_path *lp, const hit_record *h)
 
 /* One light path; bounce = segments from the light. Stops when no later photon could count: past the
  * window end, or (DARTS) when even a straight line to the camera arrives after the target bin (early exit). */
-static void trace_light_path(const scene *s, const darts_guide *g, dp_rng *rng, thread_bufs *tb, path_count *pc)
+static void trace_light_path(const scene *s, const darts_guide *g, const eda_set *eda, dp_rng *rng, thread_bufs *tb,
+                             path_count *pc)
 {
     const integrator_settings *in = &s->integrator;
     int li = (int)(rng_uniform(rng) * s->light_count);
     if (li >= s->light_count) li = s->light_count - 1;
     const point_light *L = &s->lights[li];
-    light_path lp = {.s = s, .g = g, .tb = tb, .pc = pc, .rng = rng, .o = L->pos, .med = L->medium,
+    light_path lp = {.s = s, .g = g, .eda = eda, .tb = tb, .pc = pc, .rng = rng, .o = L->pos, .med = L->medium,
                      .bin = {.start = -INFINITY, .end = INFINITY, .pdf = 1.0, .frame = -1}};
     if (g->active && !darts_sample_bin(g, L->pos, rng_uniform(rng), &lp.bin)) return;
     lp.d = sample_uniform_sphere(rng_uniform(rng), rng_uniform(rng));
@@ -232,7 +241,7 @@ static void scale_powers(photon *p, size_t n, long paths)
         for (int c = 0; c < 3; c++) p[i].power[c] *= inv;
 }
 
-int photon_pass(const scene *s, uint64_t seed, long iteration, photon_set *out, dp_error *err)
+int photon_pass(const scene *s, const eda_set *eda, uint64_t seed, long iteration, photon_set *out, dp_error *err)
 {
     memset(out, 0, sizeof *out);
     if (s->light_count == 0) return 0;
@@ -258,7 +267,7 @@ int photon_pass(const scene *s, uint64_t seed, long iteration, photon_set *out, 
             for (long i = 0; i < nb; i++) {
                 dp_rng rng = rng_stream(seed ^ 0x70686f746f6eULL, (uint64_t)iteration, (uint64_t)(next + i));
                 pc[i] = (path_count){.thread = omp_get_thread_num(), .off_vol = mine->vol.n, .off_surf = mine->surf.n};
-                trace_light_path(s, &guide, &rng, mine, &pc[i]);
+                trace_light_path(s, &guide, eda, &rng, mine, &pc[i]);
             }
         }
         for (long i = 0; i < nb && !rc; i++) { /* merge in path order */

@@ -9,12 +9,13 @@ double progressive_radius(double r0, double alpha, long iteration, int dims)
     return r0 * exp(log_ratio / dims);
 }
 
-int photon_points_pass(const scene *s, film *f, uint64_t seed, long iteration, render_stats *st, dp_error *err)
+int photon_points_pass(const scene *s, const struct eda_set *eda, film *f, uint64_t seed, long iteration,
+                       render_stats *st, dp_error *err)
 {
     const integrator_settings *in = &s->integrator;
     photon_set ps;
     double t0 = dp_seconds();
-    if (photon_pass(s, seed, iteration, &ps, err)) return -1;
+    if (photon_pass(s, eda, seed, iteration, &ps, err)) return -1;
     double t1 = dp_seconds();
     gather_input g = {.k_surf = in->gather_photon_count, .camera_leg_projected = in->camera_leg_projected};
     g.r_vol = progressive_radius(in->volume_gather_radius, in->volume_alpha, iteration, in->radius_schedule_3d ? 3 : 2);

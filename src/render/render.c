@@ -1,5 +1,6 @@
 /* The progressive driver: passes until the pass count or the time budget is reached (or an interrupt),
  * with a progress line on stderr. Passes are independent draws; the film holds their running mean. */
+#include "dartspp/darts.h"
 #include "dartspp/render.h"
 
 #include <omp.h>
@@ -53,8 +54,13 @@ int render_scene(const scene *s, const render_options *opt, film *f, render_stat
     *st = (render_stats){0};
     if (s->integrator.volume_beams)
         return dp_fail(err, "%s: integrator.volume_photon_type: 'beams' is not supported (supported: points)", s->path);
-    if (film_init(f, s->cam.width, s->cam.height, &s->integrator.window, err)) return -1;
     if (opt->threads > 0) omp_set_num_threads(opt->threads);
+    eda_set eda = {0};
+    if (s->integrator.type == INTEGRATOR_PHOTON_POINTS && eda_set_prepare(s, &eda, err)) return -1;
+    if (film_init(f, s->cam.width, s->cam.height, &s->integrator.window, err)) {
+        eda_set_free(&eda);
+        return -1;
+    }
     long spp = opt->spp >= 0 ? opt->spp : s->renderer.spp;
     double limit = opt->time_limit >= 0 ? opt->time_limit : s->renderer.timeout_seconds;
     progress_line pl = {.tty = isatty(2), .last_print = -1e9};
@@ -62,8 +68,9 @@ int render_scene(const scene *s, const render_options *opt, film *f, render_stat
     while (keep_going(st, spp, limit, opt->stop)) {
         if (s->integrator.type == INTEGRATOR_PATH_TRACER)
             st->rays += path_tracer_pass(s, f, opt->seed, st->passes, &f->nonfinite);
-        else if (photon_points_pass(s, f, opt->seed, st->passes, st, err)) {
+        else if (photon_points_pass(s, &eda, f, opt->seed, st->passes, st, err)) {
             film_free(f);
+            eda_set_free(&eda);
             return -1;
         }
         st->camera_rays += (double)s->cam.width * s->cam.height;
@@ -72,9 +79,11 @@ int render_scene(const scene *s, const render_options *opt, film *f, render_stat
         if (opt->progress) progress_print(&pl, st, spp, limit, 0);
         if (opt->after_pass && opt->after_pass(opt->after_pass_ctx, f, st, err)) {
             film_free(f);
+            eda_set_free(&eda);
             return -1;
         }
     }
+    eda_set_free(&eda);
     st->nonfinite = f->nonfinite;
     st->interrupted = opt->stop && *opt->stop;
     if (opt->progress) progress_print(&pl, st, spp, limit, 1);

@@ -1,5 +1,6 @@
 /* Phase functions: isotropic and Henyey–Greenstein (Tungsten convention: μ = ω_in · ω_out between two
- * propagation directions). `ida` evaluates as HG with its g until EDA sampling exists (issue 6). */
+ * propagation directions). `ida` evaluates as HG with its g, as in the reference: EDA changes only how the
+ * photon pass samples directions (darts.h). */
 #include "dartspp/scene.h"
 
 static double hg_eval(double g, double mu)

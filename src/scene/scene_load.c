@@ -95,6 +95,32 @@ static int parse_phase(json_ctx *c, const cJSON *v, const char *where, phase_fun
     return 0;
 }
 
+/* The EDA keys of an `ida` phase function (reference §7.2): table_path, alpha, dT_start, dT_end, max_T. */
+static int parse_eda_keys(json_ctx *c, const cJSON *pv, const char *where, medium *m)
+{
+    m->eda = m->phase.type == PHASE_IDA;
+    m->eda_alpha = -1.0; /* unset: the integrator's eda_alpha */
+    m->eda_r_lo = 0.2;
+    m->eda_r_hi = 0.999;
+    if (!m->eda) return 0;
+    char w[256];
+    snprintf(w, sizeof w, "%s.phase_function", where);
+    const char *path = "";
+    if (jget_string(c, pv, w, "table_path", &path) < 0 || jget_number_range(c, pv, w, "alpha", -1.0, -1.0, 0, &m->eda_alpha) ||
+        jget_number_range(c, pv, w, "dT_start", 0.2, 0.0, 1.0, &m->eda_r_lo) ||
+        jget_number_range(c, pv, w, "dT_end", 0.999, 0.0, 1.0, &m->eda_r_hi) ||
+        jget_number_range(c, pv, w, "max_T", 0.0, 0.0, 0, &m->eda_s_max))
+        return -1;
+    if (m->eda_alpha != -1.0 && !(m->eda_alpha > 0.0)) return jfail(c, w, "alpha", "must be > 0 (got %g)", m->eda_alpha);
+    if (!(m->eda_r_lo < m->eda_r_hi && m->eda_r_hi < 1.0))
+        return jfail(c, w, "dT_end", "need dT_start < dT_end < 1 (got %g, %g)", m->eda_r_lo, m->eda_r_hi);
+    if (strlen(path) >= sizeof m->eda_table_path) return jfail(c, w, "table_path", "path too long");
+    if (path[0] && !(m->eda_s_max > 0.0))
+        return jfail(c, w, "max_T", "a headerless table (table_path) needs its S range max_T > 0");
+    snprintf(m->eda_table_path, sizeof m->eda_table_path, "%s", path);
+    return 0;
+}
+
 static int parse_medium(json_ctx *c, const cJSON *v, int i, medium *m)
 {
     char w[64];
@@ -128,7 +154,9 @@ static int parse_medium(json_ctx *c, const cJSON *v, int i, medium *m)
     if (!v3_is_finite(m->sigma_t)) return jfail(c, w, "sigma_s", "sigma_s + sigma_a times density overflows");
     if (!isfinite(m->eta)) return jfail(c, w, "speed_of_light", "too small (got %g)", speed);
     m->max_bounces = maxb > 1 << 30 ? 1 << 30 : (int)maxb;
-    return parse_phase(c, cJSON_GetObjectItemCaseSensitive(v, "phase_function"), w, &m->phase);
+    const cJSON *pv = cJSON_GetObjectItemCaseSensitive(v, "phase_function");
+    if (parse_phase(c, pv, w, &m->phase)) return -1;
+    return parse_eda_keys(c, pv, w, m);
 }
 
 static int parse_media(json_ctx *c, const cJSON *root, scene *s)
