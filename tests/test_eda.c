@@ -35,6 +35,33 @@ static ellipse_record record(double C, double T, vec3 e)
     return r;
 }
 
+/* ∫ fn(ω) dω by the midpoint rule in cosθ (nc cells) and φ (nphi cells) about axis */
+typedef double (*sphere_fn)(const void *ctx, vec3 w);
+static double sphere_integral(vec3 axis, int nc, int nphi, sphere_fn fn, const void *ctx)
+{
+    vec3 b1, b2;
+    v3_basis(axis, &b1, &b2);
+    double sum = 0.0;
+    for (int i = 0; i < nc; i++)
+        for (int j = 0; j < nphi; j++) {
+            double c = -1.0 + (i + 0.5) * 2.0 / nc, s = sqrt(1.0 - c * c), phi = 2.0 * M_PI * (j + 0.5) / nphi;
+            sum += fn(ctx, v3_add(v3_scale(axis, c), v3_add(v3_scale(b1, s * cos(phi)), v3_scale(b2, s * sin(phi)))));
+        }
+    return sum * (2.0 / nc) * (2.0 * M_PI / nphi);
+}
+
+typedef struct {
+    const eda_table *t;
+    const float *cell;
+    vec3 e;
+} pdf_ctx;
+
+static double pdf_at(const void *ctx, vec3 w)
+{
+    const pdf_ctx *c = ctx;
+    return eda_pdf(c->t, c->cell, c->e, w);
+}
+
 /* 1. every cell a CDF; p_E integrates to 1 over the sphere (midpoint rule in cosθ and φ about e) */
 static void test_cdfs_and_density(void **state)
 {
@@ -49,21 +76,14 @@ static void test_cdfs_and_density(void **state)
         if (F[NC - 1] != 1.0f) bad++;
     }
     assert_int_equal(bad, 0);
-    vec3 e = v3_norm(v3(0.2, -0.5, 0.8)), b1, b2;
-    v3_basis(e, &b1, &b2);
+    vec3 e = v3_norm(v3(0.2, -0.5, 0.8));
     const double cases[4][2] = {{1.0, 1.2}, {3.0, 3.3}, {5.0, 10.0}, {3.0, 11.5}};
     for (int q = 0; q < 4; q++) {
         ellipse_record r = record(cases[q][0], cases[q][1], e);
         const float *cell = eda_cell(&t, &r);
         assert_non_null(cell);
-        const int nc = 2048, nphi = 16;
-        double sum = 0.0;
-        for (int i = 0; i < nc; i++)
-            for (int j = 0; j < nphi; j++) {
-                double c = -1.0 + (i + 0.5) * 2.0 / nc, s = sqrt(1.0 - c * c), phi = 2.0 * M_PI * (j + 0.5) / nphi;
-                vec3 w = v3_add(v3_scale(e, c), v3_add(v3_scale(b1, s * cos(phi)), v3_scale(b2, s * sin(phi))));
-                sum += eda_pdf(&t, cell, e, w) * (2.0 / nc) * (2.0 * M_PI / nphi);
-            }
+        pdf_ctx pc = {&t, cell, e};
+        double sum = sphere_integral(e, 2048, 16, pdf_at, &pc);
         print_message("  cell C %g T %g: integral of p_E over the sphere %.12f\n", cases[q][0], cases[q][1], sum);
         assert_true(fabs(sum - 1.0) < 1e-6);
     }
@@ -156,19 +176,22 @@ static double h_test(vec3 w, int which)
     return which == 0 ? (1.0 + c) * (1.0 + c) : exp(2.0 * w.x) + (w.z > 0.3 ? 1.0 : 0.0);
 }
 
+typedef struct {
+    const phase_function *ph;
+    vec3 w_in;
+    int which;
+} fh_ctx;
+
+static double f_times_h(const void *ctx, vec3 w)
+{
+    const fh_ctx *c = ctx;
+    return phase_eval(c->ph, c->w_in, w) * h_test(w, c->which);
+}
+
 static double quad_f_h(const phase_function *ph, vec3 w_in, int which)
 {
-    vec3 b1, b2;
-    v3_basis(w_in, &b1, &b2);
-    const int nc = 4000, nphi = 64;
-    double sum = 0.0;
-    for (int i = 0; i < nc; i++)
-        for (int j = 0; j < nphi; j++) {
-            double c = -1.0 + (i + 0.5) * 2.0 / nc, s = sqrt(1.0 - c * c), phi = 2.0 * M_PI * (j + 0.5) / nphi;
-            vec3 w = v3_add(v3_scale(w_in, c), v3_add(v3_scale(b1, s * cos(phi)), v3_scale(b2, s * sin(phi))));
-            sum += phase_eval(ph, w_in, w) * h_test(w, which);
-        }
-    return sum * (2.0 / nc) * (2.0 * M_PI / nphi);
+    fh_ctx c = {ph, w_in, which};
+    return sphere_integral(w_in, 4000, 64, f_times_h, &c);
 }
 
 static void test_combined_sampler_unbiased(void **state)

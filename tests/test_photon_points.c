@@ -608,16 +608,22 @@ static void co_mean_var(const scene *s, int runs, uint64_t seed0, long passes, d
  * the path tracer (8 × 1024 passes, rendered here). Error: normalised MSE, Σ(x - ref)² / Σ ref² over all pixels and channels. Its
  * expectation is B² + V_pp + V_ref (squared bias, variance of the photon-points mean, variance of the
  * reference), the variances being measured from the spread over seeds and over reference chunks. */
+/* The consistency box scene rendered by one method, in a temporary folder. */
+static void co_scene(co_method method, double g, tmp_scene *t, scene *s)
+{
+    char integ[2048], text[8192];
+    co_integrator(integ, sizeof integ, method);
+    box_scene_text_g(text, sizeof text, CO_RES, integ, g);
+    tmp_scene_write(t, text);
+    load_scene(t->path, NULL, 0, s);
+}
+
 static void consistency_check(co_method method, double g, const double *ref, double ref2, double Vref, double tr,
                               double tr_se)
 {
-    char integ[2048], text[8192];
     tmp_scene tq;
-    co_integrator(integ, sizeof integ, method);
-    box_scene_text_g(text, sizeof text, CO_RES, integ, g);
-    tmp_scene_write(&tq, text);
     scene sq;
-    load_scene(tq.path, NULL, 0, &sq);
+    co_scene(method, g, &tq, &sq);
     size_t n = (size_t)CO_RES * CO_RES * 3;
     double *pp = malloc(n * sizeof(double)), *vpp = malloc(n * sizeof(double));
     double tpp[CO_PP_SEEDS];
@@ -680,13 +686,9 @@ static void consistency_check(co_method method, double g, const double *ref, dou
 
 static void consistency_suite(double g, co_method first, co_method last)
 {
-    char integ[2048], text[8192];
     tmp_scene tp;
-    co_integrator(integ, sizeof integ, CO_PATH_TRACER);
-    box_scene_text_g(text, sizeof text, CO_RES, integ, g);
-    tmp_scene_write(&tp, text);
     scene sp;
-    load_scene(tp.path, NULL, 0, &sp);
+    co_scene(CO_PATH_TRACER, g, &tp, &sp);
     size_t n = (size_t)CO_RES * CO_RES * 3;
     double *ref = malloc(n * sizeof(double)), *vref = malloc(n * sizeof(double));
     double tref[CO_PT_CHUNKS];
