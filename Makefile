@@ -64,6 +64,14 @@ build/san/tests/%: tests/%.c tests/test_util.h build/san/libdartspp.a
 test: build/dartspp build/san/dartspp $(TEST_BIN)
 	@tests/run_tests.sh build/san/tests
 
+# The whole stress matrix (extreme media, anisotropy, gates, scales, geometry): the estimator-level cases of
+# tests/test_darts.c and tests/test_eda.c and the renders of tests/test_stress.c, about 3 minutes under ASan
+# on 2 cores. `make test` runs a fast subset of each. DARTSPP_STRESS_ONLY=text picks render cases by name.
+STRESS_TESTS = build/san/tests/test_darts build/san/tests/test_eda build/san/tests/test_stress
+stress: $(STRESS_TESTS)
+	@rm -rf build/san/stress && mkdir -p build/san/stress && cp $(STRESS_TESTS) build/san/stress/
+	@DARTSPP_STRESS=full tests/run_tests.sh build/san/stress
+
 # The demo: fog-filled Cornell box, pulsed point light, a gate where multiple scattering dominates.
 run: build/dartspp
 	./build/dartspp render scenes/fogbox/fogbox.json --time 30 --output out/fogbox.exr

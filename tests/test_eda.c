@@ -230,6 +230,75 @@ static void test_combined_sampler_unbiased(void **state)
     assert_int_equal(fails, 0);
 }
 
+/* 5. extreme media and anisotropy (issue: numerical stability): tables for σs from 1e-4 to 1e3 per unit
+ * length (S range 10, so 1e-3 to 1e4 mean free paths), albedo 0.01, g from −0.99 to 0.99. Every cell a finite
+ * CDF; the combined sampler's weights finite and >= 0 and unbiased against closed forms that hold for any
+ * g: ∫ f dω = 1 and ∫ f·(ω·a) dω = g·(ω_in·a) (the mean cosine of Henyey–Greenstein is g).
+ * Fast subset by default, the full cross product with DARTSPP_STRESS=full (make stress). */
+static int stress_full(void)
+{
+    const char *v = getenv("DARTSPP_STRESS");
+    return v && strcmp(v, "full") == 0;
+}
+
+static int check_extreme_case(double ss, double sa, double g, long n)
+{
+    eda_table t;
+    build_small(&t, ss, sa, g, 10.0);
+    long bad_cdf = 0;
+    for (long c = 0; c < (long)NR * NS; c++) {
+        const float *F = t.cdf + c * NC;
+        for (int k = 0; k < NC; k++)
+            if (!isfinite(F[k]) || !(F[k] >= (k ? F[k - 1] : 0.0f)) || !(F[k] <= 1.0f)) bad_cdf++;
+        if (F[NC - 1] != 1.0f) bad_cdf++;
+    }
+    phase_function ph = {g == 0.0 ? PHASE_ISOTROPIC : PHASE_HENYEY_GREENSTEIN, g};
+    vec3 w_in = v3_norm(v3(-0.3, 0.9, 0.2)), e = v3_norm(v3(0.5, 0.5, -0.7)), a = v3_norm(v3(0.3, -0.4, 0.85));
+    ellipse_record r = record(2.5, 3.0, e);
+    int fails = bad_cdf > 0 || !eda_cell(&t, &r);
+    double ref[2] = {1.0, g * v3_dot(w_in, a)};
+    double m[2] = {0}, m2[2] = {0};
+    long bad_w = 0;
+    dp_rng rng = rng_stream(4242, (uint64_t)(1e4 * ss), (uint64_t)(100 * (g + 1)));
+    for (long i = 0; i < n; i++) {
+        double u[4] = {rng_uniform(&rng), rng_uniform(&rng), rng_uniform(&rng), rng_uniform(&rng)}, w;
+        vec3 d = eda_sample_direction(&t, 0.5, &ph, w_in, &r, u, &w);
+        if (!isfinite(w) || w < 0.0 || !v3_is_finite(d)) {
+            bad_w++;
+            continue;
+        }
+        double x[2] = {w, w * v3_dot(d, a)};
+        for (int k = 0; k < 2; k++) m[k] += x[k], m2[k] += x[k] * x[k];
+    }
+    for (int k = 0; k < 2; k++) {
+        double mean = m[k] / n, se = sqrt(fmax(0.0, m2[k] / n - mean * mean) / n);
+        double z = se > 0.0 ? (mean - ref[k]) / se : (fabs(mean - ref[k]) < 1e-12 ? 0.0 : INFINITY);
+        print_message("  sigma_s %-6g sigma_a %-6g g %+5.2f  E[W%s] MC %.5f ± %.5f  closed form %.5f  z %+.2f%s\n", ss, sa,
+                      g, k ? "(w.a)" : "", mean, se, ref[k], z, fabs(z) < 4.0 ? "" : "  <-- FAIL");
+        fails += !(fabs(z) < 4.0);
+    }
+    if (bad_cdf || bad_w) print_message("  bad CDF entries %ld, non-finite or negative weights %ld\n", bad_cdf, bad_w);
+    eda_table_free(&t);
+    return fails + (bad_w > 0);
+}
+
+static void test_extreme_media_and_g(void **state)
+{
+    (void)state;
+    const double media_full[][2] = {{1e-4, 0.0}, {1e-2, 1e-3}, {1.0, 99.0}, {1e2, 10.0}, {1e3, 9.9e4}};
+    const double g_full[] = {-0.99, -0.5, 0.0, 0.5, 0.99};
+    const double media_fast[][2] = {{1e-4, 0.0}, {1e3, 9.9e4}};
+    const double g_fast[] = {-0.99, 0.99};
+    int full = stress_full(), fails = 0;
+    size_t nm = full ? 5 : 2, ng = full ? 5 : 2;
+    for (size_t i = 0; i < nm; i++)
+        for (size_t j = 0; j < ng; j++) {
+            const double *md = full ? media_full[i] : media_fast[i];
+            fails += check_extreme_case(md[0], md[1], full ? g_full[j] : g_fast[j], 200000);
+        }
+    assert_int_equal(fails, 0);
+}
+
 /* 4. deterministic builds (also across thread counts), save/load round trip, bad files refused */
 static void test_files(void **state)
 {
@@ -321,6 +390,7 @@ int main(void)
         cmocka_unit_test(test_eda_branch_chi2),
         cmocka_unit_test(test_combined_sampler_unbiased),
         cmocka_unit_test(test_files),
+        cmocka_unit_test(test_extreme_media_and_g),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

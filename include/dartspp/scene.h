@@ -165,6 +165,7 @@ struct scene {
     float *verts;            /* 3 per vertex */
     uint32_t *tris;          /* 3 global vertex indices per triangle */
     uint32_t vert_count, tri_count;
+    float ray_offset_scale;  /* largest |coordinate| of the geometry (1 without geometry): ray offsets scale with it */
     char *notes;             /* warnings and (with verbose) ignored keys, one per line; may be NULL */
     void *rt_device, *rt_scene; /* Embree handles */
 };
@@ -188,12 +189,19 @@ typedef struct {
 
 /* Closest hit with t in (0, tmax); returns 1 on a hit. */
 int scene_intersect(const scene *s, vec3 o, vec3 d, double tmax, hit_record *h);
-/* Origin for a ray leaving surface point p on the side of n (Wächter & Binder, Ray Tracing Gems ch. 6). */
-vec3 offset_ray_origin(vec3 p, vec3 n);
+/* Origin for a ray leaving surface point p on the side of n (Wächter & Binder, Ray Tracing Gems ch. 6), with
+ * their near-origin constants scaled by the scene's size so that a scene scaled by any factor is offset alike. */
+vec3 offset_ray_origin(const scene *s, vec3 p, vec3 n);
 
 /* Transmittance and time from p (in medium `med`) to the point q, crossing only null/forward surfaces;
  * returns 0 (and tr = 0) when an opaque surface is in the way. time accumulates eta * length. */
 int scene_transmittance(const scene *s, vec3 p, int med, vec3 q, vec3 *tr, double *time);
+
+/* Whether the medium scatters in any channel (the DARTS samplers and EDA only run where it does). */
+static inline int medium_scatters(const medium *m)
+{
+    return m->sigma_s.x > 0.0 || m->sigma_s.y > 0.0 || m->sigma_s.z > 0.0;
+}
 
 static inline double medium_eta(const scene *s, int med)
 {

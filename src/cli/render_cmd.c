@@ -148,11 +148,18 @@ static void print_samplers(const scene *s)
     const char *sep = "; EDA direction sampling in ";
     for (int i = 0; i < s->medium_count; i++) {
         const medium *m = &s->media[i];
-        if (!m->eda && !in->eda) continue;
+        if (!m->eda && !(in->eda && medium_scatters(m))) continue;
         printf("%s'%s' (alpha %g)", sep, m->name, m->eda_alpha > 0 ? m->eda_alpha : in->eda_alpha);
         sep = ", ";
     }
-    printf("%s\n", sep[0] == ';' ? "; EDA off" : "");
+    printf("%s", sep[0] == ';' ? "; EDA off" : "");
+    sep = "; no DARTS sampling in the non-scattering media ";
+    for (int i = 0; i < s->medium_count; i++) {
+        if (medium_scatters(&s->media[i])) continue;
+        printf("%s'%s'", sep, s->media[i].name);
+        sep = ", ";
+    }
+    printf("\n");
 }
 
 static void print_summary(const scene *s, const render_stats *st)

@@ -65,7 +65,7 @@ void da_sample_distance(const medium *m, const ellipse_record *r, vec3 d, double
     double perp2 = fmax(0.0, r->C * r->C - p_proj * p_proj); /* squared distance of the camera to the ray */
     int row = (int)(rng_uniform(rng) * TABLE_ROWS);
     if (row >= TABLE_ROWS) row = TABLE_ROWS - 1;
-    double rot = rng_uniform(rng), expo_max = -INFINITY;
+    double rot = rng_uniform(rng), expo_max = -INFINITY, amp_max = 0.0;
     for (int j = 0; j < M_CAND; j++) {
         double u = candidate_uniform(row, j, rot);
         double t = -log1p(-u * alpha) / st;              /* truncated exponential on [0, tmax) */
@@ -84,20 +84,23 @@ void da_sample_distance(const medium *m, const ellipse_record *r, vec3 d, double
         if (ok[j]) {
             any = 1;
             expo_max = fmax(expo_max, expo[j]);
+            amp_max = fmax(amp_max, amp[j]);
         }
     }
-    if (!any) { /* nothing reachable: keep candidate 0 with its exponential weight σs e^{−σt t}/(q·α) */
+    double w[M_CAND], W = 0.0;
+    int valid = 0;
+    for (int j = 0; any && j < M_CAND; j++) {
+        /* scaled by amp_max·e^{max} (RIS is scale-free): every w_j <= 1, so W neither overflows nor, with
+         * the largest exponent at exp(0), underflows unless Φ itself is 0 (no scattering: D infinite) */
+        w[j] = ok[j] && amp_max > 0.0 ? (amp[j] / amp_max) * exp(expo[j] - expo_max) : 0.0;
+        W += w[j];
+        valid += w[j] > 0.0;
+    }
+    if (!valid) { /* nothing reachable: keep candidate 0 with its exponential weight σs e^{−σt t}/(q·α) */
         out->fallback = 1;
         out->t = t_c[0];
         out->weight = medium_weight(m, c, t_c[0], 1.0);
         return;
-    }
-    double w[M_CAND], W = 0.0;
-    int valid = 0;
-    for (int j = 0; j < M_CAND; j++) {
-        w[j] = ok[j] ? amp[j] * exp(expo[j] - expo_max) : 0.0; /* scaled by e^{−max}: RIS is scale-free */
-        W += w[j];
-        valid += w[j] > 0.0;
     }
     /* Defensive selection: P_j = (1 − ε)·w_j/W + ε/valid over the reachable candidates. With the weight
      * 1/(M·P_j) the estimate stays unbiased for any P_j > 0 wherever a contribution is possible

@@ -7,7 +7,9 @@
 
 static int medium_uses_eda(const scene *s, const medium *m)
 {
-    return s->integrator.window.gated && (m->eda || s->integrator.eda);
+    /* integrator-wide EDA skips media that do not scatter (there is no direction to pick); a medium that
+     * asks for EDA itself (phase "ida") and cannot have it is an error below */
+    return s->integrator.window.gated && (m->eda || (s->integrator.eda && medium_scatters(m)));
 }
 
 /* The medium's table: the authors' headerless file (relative to the scene's folder), or our cache. The

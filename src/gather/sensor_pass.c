@@ -91,7 +91,7 @@ static void trace_sensor_path(pixel_ctx *c, vec3 d)
         vec3 n_in = v3_dot(d, h.ng) < 0.0 ? h.ng : v3_neg(h.ng);
         if (bsdf_is_passthrough(bs)) {
             med = surface_next_medium(sf, med, d, h.ng);
-            o = offset_ray_origin(h.p, v3_neg(n_in));
+            o = offset_ray_origin(s, h.p, v3_neg(n_in));
             continue;
         }
         if (bs->type != BSDF_MIRROR) {
@@ -101,7 +101,7 @@ static void trace_sensor_path(pixel_ctx *c, vec3 d)
         d = v3_sub(d, v3_scale(h.ng, 2.0 * v3_dot(d, h.ng)));
         thr = v3_mul(thr, bs->albedo);
         med = surface_next_medium(sf, med, d, h.ng);
-        o = offset_ray_origin(h.p, n_in);
+        o = offset_ray_origin(s, h.p, n_in);
         b_cam++;
     }
 }

@@ -69,13 +69,14 @@ typedef struct {
 
 static void store(light_path *lp, photon_buf *b, uint32_t *count, vec3 x, vec3 d, vec3 power, int bounce, double t)
 {
-    if (!v3_is_finite(power)) {
-        lp->tb->nonfinite++;
-        return;
-    }
     if (v3_is_zero(power)) return;
     photon ph;
     make_photon(&ph, x, d, v3_scale(power, 1.0 / lp->bin.pdf), bounce, t, lp->bin.frame);
+    /* checked as stored: a finite double power can still overflow the float record */
+    if (!isfinite(ph.power[0]) || !isfinite(ph.power[1]) || !isfinite(ph.power[2]) || !isfinite(ph.time)) {
+        lp->tb->nonfinite++;
+        return;
+    }
     if (buf_push(b, &ph)) lp->tb->oom = 1;
     else (*count)++;
 }
@@ -104,7 +105,7 @@ static int medium_segment(light_path *lp, double tmax)
 {
     const integrator_settings *in = &lp->s->integrator;
     const medium *m = &lp->s->media[lp->med];
-    int darts = lp->g->active;
+    int darts = lp->g->active && medium_scatters(m); /* nothing to aim where nothing scatters */
     if (darts && in->enable_elliptical) {
         double t, pdf;
         double sigma = v3_avg(m->sigma_t), u1 = rng_uniform(lp->rng), u2 = rng_uniform(lp->rng);
@@ -158,7 +159,7 @@ static int surface_event(light_path *lp, const hit_record *h)
     vec3 n_in = v3_dot(lp->d, h->ng) < 0.0 ? h->ng : v3_neg(h->ng);
     if (bsdf_is_passthrough(b)) {
         lp->med = surface_next_medium(sf, lp->med, lp->d, h->ng);
-        lp->o = offset_ray_origin(h->p, v3_neg(n_in));
+        lp->o = offset_ray_origin(lp->s, h->p, v3_neg(n_in));
         new_vertex(lp);
         return 1;
     }
@@ -174,7 +175,7 @@ static int surface_event(light_path *lp, const hit_record *h)
     }
     lp->beta = v3_mul(lp->beta, b->albedo);
     lp->med = surface_next_medium(sf, lp->med, lp->d, h->ng);
-    lp->o = offset_ray_origin(h->p, n_in);
+    lp->o = offset_ray_origin(lp->s, h->p, n_in);
     new_vertex(lp);
     return 1;
 }
@@ -263,7 +264,7 @@ int photon_pass(const scene *s, const eda_set *eda, uint64_t seed, long iteratio
         {
             thread_bufs *mine = &tb[omp_get_thread_num()];
             mine->vol.n = mine->surf.n = 0;
-#pragma omp for schedule(static)
+#pragma omp for schedule(dynamic, 64) /* paths differ in length; any thread may trace any path */
             for (long i = 0; i < nb; i++) {
                 dp_rng rng = rng_stream(seed ^ 0x70686f746f6eULL, (uint64_t)iteration, (uint64_t)(next + i));
                 pc[i] = (path_count){.thread = omp_get_thread_num(), .off_vol = mine->vol.n, .off_surf = mine->surf.n};

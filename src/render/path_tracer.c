@@ -99,7 +99,7 @@ static int scatter_surface(pixel_ctx *c, path_state *ps, const hit_record *h, in
     vec3 n_in = v3_dot(ps->d, h->ng) < 0.0 ? h->ng : v3_neg(h->ng); /* facing the arriving path */
     if (bsdf_is_passthrough(b)) {
         ps->medium = surface_next_medium(sf, ps->medium, ps->d, h->ng);
-        ps->o = offset_ray_origin(h->p, v3_neg(n_in));
+        ps->o = offset_ray_origin(c->s, h->p, v3_neg(n_in));
         return 1;
     }
     ps->depth++;
@@ -111,14 +111,14 @@ static int scatter_surface(pixel_ctx *c, path_state *ps, const hit_record *h, in
         path_state at = *ps;
         at.beta = v3_mul(ps->beta, b->albedo);
         if (path_counts(&s->integrator, ps->depth + 1))
-            connect_lights(c, &at, offset_ray_origin(h->p, n_in), eval_lambert_cos, &lc);
+            connect_lights(c, &at, offset_ray_origin(c->s, h->p, n_in), eval_lambert_cos, &lc);
         vec3 l = sample_cosine_hemisphere(rng_uniform(c->rng), rng_uniform(c->rng)), t1, t2;
         v3_basis(n_in, &t1, &t2);
         ps->d = v3_norm(v3_add(v3_add(v3_scale(t1, l.x), v3_scale(t2, l.y)), v3_scale(n_in, l.z)));
     }
     ps->beta = v3_mul(ps->beta, b->albedo);
     ps->medium = surface_next_medium(sf, ps->medium, ps->d, h->ng);
-    ps->o = offset_ray_origin(h->p, n_in);
+    ps->o = offset_ray_origin(c->s, h->p, n_in);
     return 1;
 }
 

@@ -14,6 +14,9 @@ static void embree_error(void *user, enum RTCError code, const char *str)
 
 int scene_build_embree(scene *s, dp_error *err)
 {
+    s->ray_offset_scale = 0.0f;
+    for (size_t i = 0; i < 3 * (size_t)s->vert_count; i++) s->ray_offset_scale = fmaxf(s->ray_offset_scale, fabsf(s->verts[i]));
+    if (!(s->ray_offset_scale > 0.0f)) s->ray_offset_scale = 1.0f;
     RTCDevice dev = rtcNewDevice("threads=0");
     if (!dev) return dp_fail(err, "%s: cannot create the Embree device (error %d)", s->path, (int)rtcGetDeviceError(NULL));
     rtcSetDeviceErrorFunction(dev, embree_error, NULL);
@@ -101,10 +104,13 @@ int scene_intersect(const scene *s, vec3 o, vec3 d, double tmax, hit_record *h)
 }
 
 /* Wächter & Binder, "A Fast and Robust Method for Avoiding Self-Intersection" (Ray Tracing Gems, ch. 6):
- * move the float position by a few ulps along n, or by a fixed amount near the origin. */
-static float offset_component(float p, double n)
+ * move the float position by a few ulps along n, or, near the origin where ulps are tinier than the
+ * intersection error (which follows the size of the scene's coordinates), by a fixed amount. Their
+ * constants 1/32 and 1/65536 suit coordinates of order 1; here they are multiplied by the scene's largest
+ * coordinate, so that scaling a scene scales its offsets too. */
+static float offset_component(float p, double n, float scale)
 {
-    const float origin = 1.0f / 32.0f, float_scale = 1.0f / 65536.0f, int_scale = 256.0f;
+    const float origin = scale / 32.0f, float_scale = scale / 65536.0f, int_scale = 256.0f;
     if (fabsf(p) < origin) return p + float_scale * (float)n;
     int32_t of = (int32_t)(int_scale * n), bits;
     memcpy(&bits, &p, 4);
@@ -114,9 +120,11 @@ static float offset_component(float p, double n)
     return r;
 }
 
-vec3 offset_ray_origin(vec3 p, vec3 n)
+vec3 offset_ray_origin(const scene *s, vec3 p, vec3 n)
 {
-    return v3(offset_component((float)p.x, n.x), offset_component((float)p.y, n.y), offset_component((float)p.z, n.z));
+    float k = s->ray_offset_scale > 0.0f ? s->ray_offset_scale : 1.0f;
+    return v3(offset_component((float)p.x, n.x, k), offset_component((float)p.y, n.y, k),
+              offset_component((float)p.z, n.z, k));
 }
 
 int scene_transmittance(const scene *s, vec3 p, int med, vec3 q, vec3 *tr, double *time)
@@ -136,7 +144,7 @@ int scene_transmittance(const scene *s, vec3 p, int med, vec3 q, vec3 *tr, doubl
         const surface *sf = &s->surfaces[h.surface];
         if (!bsdf_is_passthrough(&s->bsdfs[sf->bsdf])) break;
         med = surface_next_medium(sf, med, d, h.ng);
-        p = offset_ray_origin(h.p, v3_dot(d, h.ng) > 0 ? h.ng : v3_neg(h.ng));
+        p = offset_ray_origin(s, h.p, v3_dot(d, h.ng) > 0 ? h.ng : v3_neg(h.ng));
     }
     *tr = v3s(0.0);
     return 0;
