@@ -328,6 +328,50 @@ static void test_exr_corrupted_bytes_never_crash(void **state)
 
 /* ---- PFM ---- */
 
+/* OpenEXRCore <= 3.4.7 stores a ZIP chunk whose zlib output has exactly the packed size as zlib bytes, which
+ * readers take for raw data (openexr issue #2306); exr_write guards against it. One 64 × 16 chunk (12288
+ * bytes) of r random floats and zeros, plus one float with b random low bits: r and b sweep the zlib size
+ * through the packed size in steps of a fraction of a byte, so some variant lands on it exactly. Every
+ * variant must read back bit-exact. (Without the guard, Debian 12's OpenEXRCore 3.1.5 corrupted variants
+ * of this sweep — 2 of 425 — reading back NaN and values near 1e38.) */
+static void test_exr_roundtrip_at_the_zip_size_boundary(void **state)
+{
+    (void)state;
+    char *dir = test_tmpdir(), path[512];
+    join(path, sizeof path, dir, "z.exr");
+    const int w = 64, h = 16, n = w * h * 3;
+    image_rgb img, back;
+    dp_error err;
+    assert_int_equal(image_alloc(&img, w, h, &err), 0);
+    long variants = 0, bad = 0, raw_sized = 0;
+    for (int r = n - 24; r <= n; r++)
+        for (int b = 0; b <= 32; b += 2) {
+            uint64_t x = 0x9e3779b97f4a7c15ULL * (uint64_t)(r * 64 + b + 1);
+            for (int i = 0; i < n; i++) {
+                x ^= x << 13, x ^= x >> 7, x ^= x << 17;
+                uint32_t bits = i < r ? (uint32_t)x : i == r ? (uint32_t)x & (uint32_t)((1ULL << b) - 1) : 0u;
+                bits &= 0xbf7fffffu; /* keep it finite: exponent never all ones */
+                memcpy(&img.rgb[i], &bits, 4);
+            }
+            assert_int_equal(exr_write(path, &img, NULL, &err), 0);
+            assert_int_equal(exr_read(path, &back, &err), 0);
+            bad += memcmp(back.rgb, img.rgb, sizeof(float) * (size_t)n) != 0;
+            image_free(&back);
+            exr_context_t ctx = NULL;
+            exr_chunk_info_t ci;
+            assert_int_equal(exr_start_read(&ctx, path, NULL), EXR_ERR_SUCCESS);
+            assert_int_equal(exr_read_scanline_chunk_info(ctx, 0, 0, &ci), EXR_ERR_SUCCESS);
+            raw_sized += ci.packed_size == ci.unpacked_size;
+            exr_finish(&ctx);
+            variants++;
+        }
+    print_message("  %ld variants, %ld stored at the raw size, %ld read back wrong\n", variants, raw_sized, bad);
+    assert_true(raw_sized > 0 && raw_sized < variants); /* the sweep crosses the boundary */
+    assert_int_equal(bad, 0);
+    image_free(&img);
+    remove_tree(dir);
+}
+
 static void test_pfm_roundtrip_bitexact(void **state)
 {
     (void)state;
@@ -912,6 +956,7 @@ int main(void)
         cmocka_unit_test(test_exr_reads_half_uint_and_grey),
         cmocka_unit_test(test_exr_truncated_and_garbage),
         cmocka_unit_test(test_exr_corrupted_bytes_never_crash),
+        cmocka_unit_test(test_exr_roundtrip_at_the_zip_size_boundary),
         cmocka_unit_test(test_pfm_roundtrip_bitexact),
         cmocka_unit_test(test_pfm_bytes_on_disk),
         cmocka_unit_test(test_pfm_grey_and_big_endian),

@@ -144,8 +144,27 @@ static exr_result_t define_header(exr_context_t ctx, const image_rgb *img, const
     return rv;
 }
 
+/* OpenEXRCore up to 3.4.7 (Debian 12 ships 3.1.5) stores the zlib bytes of a chunk whose compressed size
+ * equals its packed size, which readers take for uncompressed data: the chunk reads back as garbage (NaN,
+ * 1e38; openexr issue #2306, one chunk in a few hundred of noisy float data). The library's own rule is that
+ * a chunk stored at its packed size holds the packed bytes, so after the library's compressor runs, such a
+ * chunk gets them. */
+typedef struct {
+    exr_result_t (*compress)(exr_encode_pipeline_t *enc);
+} zip_guard;
+
+static exr_result_t compress_guarded(exr_encode_pipeline_t *enc)
+{
+    const zip_guard *g = enc->encoding_user_data;
+    exr_result_t rv = g->compress(enc);
+    if (rv == EXR_OK && enc->compressed_buffer && enc->compressed_buffer != enc->packed_buffer &&
+        enc->compressed_bytes == enc->packed_bytes)
+        memcpy(enc->compressed_buffer, enc->packed_buffer, enc->packed_bytes);
+    return rv;
+}
+
 static exr_result_t encode_chunk(exr_context_t ctx, const image_rgb *img, int y, exr_encode_pipeline_t *enc,
-                                 int *started)
+                                 zip_guard *guard, int *started)
 {
     exr_chunk_info_t ci;
     exr_result_t rv = exr_write_scanline_chunk_info(ctx, 0, y, &ci);
@@ -155,7 +174,14 @@ static exr_result_t encode_chunk(exr_context_t ctx, const image_rgb *img, int y,
     for (int c = 0; c < enc->channel_count; ++c)
         bind_channel(enc->channels + c, img->rgb, img->width, (size_t)ci.start_y,
                      rgb_offset(enc->channels[c].channel_name));
-    if (!*started) rv = exr_encoding_choose_default_routines(ctx, 0, enc);
+    if (!*started) {
+        rv = exr_encoding_choose_default_routines(ctx, 0, enc);
+        if (rv == EXR_OK && enc->compress_fn) {
+            guard->compress = enc->compress_fn;
+            enc->compress_fn = compress_guarded;
+            enc->encoding_user_data = guard;
+        }
+    }
     *started = 1;
     return rv == EXR_OK ? exr_encoding_run(ctx, 0, enc) : rv;
 }
@@ -166,9 +192,10 @@ static exr_result_t write_pixels(exr_context_t ctx, const image_rgb *img)
     exr_result_t rv = exr_get_scanlines_per_chunk(ctx, 0, &lines);
     if (rv == EXR_OK && lines <= 0) rv = EXR_ERR_INVALID_ARGUMENT;
     exr_encode_pipeline_t enc = EXR_ENCODE_PIPELINE_INITIALIZER;
+    zip_guard guard = {NULL};
     int started = 0;
     for (int y = 0; rv == EXR_OK && y < img->height; y += lines)
-        rv = encode_chunk(ctx, img, y, &enc, &started);
+        rv = encode_chunk(ctx, img, y, &enc, &guard, &started);
     if (started) exr_encoding_destroy(ctx, &enc);
     return rv;
 }
