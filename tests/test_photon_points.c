@@ -290,6 +290,69 @@ static void test_threads_bit_identical(void **state)
     tmp_scene_remove(&t);
 }
 
+/* Total surface-photon power of one photon pass (all channels; powers are already divided by the paths). */
+static double surface_power_total(const photon_set *p)
+{
+    double t = 0.0;
+    for (size_t i = 0; i < p->n_surf; i++) t += (double)p->surf[i].power[0] + p->surf[i].power[1] + p->surf[i].power[2];
+    return t;
+}
+
+/* Once the volume budget is full, DARTS traces the remaining paths for surface photons only, with free
+ * flight and phase sampling instead of DA distance sampling and EDA, and without control vertices. Those
+ * samplers are all unbiased, so the surface map must keep its expectation. Two photon passes per iteration
+ * share their random streams: A with room for every volume photon (all paths aimed), B with a volume
+ * budget that fills in the first batch of 8192 paths (the other 24576 take the fast path). Per iteration,
+ * the difference of their surface totals comes only from those paths; over 48 iterations its mean must be
+ * within 4 standard errors of 0. The pairing makes it sharp: the standard error is ~0.15 % of the total, so
+ * a fast path that weighted each scattering event 1 % too high gives z ~ 2, and 3 % fails. */
+static void test_surface_photons_after_volume_budget_full(void **state)
+{
+    (void)state;
+    char text[8192];
+    box_scene_text(text, sizeof text, 16,
+                   "\"type\": \"progressive_transient_photon_map\", \"volume_photon_type\": \"points\","
+                   " \"photon_count\": 32768, \"volume_photon_count\": 1e7, \"gather_photon_count\": 16,"
+                   " \"gather_radius\": 0.15, \"volume_gather_radius\": 0.08, \"max_bounces\": 12,"
+                   " \"transient_time_center\": 4.5, \"transient_time_width\": 0.5, \"enable_guiding\": true,"
+                   " \"enable_elliptical\": true, \"strict_time_width\": true");
+    tmp_scene t;
+    tmp_scene_write(&t, text);
+    scene sa, sb;
+    load_scene(t.path, NULL, 0, &sa);
+    const char *sets[] = {"volume_photon_count=2000"};
+    load_scene(t.path, sets, 1, &sb);
+    enum { ITERS = 48 };
+    double diff[ITERS], mean = 0.0, var = 0.0, total_a = 0.0;
+    long fast_paths = 0;
+    for (int i = 0; i < ITERS; i++) {
+        dp_error err;
+        photon_set a, b;
+        if (photon_pass(&sa, NULL, 21, i, &a, &err) || photon_pass(&sb, NULL, 21, i, &b, &err)) fail_msg("%s", err.msg);
+        assert_int_equal(a.vol_paths, a.paths); /* A never fills its volume budget */
+        assert_true(b.vol_paths < 8192);        /* B fills it in the first batch */
+        assert_true(b.n_vol <= 2000);
+        assert_int_equal(a.surf_paths, b.surf_paths);
+        assert_true(a.n_surf > 100 && b.n_surf > 100);
+        fast_paths += b.paths - 8192;
+        diff[i] = surface_power_total(&b) - surface_power_total(&a);
+        total_a += surface_power_total(&a) / ITERS;
+        mean += diff[i] / ITERS;
+        photon_set_free(&a);
+        photon_set_free(&b);
+    }
+    for (int i = 0; i < ITERS; i++) var += (diff[i] - mean) * (diff[i] - mean) / (ITERS - 1);
+    double se = sqrt(var / ITERS);
+    print_message("  surface total %.5g; fast minus aimed %.3g (se %.2g, z = %.2f) over %ld fast paths\n", total_a, mean,
+                  se, mean / se, fast_paths);
+    assert_true(se > 0.0);
+    assert_true(se < 0.05 * total_a); /* the comparison can see a bias of a few percent */
+    assert_true(fabs(mean) < 4.0 * se);
+    scene_free(&sa);
+    scene_free(&sb);
+    tmp_scene_remove(&t);
+}
+
 /* ---------------------------------------------------------------------------------------------------- */
 /* 3. single scattering against quadrature                                                               */
 
@@ -736,6 +799,7 @@ int main(void)
         cmocka_unit_test(test_radius_schedule_closed_form),
         cmocka_unit_test(test_radius_schedule_used_by_integrator),
         cmocka_unit_test(test_threads_bit_identical),
+        cmocka_unit_test(test_surface_photons_after_volume_budget_full),
         cmocka_unit_test(test_single_scatter_total),
         cmocka_unit_test(test_consistency_vs_path_tracer),
         cmocka_unit_test(test_eda_consistency_anisotropic),

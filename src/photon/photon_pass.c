@@ -60,6 +60,8 @@ typedef struct {
     thread_bufs *tb;
     path_count *pc;
     dp_rng *rng;
+    int volume_open;       /* the volume budget still has room (decided per batch, in path order) */
+    int aim_volume;        /* DARTS samplers on: only while volume_open, as they serve the volume map */
     darts_bin bin;         /* target bin; gate mode: the gate with pdf 1 */
     ellipse_record rec;    /* of the current vertex (DARTS, in a medium) */
     vec3 o, d, beta;
@@ -84,7 +86,7 @@ static void store(light_path *lp, photon_buf *b, uint32_t *count, vec3 x, vec3 d
 /* A new vertex at lp->o: the ellipse record its samplers share (DARTS, inside a medium). */
 static void new_vertex(light_path *lp)
 {
-    if (!lp->g->active || lp->med == MEDIUM_VACUUM) return;
+    if (!lp->aim_volume || lp->med == MEDIUM_VACUUM) return;
     const medium *m = &lp->s->media[lp->med];
     ellipse_record_init(&lp->rec, lp->g, &lp->bin, lp->o, lp->time, m->eta, lp->s->integrator.ellipse_residual,
                         v3_avg(m->sigma_t), rng_uniform(lp->rng));
@@ -105,7 +107,8 @@ static int medium_segment(light_path *lp, double tmax)
 {
     const integrator_settings *in = &lp->s->integrator;
     const medium *m = &lp->s->media[lp->med];
-    int darts = lp->g->active && medium_scatters(m); /* nothing to aim where nothing scatters */
+    /* nothing to aim where nothing scatters, or once no volume photon can be stored */
+    int darts = lp->aim_volume && medium_scatters(m);
     if (darts && in->enable_elliptical) {
         double t, pdf;
         double sigma = v3_avg(m->sigma_t), u1 = rng_uniform(lp->rng), u2 = rng_uniform(lp->rng);
@@ -136,7 +139,7 @@ static int medium_segment(light_path *lp, double tmax)
     if (++lp->medium_events > m->max_bounces) return -1;
     /* classic photons (no control vertices); low_order_scattering off: none at the first vertex after a
      * light or surface */
-    if (!(darts && in->enable_elliptical) && (in->low_order_scattering || lp->medium_events > 1))
+    if (lp->volume_open && !(darts && in->enable_elliptical) && (in->low_order_scattering || lp->medium_events > 1))
         store(lp, &lp->tb->vol, &lp->pc->n_vol, lp->o, lp->d, lp->beta, lp->bounce, lp->time);
     new_vertex(lp);
     const eda_table *et = darts && lp->eda ? lp->eda->table[lp->med] : NULL;
@@ -181,15 +184,19 @@ static int surface_event(light_path *lp, const hit_record *h)
 }
 
 /* One light path; bounce = segments from the light. Stops when no later photon could count: past the
- * window end, or (DARTS) when even a straight line to the camera arrives after the target bin (early exit). */
-static void trace_light_path(const scene *s, const darts_guide *g, const eda_set *eda, dp_rng *rng, thread_bufs *tb,
-                             path_count *pc)
+ * window end, or (DARTS) when even a straight line to the camera arrives after the target bin (early exit).
+ * Once the volume budget is full (volume_open = 0) the path only feeds surface photons, so it is traced with
+ * plain free flight and phase sampling: every sampler is unbiased, and DA, control vertices and EDA only pay
+ * off for the volume map. Bin sampling, the surface time test and the early exit stay on. */
+static void trace_light_path(const scene *s, const darts_guide *g, const eda_set *eda, int volume_open, dp_rng *rng,
+                             thread_bufs *tb, path_count *pc)
 {
     const integrator_settings *in = &s->integrator;
     int li = (int)(rng_uniform(rng) * s->light_count);
     if (li >= s->light_count) li = s->light_count - 1;
     const point_light *L = &s->lights[li];
     light_path lp = {.s = s, .g = g, .eda = eda, .tb = tb, .pc = pc, .rng = rng, .o = L->pos, .med = L->medium,
+                     .volume_open = volume_open, .aim_volume = g->active && volume_open,
                      .bin = {.start = -INFINITY, .end = INFINITY, .pdf = 1.0, .frame = -1}};
     if (g->active && !darts_sample_bin(g, L->pos, rng_uniform(rng), &lp.bin)) return;
     lp.d = sample_uniform_sphere(rng_uniform(rng), rng_uniform(rng));
@@ -268,7 +275,7 @@ int photon_pass(const scene *s, const eda_set *eda, uint64_t seed, long iteratio
             for (long i = 0; i < nb; i++) {
                 dp_rng rng = rng_stream(seed ^ 0x70686f746f6eULL, (uint64_t)iteration, (uint64_t)(next + i));
                 pc[i] = (path_count){.thread = omp_get_thread_num(), .off_vol = mine->vol.n, .off_surf = mine->surf.n};
-                trace_light_path(s, &guide, eda, &rng, mine, &pc[i]);
+                trace_light_path(s, &guide, eda, !bv.full, &rng, mine, &pc[i]);
             }
         }
         for (long i = 0; i < nb && !rc; i++) { /* merge in path order */
