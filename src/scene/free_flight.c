@@ -1,8 +1,21 @@
 /* Free-flight distance sampling in a homogeneous medium with per-channel σt (spectral one-sample MIS). */
 #include "dartspp/scene.h"
 
+/* Grey σt (the same in every channel, as in most fog scenes): t ~ σt e^{−σt t}, so the weight of a medium
+ * event is σs/σt and that of passing tmax is 1; no channel choice and no exponential needed. */
+static double sample_grey(const medium *m, double tmax, dp_rng *rng, vec3 *beta, int *event)
+{
+    double st = m->sigma_t.x;
+    double t = st > 0.0 ? -log1p(-rng_uniform(rng)) / st : INFINITY;
+    *event = t < tmax;
+    if (!*event) return tmax;
+    *beta = v3_scale(v3_mul(*beta, m->sigma_s), 1.0 / st);
+    return t;
+}
+
 double medium_sample_free_flight(const medium *m, double tmax, dp_rng *rng, vec3 *beta, int *event)
 {
+    if (m->sigma_t.x == m->sigma_t.y && m->sigma_t.y == m->sigma_t.z) return sample_grey(m, tmax, rng, beta, event);
     int ch = (int)(rng_uniform(rng) * 3.0);
     double st = v3_comp(m->sigma_t, ch > 2 ? 2 : ch);
     double t = st > 0.0 ? -log1p(-rng_uniform(rng)) / st : INFINITY;
