@@ -26,15 +26,17 @@ elliptical_only|--set enable_guiding=false --set enable_elliptical=true
 da_only|--set enable_guiding=true --set enable_elliptical=false
 darts|--set enable_guiding=true --set enable_elliptical=true"
 only=${METHODS:-path_tracer baseline elliptical_only da_only darts} # METHODS="baseline darts" runs a subset
-echo "$methods" | while IFS='|' read -r label sets; do
-    case " $only " in *" $label "*) ;; *) continue ;; esac
-    s=1
-    while [ "$s" -le "$seeds" ]; do
+# seeds outer, methods inner: the methods alternate, so a slow spell of the machine (shared hosts drift by
+# 20 % over minutes) falls on all of them rather than on one
+s=1
+while [ "$s" -le "$seeds" ]; do
+    echo "$methods" | while IFS='|' read -r label sets; do
+        case " $only " in *" $label "*) ;; *) continue ;; esac
         # shellcheck disable=SC2086
         "$bin" render "$scene" $sets $extra --time "$secs" --seed "$s" --quiet --output "$out/$label-s$s.exr" \
             --reference "$ref" --log "$out/$label-s$s.csv" --log-every 1 > "$out/$label-s$s.txt"
-        s=$((s + 1))
     done
+    s=$((s + 1))
 done
 vref=0
 [ -f "$ref.var" ] && vref=$(cat "$ref.var")
