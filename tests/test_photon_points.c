@@ -332,6 +332,8 @@ static void test_surface_photons_after_volume_budget_full(void **state)
         assert_int_equal(a.vol_paths, a.paths); /* A never fills its volume budget */
         assert_true(b.vol_paths < 8192);        /* B fills it in the first batch */
         assert_true(b.n_vol <= 2000);
+        assert_int_equal(a.aimed_paths, a.paths); /* the count the run summary reports */
+        assert_int_equal(b.aimed_paths, 8192);
         assert_int_equal(a.surf_paths, b.surf_paths);
         assert_true(a.n_surf > 100 && b.n_surf > 100);
         fast_paths += b.paths - 8192;

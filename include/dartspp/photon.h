@@ -60,6 +60,7 @@ typedef struct {
     long surf_paths;
     long nonfinite;        /* photons dropped for a non-finite power */
     long early_exits;      /* paths ended by the DARTS early exit */
+    long aimed_paths;      /* DARTS: paths traced with its samplers, before the volume budget filled */
 } photon_set;
 
 struct scene;

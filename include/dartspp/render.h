@@ -58,6 +58,7 @@ typedef struct render_stats {
     double stored_photons;  /* volume + surface photons stored, summed over iterations */
     double r_vol, r_surf;   /* radii of the last iteration */
     double early_exits;     /* light paths ended by the DARTS early exit */
+    double aimed_paths;     /* light paths traced with the DARTS samplers (the rest: surface photons only) */
     double t_photon, t_maps, t_gather; /* seconds spent in the photon pass, map builds, sensor pass */
 } render_stats;
 

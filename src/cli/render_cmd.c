@@ -176,6 +176,10 @@ static void print_summary(const scene *s, const render_stats *st)
     if (st->early_exits > 0)
         printf("early exit: %.1f%% of the light paths ended as soon as no photon could reach their bin\n",
                100.0 * st->early_exits / st->photon_paths);
+    if (st->aimed_paths > 0 && st->aimed_paths < st->photon_paths)
+        printf("volume budget: full after %.1f%% of the light paths; the rest fed only the surface map "
+               "(free flight, no control vertices)\n",
+               100.0 * st->aimed_paths / st->photon_paths);
     if (st->photon_paths > 0)
         printf("photon points: %.3g photon paths (%.2f M/s in the photon pass), %.3g photons stored; "
                "time in photon pass %.2f s, map builds %.2f s, sensor pass %.2f s; last radii r_vol %.4g, R_surf %.4g\n",

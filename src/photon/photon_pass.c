@@ -259,7 +259,7 @@ int photon_pass(const scene *s, const eda_set *eda, uint64_t seed, long iteratio
     photon_buf vol = {0}, surf = {0};
     darts_guide guide;
     darts_guide_init(s, &guide);
-    long early = 0;
+    long early = 0, aimed = 0;
     int nt = omp_get_max_threads();
     thread_bufs *tb = calloc((size_t)nt, sizeof(thread_bufs));
     path_count *pc = malloc(BATCH * sizeof(path_count));
@@ -267,6 +267,7 @@ int photon_pass(const scene *s, const eda_set *eda, uint64_t seed, long iteratio
     long next = 0;
     while (!rc && next < max_paths && !(bv.full && bsf.full)) {
         long nb = max_paths - next < BATCH ? max_paths - next : BATCH;
+        aimed += guide.active && !bv.full ? nb : 0;
 #pragma omp parallel num_threads(nt)
         {
             thread_bufs *mine = &tb[omp_get_thread_num()];
@@ -301,6 +302,7 @@ int photon_pass(const scene *s, const eda_set *eda, uint64_t seed, long iteratio
     }
     out->paths = next;
     out->early_exits = early;
+    out->aimed_paths = aimed;
     out->vol_paths = bv.full ? bv.paths : next;
     out->surf_paths = bsf.full ? bsf.paths : next;
     scale_powers(vol.p, vol.n, out->vol_paths);

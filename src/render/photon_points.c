@@ -33,6 +33,7 @@ int photon_points_pass(const scene *s, const struct eda_set *eda, film *f, uint6
         st->rays += sensor_pass(s, &g, f, seed, iteration, &f->nonfinite);
         st->photon_paths += (double)ps.paths;
         st->early_exits += (double)ps.early_exits;
+        st->aimed_paths += (double)ps.aimed_paths;
         st->stored_photons += (double)(ps.n_vol + ps.n_surf);
         st->r_vol = g.r_vol;
         st->r_surf = g.r_surf;
