@@ -61,7 +61,6 @@ typedef struct {
     path_count *pc;
     dp_rng *rng;
     int volume_open;       /* the volume budget still has room (decided per batch, in path order) */
-    int aim_volume;        /* DARTS samplers on: only while volume_open, as they serve the volume map */
     darts_bin bin;         /* target bin; gate mode: the gate with pdf 1 */
     ellipse_record rec;    /* of the current vertex (DARTS, in a medium) */
     vec3 o, d, beta;
@@ -83,10 +82,13 @@ static void store(light_path *lp, photon_buf *b, uint32_t *count, vec3 x, vec3 d
     else (*count)++;
 }
 
+/* The DARTS samplers serve the volume map: they run only while its budget has room. */
+static int aims_at_volume(const light_path *lp) { return lp->g->active && lp->volume_open; }
+
 /* A new vertex at lp->o: the ellipse record its samplers share (DARTS, inside a medium). */
 static void new_vertex(light_path *lp)
 {
-    if (!lp->aim_volume || lp->med == MEDIUM_VACUUM) return;
+    if (!aims_at_volume(lp) || lp->med == MEDIUM_VACUUM) return;
     const medium *m = &lp->s->media[lp->med];
     ellipse_record_init(&lp->rec, lp->g, &lp->bin, lp->o, lp->time, m->eta, lp->s->integrator.ellipse_residual,
                         v3_avg(m->sigma_t), rng_uniform(lp->rng));
@@ -108,7 +110,7 @@ static int medium_segment(light_path *lp, double tmax)
     const integrator_settings *in = &lp->s->integrator;
     const medium *m = &lp->s->media[lp->med];
     /* nothing to aim where nothing scatters, or once no volume photon can be stored */
-    int darts = lp->aim_volume && medium_scatters(m);
+    int darts = aims_at_volume(lp) && medium_scatters(m);
     if (darts && in->enable_elliptical) {
         double t, pdf;
         double sigma = v3_avg(m->sigma_t), u1 = rng_uniform(lp->rng), u2 = rng_uniform(lp->rng);
@@ -196,7 +198,7 @@ static void trace_light_path(const scene *s, const darts_guide *g, const eda_set
     if (li >= s->light_count) li = s->light_count - 1;
     const point_light *L = &s->lights[li];
     light_path lp = {.s = s, .g = g, .eda = eda, .tb = tb, .pc = pc, .rng = rng, .o = L->pos, .med = L->medium,
-                     .volume_open = volume_open, .aim_volume = g->active && volume_open,
+                     .volume_open = volume_open,
                      .bin = {.start = -INFINITY, .end = INFINITY, .pdf = 1.0, .frame = -1}};
     if (g->active && !darts_sample_bin(g, L->pos, rng_uniform(rng), &lp.bin)) return;
     lp.d = sample_uniform_sphere(rng_uniform(rng), rng_uniform(rng));
