@@ -21,6 +21,7 @@ typedef struct {
     double width;      /* gate width, or frame width */
     int frames;        /* 0: gate mode (one bin); else the frame count */
     double eta_lb;     /* smallest refractive index in the scene: time >= eta_lb * distance */
+    double eta_ub;     /* largest: time <= eta_ub * distance along a straight segment */
 } darts_guide;
 
 typedef struct {

@@ -65,9 +65,11 @@ typedef struct {
 
 struct scene;
 struct eda_set;
-/* eda: the render's EDA tables (darts.h), or NULL for phase-function sampling everywhere. */
-int photon_pass(const struct scene *s, const struct eda_set *eda, uint64_t seed, long iteration, photon_set *out,
-                dp_error *err);
+/* eda: the render's EDA tables (darts.h), or NULL for phase-function sampling everywhere. surface_radius:
+ * the radius the surface photons will be gathered with; the DARTS time tests of surface photons (and the
+ * early exit) are widened by the camera-leg change across it, so that the gather's own gate test decides. */
+int photon_pass(const struct scene *s, const struct eda_set *eda, uint64_t seed, long iteration,
+                double surface_radius, photon_set *out, dp_error *err);
 void photon_set_free(photon_set *ps);
 
 #endif

@@ -15,8 +15,11 @@ void darts_guide_init(const scene *s, darts_guide *g)
     g->end = time_window_end(tw);
     g->width = tw->width;
     g->frames = tw->frame_count;
-    g->eta_lb = in->vacuum_eta;
-    for (int i = 0; i < s->medium_count; i++) g->eta_lb = fmin(g->eta_lb, s->media[i].eta);
+    g->eta_lb = g->eta_ub = in->vacuum_eta;
+    for (int i = 0; i < s->medium_count; i++) {
+        g->eta_lb = fmin(g->eta_lb, s->media[i].eta);
+        g->eta_ub = fmax(g->eta_ub, s->media[i].eta);
+    }
 }
 
 int darts_sample_bin(const darts_guide *g, vec3 x_light, double u, darts_bin *b)

@@ -61,6 +61,7 @@ typedef struct {
     path_count *pc;
     dp_rng *rng;
     int volume_open;       /* the volume budget still has room (decided per batch, in path order) */
+    double surface_slack;  /* DARTS: widening of the surface time tests, η_max × the surface gather radius */
     darts_bin bin;         /* target bin; gate mode: the gate with pdf 1 */
     ellipse_record rec;    /* of the current vertex (DARTS, in a medium) */
     vec3 o, d, beta;
@@ -95,12 +96,16 @@ static void new_vertex(light_path *lp)
 }
 
 /* Surface photons with DARTS: the straight-line lower bound of the full path time must be before the bin
- * end, and in strict mode not before its start (reference §8.2). */
+ * end, and in strict mode not before its start (reference §8.2) — both widened by the slack. The gather
+ * tests the time again at the gather point x', up to r away, where the camera leg differs by up to η·r:
+ * tested only here, at the photon (as the reference does), a photon that counts at x' could be dropped,
+ * and the surfaces near the edges of the in-gate band would come out too dark. */
 static int surface_time_ok(const light_path *lp, vec3 x)
 {
     if (!lp->g->active) return 1;
     double t_lb = lp->time + lp->g->eta_lb * v3_len(v3_sub(lp->g->cam, x));
-    return t_lb < lp->bin.end && (!lp->s->integrator.strict_time_width || t_lb >= lp->bin.start);
+    return t_lb < lp->bin.end + lp->surface_slack &&
+           (!lp->s->integrator.strict_time_width || t_lb >= lp->bin.start - lp->surface_slack);
 }
 
 /* One medium segment up to tmax: the control vertex (elliptical), then the distance sample. Returns 1 for
@@ -190,23 +195,25 @@ static int surface_event(light_path *lp, const hit_record *h)
  * Once the volume budget is full (volume_open = 0) the path only feeds surface photons, so it is traced with
  * plain free flight and phase sampling: every sampler is unbiased, and DA, control vertices and EDA only pay
  * off for the volume map. Bin sampling, the surface time test and the early exit stay on. */
-static void trace_light_path(const scene *s, const darts_guide *g, const eda_set *eda, int volume_open, dp_rng *rng,
-                             thread_bufs *tb, path_count *pc)
+static void trace_light_path(const scene *s, const darts_guide *g, const eda_set *eda, int volume_open,
+                             double surface_slack, dp_rng *rng, thread_bufs *tb, path_count *pc)
 {
     const integrator_settings *in = &s->integrator;
     int li = (int)(rng_uniform(rng) * s->light_count);
     if (li >= s->light_count) li = s->light_count - 1;
     const point_light *L = &s->lights[li];
     light_path lp = {.s = s, .g = g, .eda = eda, .tb = tb, .pc = pc, .rng = rng, .o = L->pos, .med = L->medium,
-                     .volume_open = volume_open,
+                     .volume_open = volume_open, .surface_slack = surface_slack,
                      .bin = {.start = -INFINITY, .end = INFINITY, .pdf = 1.0, .frame = -1}};
     if (g->active && !darts_sample_bin(g, L->pos, rng_uniform(rng), &lp.bin)) return;
+    darts_bin reach = lp.bin; /* the early exit keeps every path whose surface photons could still count */
+    reach.end += surface_slack;
     lp.d = sample_uniform_sphere(rng_uniform(rng), rng_uniform(rng));
     lp.beta = v3_scale(L->intensity, 4.0 * M_PI * s->light_count);
     double t_end = in->window.gated ? time_window_end(&in->window) : INFINITY;
     new_vertex(&lp);
     while (lp.bounce + 1 < in->max_bounces && lp.time < t_end && !v3_is_zero(lp.beta)) {
-        if (g->active && in->early_exit && !darts_can_reach(g, &lp.bin, lp.o, lp.time)) {
+        if (g->active && in->early_exit && !darts_can_reach(g, &reach, lp.o, lp.time)) {
             pc->early_exit = 1;
             return;
         }
@@ -251,7 +258,8 @@ static void scale_powers(photon *p, size_t n, long paths)
         for (int c = 0; c < 3; c++) p[i].power[c] *= inv;
 }
 
-int photon_pass(const scene *s, const eda_set *eda, uint64_t seed, long iteration, photon_set *out, dp_error *err)
+int photon_pass(const scene *s, const eda_set *eda, uint64_t seed, long iteration, double surface_radius,
+                photon_set *out, dp_error *err)
 {
     memset(out, 0, sizeof *out);
     if (s->light_count == 0) return 0;
@@ -261,6 +269,7 @@ int photon_pass(const scene *s, const eda_set *eda, uint64_t seed, long iteratio
     photon_buf vol = {0}, surf = {0};
     darts_guide guide;
     darts_guide_init(s, &guide);
+    double slack = s->integrator.include_surfaces ? guide.eta_ub * surface_radius : 0.0;
     long early = 0, aimed = 0;
     int nt = omp_get_max_threads();
     thread_bufs *tb = calloc((size_t)nt, sizeof(thread_bufs));
@@ -278,7 +287,7 @@ int photon_pass(const scene *s, const eda_set *eda, uint64_t seed, long iteratio
             for (long i = 0; i < nb; i++) {
                 dp_rng rng = rng_stream(seed ^ 0x70686f746f6eULL, (uint64_t)iteration, (uint64_t)(next + i));
                 pc[i] = (path_count){.thread = omp_get_thread_num(), .off_vol = mine->vol.n, .off_surf = mine->surf.n};
-                trace_light_path(s, &guide, eda, !bv.full, &rng, mine, &pc[i]);
+                trace_light_path(s, &guide, eda, !bv.full, slack, &rng, mine, &pc[i]);
             }
         }
         for (long i = 0; i < nb && !rc; i++) { /* merge in path order */

@@ -14,12 +14,12 @@ int photon_points_pass(const scene *s, const struct eda_set *eda, film *f, uint6
 {
     const integrator_settings *in = &s->integrator;
     photon_set ps;
-    double t0 = dp_seconds();
-    if (photon_pass(s, eda, seed, iteration, &ps, err)) return -1;
-    double t1 = dp_seconds();
     gather_input g = {.k_surf = in->gather_photon_count, .camera_leg_projected = in->camera_leg_projected};
     g.r_vol = progressive_radius(in->volume_gather_radius, in->volume_alpha, iteration, in->radius_schedule_3d ? 3 : 2);
     g.r_surf = progressive_radius(in->gather_radius, in->alpha, iteration, 2);
+    double t0 = dp_seconds();
+    if (photon_pass(s, eda, seed, iteration, g.r_surf, &ps, err)) return -1;
+    double t1 = dp_seconds();
     volume_photon_map *vm = NULL;
     surface_photon_map *sm = NULL;
     int rc = 0;
