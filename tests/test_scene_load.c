@@ -527,6 +527,58 @@ static void test_cli_bad_input(void **state)
     if (failures) fail_msg("%d of %zu bad inputs were not reported as required", failures, ncases);
 }
 
+/* Mirrors: the render still runs (exit 0), and the warning names the scene, the mirror surface and the
+ * assumption that breaks - for the path tracer (no connection to point lights through a mirror) and for
+ * DARTS (straight camera leg) - and stays silent where neither applies. */
+static void test_cli_mirror_warnings(void **state)
+{
+    (void)state;
+    if (access(DARTSPP_BIN, X_OK) != 0)
+        fail_msg("%s does not exist or is not executable: build it first (make build/san/dartspp)", DARTSPP_BIN);
+    static const char *pt_says = "the path tracer cannot connect to point lights", *darts_says = "DARTS time bounds";
+    static const char *pp = "\"type\": \"progressive_transient_photon_map\", \"photon_count\": 2000, "
+                            "\"volume_photon_count\": 1000, \"volume_gather_radius\": 0.2, \"gather_radius\": 0.2, "
+                            "\"enable_guiding\": true, \"enable_elliptical\": true";
+    static const struct {
+        const char *what;
+        int mirror, photons;
+        const char *set;
+        int pt_warns, darts_warns;
+    } cases[] = {
+        {"lambert floor, path tracer", 0, 0, "", 0, 0},
+        {"mirror floor, path tracer", 1, 0, "", 1, 0},
+        {"mirror floor, DARTS", 1, 1, "", 0, 1},
+        {"mirror floor, DARTS strict", 1, 1, " --set enable_elliptical=false --set strict_time_width=true", 0, 1},
+        {"mirror floor, DA only", 1, 1, " --set enable_elliptical=false", 0, 0},
+        {"lambert floor, DARTS", 0, 1, "", 0, 0},
+    };
+    const char *dir = fx_dir();
+    char *out = fx_keep(malloc(16384));
+    int failures = 0;
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        char *a = cases[i].mirror ? replace1(BASE_SCENE, "\"type\": \"lambert\"", "\"type\": \"mirror\"")
+                                  : strdup(BASE_SCENE);
+        char *text = cases[i].photons ? replace1(a, "\"type\": \"path_tracer\"", pp) : strdup(a);
+        free(a);
+        char path[1100], exr[1100], cmd[3000];
+        snprintf(path, sizeof path, "%s/mirror_%02zu.json", dir, i);
+        snprintf(exr, sizeof exr, "%s/mirror_%02zu.exr", dir, i);
+        write_bytes(path, text, strlen(text));
+        free(text);
+        snprintf(cmd, sizeof cmd, "%s render '%s' --spp 1 --quiet --output '%s'%s", DARTSPP_BIN, path, exr, cases[i].set);
+        int rc = test_run(cmd, out, 16384);
+        int pt = strstr(out, pt_says) != NULL, darts = strstr(out, darts_says) != NULL;
+        int named = !(pt || darts) || (strstr(out, path) && strstr(out, "'floor'"));
+        if (rc != 0 || pt != cases[i].pt_warns || darts != cases[i].darts_warns || !named) {
+            failures++;
+            print_message("[%s] exit %d, path-tracer warning %d (want %d), DARTS warning %d (want %d), names scene "
+                          "and surface %d. Output:\n%s\n", cases[i].what, rc, pt, cases[i].pt_warns, darts,
+                          cases[i].darts_warns, named, out);
+        }
+    }
+    if (failures) fail_msg("%d mirror-warning cases wrong", failures);
+}
+
 /* In-process: the same message contract for a few more bad values (no binary needed). */
 static void test_bad_values_in_process(void **state)
 {
@@ -962,6 +1014,7 @@ int main(void)
         T(test_camera_axes_tilted),
         T(test_camera_axes_looking_along_x),
         T(test_cli_bad_input),
+        T(test_cli_mirror_warnings),
         T(test_bad_values_in_process),
         T(test_derived_coefficients_stay_finite),
         T(test_set_overrides),

@@ -130,6 +130,30 @@ static int after_pass(void *ctx, const film *f, const render_stats *st, dp_error
     return 0;
 }
 
+/* Mirrors break two assumptions, and the user should hear which one applies (README, "Strict time mode on
+ * a mirror"): the path tracer cannot reach a point light through a mirror, so light that hits a mirror
+ * before any diffuse or medium vertex is missing; DARTS's time bounds and control vertices assume a
+ * straight camera leg, so what the camera sees through a mirror is biased. */
+static void warn_mirrors(const scene *s)
+{
+    const char *mirror = NULL;
+    for (int i = 0; i < s->surface_count && !mirror; i++)
+        if (s->surfaces[i].tri_count > 0 && s->bsdfs[s->surfaces[i].bsdf].type == BSDF_MIRROR)
+            mirror = s->surfaces[i].name;
+    if (!mirror) return;
+    if (s->integrator.type == INTEGRATOR_PATH_TRACER && s->light_count > 0)
+        fprintf(stderr, "warning: %s: surface '%s' is a mirror: the path tracer cannot connect to point lights "
+                "through it, so light reflected by it before any diffuse or medium vertex (caustics) is missing "
+                "from the image; photon points render it\n", s->path, mirror);
+    darts_guide g;
+    darts_guide_init(s, &g);
+    int straight_leg = s->integrator.enable_elliptical || s->integrator.strict_time_width;
+    if (s->integrator.type == INTEGRATOR_PHOTON_POINTS && g.active && straight_leg)
+        fprintf(stderr, "warning: %s: surface '%s' is a mirror: DARTS time bounds and control vertices assume a "
+                "straight camera leg, so what the camera sees through it is too dark; enable_elliptical=false "
+                "and strict_time_width=false render it without that bias\n", s->path, mirror);
+}
+
 /* Which photon-pass samplers run (DESIGN §4: the summary says which parts are active). */
 static void print_samplers(const scene *s)
 {
@@ -204,6 +228,7 @@ int cli_render(int argc, char **argv)
         return 2;
     }
     if (s.notes) fputs(s.notes, stderr);
+    warn_mirrors(&s);
     char out[2048];
     output_path(&a, &s, out, sizeof out);
     signal(SIGINT, on_signal);
