@@ -328,7 +328,8 @@ static void test_surface_photons_after_volume_budget_full(void **state)
     for (int i = 0; i < ITERS; i++) {
         dp_error err;
         photon_set a, b;
-        if (photon_pass(&sa, NULL, 21, i, 0.05, &a, &err) || photon_pass(&sb, NULL, 21, i, 0.05, &b, &err)) fail_msg("%s", err.msg);
+        if (photon_pass(&sa, NULL, 21, i, 0.05, &a, &err) || photon_pass(&sb, NULL, 21, i, 0.05, &b, &err))
+            fail_msg("%s", err.msg);
         assert_int_equal(a.vol_paths, a.paths); /* A never fills its volume budget */
         assert_true(b.vol_paths < 8192);        /* B fills it in the first batch */
         assert_true(b.n_vol <= 2000);
