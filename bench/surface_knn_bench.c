@@ -31,7 +31,7 @@ int main(int argc, char **argv)
     scene_load_options lo = {.sets = sets, .set_count = ns};
     if (scene_load(argv[1], &lo, &s, &err)) return fprintf(stderr, "%s\n", err.msg), 2;
     photon_set ps;
-    if (photon_pass(&s, NULL, 1, 0, &ps, &err)) return fprintf(stderr, "%s\n", err.msg), 1;
+    if (photon_pass(&s, NULL, 1, 0, 0.0, NULL, &ps, &err)) return fprintf(stderr, "%s\n", err.msg), 1;
     int n = s.cam.width * s.cam.height;
     vec3 *x = malloc(sizeof(vec3) * n);
     int *hit = malloc(sizeof(int) * n);

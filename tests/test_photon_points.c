@@ -210,11 +210,11 @@ static void photon_pass_thread_check(const scene *s, photon_set *p1)
 {
     dp_error err;
     omp_set_num_threads(1);
-    if (photon_pass(s, NULL, 9, 1, 0.0, p1, &err)) fail_msg("%s", err.msg);
+    if (photon_pass(s, NULL, 9, 1, 0.0, NULL, p1, &err)) fail_msg("%s", err.msg);
     for (int threads = 2; threads <= 3; threads++) {
         photon_set p2;
         omp_set_num_threads(threads);
-        if (photon_pass(s, NULL, 9, 1, 0.0, &p2, &err)) fail_msg("%s", err.msg);
+        if (photon_pass(s, NULL, 9, 1, 0.0, NULL, &p2, &err)) fail_msg("%s", err.msg);
         assert_int_equal(p1->paths, p2.paths);
         assert_int_equal(p1->n_vol, p2.n_vol);
         assert_int_equal(p1->n_surf, p2.n_surf);
@@ -328,7 +328,7 @@ static void test_surface_photons_after_volume_budget_full(void **state)
     for (int i = 0; i < ITERS; i++) {
         dp_error err;
         photon_set a, b;
-        if (photon_pass(&sa, NULL, 21, i, 0.05, &a, &err) || photon_pass(&sb, NULL, 21, i, 0.05, &b, &err))
+        if (photon_pass(&sa, NULL, 21, i, 0.05, NULL, &a, &err) || photon_pass(&sb, NULL, 21, i, 0.05, NULL, &b, &err))
             fail_msg("%s", err.msg);
         assert_int_equal(a.vol_paths, a.paths); /* A never fills its volume budget */
         assert_true(b.vol_paths < 8192);        /* B fills it in the first batch */

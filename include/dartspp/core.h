@@ -4,6 +4,7 @@
 #define DARTSPP_CORE_H
 
 #include <math.h>
+#include <signal.h>
 #include <stddef.h>
 #include <stdint.h>
 
@@ -23,6 +24,12 @@ int dp_fail(dp_error *err, const char *fmt, ...) __attribute__((format(printf, 2
 
 /* Monotonic wall-clock seconds (for budgets, progress and stage timings). */
 double dp_seconds(void);
+
+/* ---- interruption ----
+ * A stop flag is set asynchronously (SIGINT/SIGTERM handler) and read by the long loops once per batch of
+ * light paths or row of pixels; NULL means "never stops". */
+typedef volatile sig_atomic_t dp_stop_flag;
+static inline int dp_stopped(const dp_stop_flag *stop) { return stop && *stop; }
 
 /* ---- 3-vectors (double: geometry and time are accumulated in double) ---- */
 typedef struct {

@@ -164,5 +164,7 @@ typedef struct eda_set {
  * missing), the table of every medium that uses EDA. A scene without EDA touches no file. */
 int eda_set_prepare(const scene *s, eda_set *set, dp_error *err);
 void eda_set_free(eda_set *set);
+/* Bytes the tables of eda_set_prepare will hold (the memory guard's estimate), without touching a file. */
+size_t eda_set_bytes(const scene *s);
 
 #endif

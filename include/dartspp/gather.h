@@ -16,9 +16,11 @@ typedef struct {
     double r_surf;                  /* surface search radius R of this iteration */
     int k_surf;                     /* gather_photon_count */
     int camera_leg_projected;       /* 0: Euclidean distance segment origin → photon (reference) */
+    const dp_stop_flag *stop;       /* rows not started once it is set are skipped (may be NULL) */
 } gather_input;
 
-/* Adds one camera sample per pixel to f (pixel p of iteration i uses rng_stream(seed, i, p)).
+/* Adds one camera sample per pixel to f's pass layer (pixel p of iteration i uses rng_stream(seed, i, p));
+ * once g->stop is set the remaining rows are skipped and the pass is incomplete (the caller drops it).
  * Returns the rays traced; non-finite contributions are dropped and counted in *nonfinite. */
 double sensor_pass(const scene *s, const gather_input *g, film *f, uint64_t seed, long iteration, long *nonfinite);
 

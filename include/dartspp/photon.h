@@ -45,6 +45,10 @@ void surface_map_free(surface_photon_map *m);
  * array given to surface_map_build, and their squared distances. Returns the count found. Thread-safe. */
 int photon_map_query_knn(const surface_photon_map *m, vec3 x, int k, double R, int *idx, double *d2);
 
+/* Bytes volume_map_build allocates for n photons (the memory guard's estimate; the surface map's default
+ * backend is the same structure). */
+size_t volume_map_bytes(size_t n);
+
 /* ---- photon pass ----
  * Light paths from the point lights (light picked uniformly, direction uniform): photons stored at medium
  * scattering vertices (volume) and at hits on Lambertian surfaces (surface), never on null/forward
@@ -52,6 +56,8 @@ int photon_map_query_knn(const surface_photon_map *m, vec3 x, int k, double R, i
  * `volume_photon_count`. A map keeps the photons of the leading paths whose photons all fit (the cut is
  * decided by path index, so the result does not depend on the thread count), and its powers are divided
  * by that number of paths. */
+#define PHOTON_PASS_BATCH 8192 /* light paths traced between two merges (and two looks at the stop flag) */
+
 typedef struct {
     photon *vol, *surf;
     size_t n_vol, n_surf;
@@ -61,6 +67,7 @@ typedef struct {
     long nonfinite;        /* photons dropped for a non-finite power */
     long early_exits;      /* paths ended by the DARTS early exit */
     long aimed_paths;      /* DARTS: paths traced with its samplers, before the volume budget filled */
+    int interrupted;       /* the stop flag ended the pass early: the sets are incomplete */
 } photon_set;
 
 struct scene;
@@ -68,8 +75,10 @@ struct eda_set;
 /* eda: the render's EDA tables (darts.h), or NULL for phase-function sampling everywhere. surface_radius:
  * the radius the surface photons will be gathered with; the DARTS time tests of surface photons (and the
  * early exit) are widened by the camera-leg change across it, so that the gather's own gate test decides. */
+/* stop (may be NULL) is read once per batch of light paths: once set, the pass ends early with
+ * out->interrupted = 1 and incomplete photon sets (the caller drops the iteration). */
 int photon_pass(const struct scene *s, const struct eda_set *eda, uint64_t seed, long iteration,
-                double surface_radius, photon_set *out, dp_error *err);
+                double surface_radius, const dp_stop_flag *stop, photon_set *out, dp_error *err);
 void photon_set_free(photon_set *ps);
 
 #endif

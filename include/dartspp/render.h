@@ -12,13 +12,16 @@
  * Sums of per-pass pixel estimates; the image is sum / passes. Gate image: contributions weighted by
  * 1/width inside [start, end) (steady state: weight 1, no test). Frame k: 1/w inside its own window, so a
  * frame is exactly the gate image of its window (DESIGN §4). In frame mode the gate image is the image of
- * the union window. */
+ * the union window. A pass splats into the pass layer, which joins the sums at film_commit_pass; an
+ * interrupted pass is dropped with film_drop_pass, so the sums only ever hold completed passes. */
 typedef struct {
     int width, height;
     time_window window;
-    double *sum;       /* 3 per pixel */
-    float *frame_sum;  /* frame_count × 3 per pixel */
-    long passes;
+    double *sum;       /* 3 per pixel: completed passes */
+    float *frame_sum;  /* frame_count × 3 per pixel: completed passes */
+    double *pass;      /* the pass in progress, same layout as sum */
+    float *frame_pass; /* the pass in progress, same layout as frame_sum */
+    long passes;       /* completed passes */
     long nonfinite;    /* non-finite contributions suppressed (never written into an image) */
 } film;
 
@@ -28,6 +31,9 @@ void film_free(film *f);
  * frame >= 0 (DARTS frame mode): c counts only if t falls in that frame, in the frames and the gate image.
  * Returns 0 when c was non-finite and was dropped (the caller counts it). */
 int film_splat(film *f, size_t px, double t, vec3 c, int frame);
+/* The pass layer joins the sums (passes + 1), or is cleared. */
+void film_commit_pass(film *f);
+void film_drop_pass(film *f);
 /* Gate image (k < 0) or frame k, as the mean over passes. */
 int film_image(const film *f, int k, image_rgb *img, dp_error *err);
 
@@ -40,7 +46,12 @@ typedef struct {
     long spp;               /* passes; < 0: as the scene says */
     double time_limit;      /* seconds; < 0: as the scene says */
     int progress;           /* progress line on stderr */
-    volatile sig_atomic_t *stop; /* set asynchronously (SIGINT): finish the current pass and return */
+    /* Set asynchronously (SIGINT/SIGTERM): the pass in progress stops within a batch of light paths or a row
+     * of pixels and is dropped; render_scene returns with the completed passes. May be NULL. */
+    const dp_stop_flag *stop;
+    /* Set to 1 by render_scene when the first pass starts (before that an interrupt has nothing to keep:
+     * the CLI exits at once, even while an EDA table is being built). May be NULL. */
+    dp_stop_flag *passes_started;
     /* Called after every completed pass with the film and statistics so far (checkpoints, error logs).
      * A non-zero return stops the render with that error. May be NULL. */
     int (*after_pass)(void *ctx, const film *f, const struct render_stats *st, dp_error *err);
@@ -62,21 +73,24 @@ typedef struct render_stats {
     double t_photon, t_maps, t_gather; /* seconds spent in the photon pass, map builds, sensor pass */
 } render_stats;
 
-/* Renders the scene with its integrator into f (initialised here). */
+/* Renders the scene with its integrator into f (initialised here). On return, also with an error or an
+ * interrupt, f holds the completed passes (possibly none) and the caller frees it with film_free. */
 int render_scene(const scene *s, const render_options *opt, film *f, render_stats *st, dp_error *err);
 
-/* One pass of the reference path tracer over every pixel; returns rays traced. Deterministic: the
- * samples of pixel p in pass i come from rng_stream(seed, i, p). */
-double path_tracer_pass(const scene *s, film *f, uint64_t seed, long pass, long *nonfinite);
+/* One pass of the reference path tracer over every pixel into f's pass layer; returns rays traced.
+ * Deterministic: the samples of pixel p in pass i come from rng_stream(seed, i, p). Once stop is set the
+ * remaining rows are skipped (the caller drops the pass). */
+double path_tracer_pass(const scene *s, film *f, uint64_t seed, long pass, const dp_stop_flag *stop, long *nonfinite);
 
 /* Progressive radius of iteration i (0-based): r0 · (Π_{j=1..i} (j+α)/(j+1))^{1/dims}; dims 2 shrinks the
  * kernel area by (j+α)/(j+1) per step (Knaus & Zwicker 2011), dims 3 is the reference's cube root. */
 double progressive_radius(double r0, double alpha, long iteration, int dims);
 
-/* One iteration of photon points: photon pass, maps, sensor pass into f. Returns 0 or -1 with err. */
+/* One iteration of photon points: photon pass, maps, sensor pass into f's pass layer. Returns 0 or -1
+ * with err. Once stop is set it returns early with the pass incomplete (the caller drops it). */
 struct eda_set;
 int photon_points_pass(const scene *s, const struct eda_set *eda, film *f, uint64_t seed, long iteration,
-                       render_stats *st, dp_error *err);
+                       const dp_stop_flag *stop, render_stats *st, dp_error *err);
 
 /* ---- error log (issue: error against run time) ----
  * CSV rows "seconds,iterations,photon_paths,stored_photons,r_vol,r_surf,mse,rel_mse,mse_q99,nonfinite_pixels"
@@ -91,11 +105,47 @@ int error_log_pass(error_log *l, const film *f, const struct render_stats *st, i
 double error_log_overhead(const error_log *l); /* seconds spent computing and writing rows */
 void error_log_close(error_log *l);
 
+/* ---- memory guard ----
+ * The plan's peak memory, item by item (each with the scene key that drives it, or NULL), checked against
+ * the memory available before any work is spent. */
+#define MEMORY_ITEMS_MAX 12
+typedef struct {
+    const char *what;  /* e.g. "surface photons and their map" */
+    const char *key;   /* e.g. "integrator.photon_count"; NULL for fixed costs */
+    double bytes;
+} memory_item;
+
+typedef struct {
+    memory_item item[MEMORY_ITEMS_MAX];
+    int count;
+    double total;      /* bytes */
+} memory_estimate;
+
+/* have_reference: an error log holds a reference image. */
+void render_memory_estimate(const scene *s, int have_reference, memory_estimate *m);
+/* The item with a key that needs the most (NULL if none). */
+const memory_item *memory_largest(const memory_estimate *m);
+/* Bytes the process can still use: MemAvailable, lowered to the cgroup's limit when there is one; -1 if
+ * unknown. */
+double memory_available(void);
+/* "12.3 MiB" */
+void format_bytes(double bytes, char *out, size_t n);
+
 /* ---- outputs ----
  * Writes the gate image to `path` (.exr or .pfm), a PNG preview `<stem>.png`, and in frame mode one image
  * per frame `<stem>_<NNNN>.<ext>` (0-based, zero-padded to at least 4 digits) and `<stem>_frames.csv`.
  * Every file is written atomically; `wrote` (may be NULL) is called with each path written. */
 int render_write_outputs(const scene *s, const film *f, const char *path, const char *integrator,
                          void (*wrote)(const char *path), dp_error *err);
+
+#define OUTPUT_PATH_MAX 2048
+/* Before any work: the extension (.exr or .pfm), the folder (created), a probe file created and removed
+ * there, the disk room and file count of the gate image, preview and frame files. 0 or -1 with err. */
+int render_outputs_check(const char *path, int width, int height, int frame_count, dp_error *err);
+/* When writing to `path` failed at the end: the same outputs, under the same file names, in a new folder
+ * dartspp-rescue-XXXXXX in $TMPDIR, else /tmp, else the working folder (the first that takes them);
+ * rescue_dir receives that folder. 0, or -1 with err when no folder took them. */
+int render_write_rescue(const scene *s, const film *f, const char *path, const char *integrator,
+                        void (*wrote)(const char *path), char *rescue_dir, size_t n, dp_error *err);
 
 #endif

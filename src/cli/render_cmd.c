@@ -4,6 +4,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/resource.h>
 #include <unistd.h>
 
 #include "dartspp/cli.h"
@@ -19,15 +20,45 @@ typedef struct {
     double checkpoint; /* seconds between checkpoints; < 0: as the scene says; 0: none */
     const char *reference, *log;
     double log_every;
+    double max_memory; /* bytes; 0: what the machine has available */
     render_options ro;
 } render_args;
 
-static volatile sig_atomic_t stop_requested = 0; /* written only by the signal handler */
+/* Exit status of a render ended by SIGINT/SIGTERM (128 + SIGINT, as shells report it). */
+#define EXIT_INTERRUPTED 130
 
+static dp_stop_flag stop_requested = 0; /* set by the signal handler, read by the passes */
+static dp_stop_flag passes_started = 0; /* set by the driver: from then on an interrupt keeps the passes done */
+
+static void say(const char *msg) { (void)!write(2, msg, strlen(msg)); }
+
+/* First SIGINT/SIGTERM: the pass in progress stops within a batch or a row and is dropped, and the completed
+ * passes are written. Before the first pass (loading, EDA tables) there is nothing to keep, and a second
+ * signal means "now": both exit at once. Only async-signal-safe calls here. */
 static void on_signal(int sig)
 {
     (void)sig;
+    if (!passes_started || stop_requested) {
+        say("\ndartspp render: interrupted, exiting now\n");
+        _exit(EXIT_INTERRUPTED);
+    }
     stop_requested = 1;
+    say("\ndartspp render: interrupted: stopping the pass in progress and writing the completed passes "
+        "(interrupt again to exit at once)\n");
+}
+
+/* "8G", "512M", "100000K", "1e9": bytes (binary suffixes), or -1. */
+static double parse_bytes(const char *v)
+{
+    char *end;
+    errno = 0;
+    double d = v ? strtod(v, &end) : -1;
+    if (!v || end == v || errno || !(d > 0) || !isfinite(d)) return -1;
+    const char *units = "KMGT";
+    const char *u = *end ? strchr(units, *end) : NULL;
+    if (*end && (!u || end[1])) return -1;
+    for (const char *p = units; u && p <= u; p++) d *= 1024.0;
+    return d;
 }
 
 static int bad_arg(const char *opt, const char *val, const char *why)
@@ -67,6 +98,9 @@ static int parse_args(int argc, char **argv, render_args *a)
             i++;
         } else if (!strcmp(o, "--checkpoint")) {
             if (parse_number(o, v, 0, &a->checkpoint)) return bad_arg(o, v, "expected seconds (0: no checkpoints)");
+            i++;
+        } else if (!strcmp(o, "--max-memory")) {
+            if ((a->max_memory = parse_bytes(v)) < 0) return bad_arg(o, v, "expected a size such as 8G, 512M or 1e9");
             i++;
         } else if (!strcmp(o, "--log-every")) {
             if (parse_number(o, v, 0, &a->log_every)) return bad_arg(o, v, "expected seconds (0: every pass)");
@@ -123,7 +157,12 @@ static int after_pass(void *ctx, const film *f, const render_stats *st, dp_error
     if (error_log_pass(c->log, f, st, 0, err)) return -1;
     if (c->every <= 0 || st->seconds - c->last < c->every) return 0;
     c->last = st->seconds;
-    if (render_write_outputs(c->s, f, c->out, c->s->integrator.type_name, NULL, err)) return -1;
+    dp_error werr;
+    if (render_write_outputs(c->s, f, c->out, c->s->integrator.type_name, NULL, &werr)) {
+        /* the render goes on: its end writes again, to a rescue folder if need be */
+        fprintf(stderr, "%swarning: checkpoint not written: %s\n", isatty(2) ? "\r\033[K" : "", werr.msg);
+        return 0;
+    }
     if (!c->quiet)
         fprintf(stderr, "%scheckpoint: %ld passes, %.1f s -> %s\n", isatty(2) ? "\r\033[K" : "", st->passes,
                 st->seconds, c->out);
@@ -211,6 +250,52 @@ static void print_summary(const scene *s, const render_stats *st)
                st->t_photon, st->t_maps, st->t_gather, st->r_vol, st->r_surf);
 }
 
+/* The memory guard (before any work): the plan's estimate against the limit; exit 2 naming the key that
+ * drives it when it does not fit. */
+static int check_memory(const scene *s, const render_args *a, memory_estimate *m)
+{
+    render_memory_estimate(s, a->reference != NULL, m);
+    double limit = a->max_memory > 0 ? a->max_memory : memory_available();
+    if (!(limit > 0) || m->total <= limit) return 0;
+    const memory_item *big = memory_largest(m);
+    char need[32], have[32], item[32];
+    format_bytes(m->total, need, sizeof need);
+    format_bytes(limit, have, sizeof have);
+    fprintf(stderr, "dartspp render: %s: the render needs about %s of memory, more than the %s %s", s->path, need,
+            have, a->max_memory > 0 ? "allowed by --max-memory" : "available");
+    if (big) {
+        format_bytes(big->bytes, item, sizeof item);
+        fprintf(stderr, "; %s drives it (%s: %s)", big->key, big->what, item);
+    }
+    fprintf(stderr, "\n");
+    return 2;
+}
+
+static void print_memory(const memory_estimate *m)
+{
+    struct rusage ru;
+    char est[32], peak[32] = "unknown";
+    format_bytes(m->total, est, sizeof est);
+    if (getrusage(RUSAGE_SELF, &ru) == 0) format_bytes(ru.ru_maxrss * 1024.0, peak, sizeof peak);
+    printf("memory: estimated %s before the render, peak resident %s\n", est, peak);
+}
+
+/* Writes the completed passes to `out`, or to a rescue folder when that fails: finished work is never
+ * thrown away. 0, or 1 when the images had to go elsewhere (or nowhere). */
+static int write_outputs(const scene *s, const film *f, const char *out)
+{
+    dp_error err;
+    if (!render_write_outputs(s, f, out, s->integrator.type_name, print_written, &err)) return 0;
+    fprintf(stderr, "dartspp render: %s\n", err.msg);
+    char rescue[OUTPUT_PATH_MAX];
+    if (render_write_rescue(s, f, out, s->integrator.type_name, print_written, rescue, sizeof rescue, &err))
+        fprintf(stderr, "dartspp render: no rescue folder took the images either (%s): they are lost\n", err.msg);
+    else
+        fprintf(stderr, "dartspp render: the images of the %ld completed passes were written to %s instead\n",
+                f->passes, rescue);
+    return 1;
+}
+
 int cli_render(int argc, char **argv)
 {
     render_args a = {0};
@@ -219,6 +304,9 @@ int cli_render(int argc, char **argv)
         free(a.sets);
         return rc;
     }
+    /* Interrupts count from here: while loading, an interrupt exits at once (nothing to keep yet). */
+    signal(SIGINT, on_signal);
+    signal(SIGTERM, on_signal);
     scene s;
     dp_error err;
     scene_load_options lo = {.sets = a.sets, .set_count = a.set_count, .verbose = a.verbose};
@@ -227,37 +315,53 @@ int cli_render(int argc, char **argv)
         free(a.sets);
         return 2;
     }
-    if (s.notes) fputs(s.notes, stderr);
-    warn_mirrors(&s);
-    char out[2048];
+    char out[OUTPUT_PATH_MAX];
     output_path(&a, &s, out, sizeof out);
-    signal(SIGINT, on_signal);
-    signal(SIGTERM, on_signal);
-    a.ro.progress = !a.quiet;
-    a.ro.stop = &stop_requested;
+    memory_estimate mem;
+    /* bad outputs and plans too big are refused before any work is spent */
+    if (render_outputs_check(out, s.cam.width, s.cam.height, s.integrator.window.frame_count, &err)) {
+        fprintf(stderr, "dartspp render: %s\n", err.msg);
+        rc = 2;
+    } else {
+        rc = check_memory(&s, &a, &mem);
+    }
     after_pass_ctx cp = {.s = &s, .out = out, .quiet = a.quiet,
                          .every = a.checkpoint >= 0 ? a.checkpoint : s.renderer.checkpoint_seconds};
-    if (a.log && !(cp.log = error_log_open(a.log, a.reference, s.cam.width, s.cam.height,
-                                           s.integrator.window.frame_count, a.log_every, &err))) {
+    if (!rc && a.log && !(cp.log = error_log_open(a.log, a.reference, s.cam.width, s.cam.height,
+                                                  s.integrator.window.frame_count, a.log_every, &err))) {
         fprintf(stderr, "dartspp render: %s\n", err.msg);
+        rc = 2;
+    }
+    if (rc) {
         scene_free(&s);
         free(a.sets);
-        return 2;
+        return rc;
     }
+    if (s.notes) fputs(s.notes, stderr);
+    warn_mirrors(&s);
+    a.ro.progress = !a.quiet;
+    a.ro.stop = &stop_requested;
+    a.ro.passes_started = &passes_started;
     a.ro.after_pass = after_pass;
     a.ro.after_pass_ctx = &cp;
-    film f = {0};
+    film f;
     render_stats st;
-    rc = render_scene(&s, &a.ro, &f, &st, &err) ? 2 : 0;
-    if (!rc && cp.log && error_log_pass(cp.log, &f, &st, 1, &err)) rc = 1;
-    if (!rc) {
+    int failed = render_scene(&s, &a.ro, &f, &st, &err) != 0;
+    if (failed) fprintf(stderr, "dartspp render: %s\n", err.msg);
+    else if (cp.log && error_log_pass(cp.log, &f, &st, 1, &err)) {
+        fprintf(stderr, "dartspp render: %s\n", err.msg);
+        failed = 1;
+    }
+    if (!failed) {
         print_summary(&s, &st);
+        print_memory(&mem);
         if (cp.log)
             printf("error log: %s (%.3f s spent logging, %.2f%% of the render)\n", a.log, error_log_overhead(cp.log),
                    st.seconds > 0 ? 100.0 * error_log_overhead(cp.log) / st.seconds : 0.0);
-        if (render_write_outputs(&s, &f, out, s.integrator.type_name, print_written, &err)) rc = 1;
     }
-    if (rc) fprintf(stderr, "dartspp render: %s\n", err.msg);
+    if (f.passes > 0) failed |= write_outputs(&s, &f, out);
+    else if (st.interrupted) fprintf(stderr, "dartspp render: interrupted before the first pass completed: nothing written\n");
+    rc = failed ? 1 : st.interrupted ? EXIT_INTERRUPTED : 0;
     error_log_close(cp.log);
     film_free(&f);
     scene_free(&s);

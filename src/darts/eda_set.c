@@ -61,6 +61,19 @@ int eda_set_prepare(const scene *s, eda_set *set, dp_error *err)
     return 0;
 }
 
+size_t eda_set_bytes(const scene *s)
+{
+    size_t bytes = 0;
+    const int *shape = s->integrator.eda_shape;
+    for (int i = 0; i < s->medium_count; i++) {
+        const medium *m = &s->media[i];
+        if (!medium_uses_eda(s, m)) continue;
+        size_t cells = m->eda_table_path[0] ? (size_t)128 * 128 * 256 : (size_t)shape[0] * shape[1] * shape[2];
+        bytes += cells * sizeof(float);
+    }
+    return bytes;
+}
+
 void eda_set_free(eda_set *set)
 {
     for (int i = 0; set->tables && i < set->count; i++) eda_table_free(&set->tables[i]);

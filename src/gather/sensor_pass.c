@@ -113,6 +113,7 @@ double sensor_pass(const scene *s, const gather_input *g, film *f, uint64_t seed
     long bad = 0;
 #pragma omp parallel for schedule(dynamic, 1) reduction(+ : rays, bad)
     for (int y = 0; y < cam->height; y++) {
+        if (dp_stopped(g->stop)) continue; /* interrupted: the pass is dropped, finish fast */
         for (int x = 0; x < cam->width; x++) {
             size_t px = (size_t)y * cam->width + x;
             dp_rng rng = rng_stream(seed, (uint64_t)iteration, px);

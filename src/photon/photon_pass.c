@@ -9,7 +9,7 @@
 #include "dartspp/photon.h"
 #include "dartspp/scene.h"
 
-#define BATCH 8192
+#define BATCH PHOTON_PASS_BATCH
 
 typedef struct {
     photon *p;
@@ -259,7 +259,7 @@ static void scale_powers(photon *p, size_t n, long paths)
 }
 
 int photon_pass(const scene *s, const eda_set *eda, uint64_t seed, long iteration, double surface_radius,
-                photon_set *out, dp_error *err)
+                const dp_stop_flag *stop, photon_set *out, dp_error *err)
 {
     memset(out, 0, sizeof *out);
     if (s->light_count == 0) return 0;
@@ -277,6 +277,7 @@ int photon_pass(const scene *s, const eda_set *eda, uint64_t seed, long iteratio
     int rc = (!tb || !pc) ? -1 : 0;
     long next = 0;
     while (!rc && next < max_paths && !(bv.full && bsf.full)) {
+        if ((out->interrupted = dp_stopped(stop))) break; /* read once per batch */
         long nb = max_paths - next < BATCH ? max_paths - next : BATCH;
         aimed += guide.active && !bv.full ? nb : 0;
 #pragma omp parallel num_threads(nt)

@@ -280,6 +280,13 @@ static void copy_photons_in_tree_order(const photon *ph, const point_item *pts, 
     for (size_t i = 0; i < n; i++) out[i] = ph[pts[i].src];
 }
 
+size_t volume_map_bytes(size_t n)
+{
+    if (n == 0) return sizeof(volume_photon_map);
+    size_t node_count = ((size_t)2 << leaf_depth(n)) - 1;
+    return sizeof(volume_photon_map) + node_count * sizeof(node_box) + n * (sizeof(point_item) + sizeof(photon));
+}
+
 volume_photon_map *volume_map_build(const photon *ph, size_t n, double r, dp_error *err)
 {
     if (!(r >= 0.0)) {

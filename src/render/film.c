@@ -1,4 +1,5 @@
-/* The film: per-pixel sums of pass estimates for the gate image and each transient frame. */
+/* The film: per-pixel sums of pass estimates for the gate image and each transient frame. A pass splats into
+ * its own layer, which joins the sums only when the pass completes: an interrupted pass is dropped whole. */
 #include "dartspp/render.h"
 
 #include <stdlib.h>
@@ -10,16 +11,14 @@ int film_init(film *f, int width, int height, const time_window *tw, dp_error *e
     f->width = width;
     f->height = height;
     f->window = *tw;
-    size_t n = (size_t)width * height * 3;
+    size_t n = (size_t)width * height * 3, nf = n * (size_t)tw->frame_count;
     f->sum = calloc(n, sizeof(double));
-    if (tw->frame_count > 0) {
-        if ((double)n * tw->frame_count * sizeof(float) > 16e9) {
-            film_free(f);
-            return dp_fail(err, "%d frames of %dx%d need more than 16 GB", tw->frame_count, width, height);
-        }
-        f->frame_sum = calloc(n * (size_t)tw->frame_count, sizeof(float));
+    f->pass = calloc(n, sizeof(double));
+    if (nf > 0) {
+        f->frame_sum = calloc(nf, sizeof(float));
+        f->frame_pass = calloc(nf, sizeof(float));
     }
-    if (!f->sum || (tw->frame_count > 0 && !f->frame_sum)) {
+    if (!f->sum || !f->pass || (nf > 0 && (!f->frame_sum || !f->frame_pass))) {
         film_free(f);
         return dp_fail(err, "out of memory for a %dx%d film with %d frames", width, height, tw->frame_count);
     }
@@ -29,7 +28,9 @@ int film_init(film *f, int width, int height, const time_window *tw, dp_error *e
 void film_free(film *f)
 {
     free(f->sum);
+    free(f->pass);
     free(f->frame_sum);
+    free(f->frame_pass);
     memset(f, 0, sizeof *f);
 }
 
@@ -37,7 +38,7 @@ int film_splat(film *f, size_t px, double t, vec3 c, int frame)
 {
     if (!v3_is_finite(c)) return 0;
     const time_window *tw = &f->window;
-    double *s = &f->sum[3 * px];
+    double *s = &f->pass[3 * px];
     if (!tw->gated) {
         s[0] += c.x;
         s[1] += c.y;
@@ -55,13 +56,38 @@ int film_splat(film *f, size_t px, double t, vec3 c, int frame)
     if (tw->frame_count > 0) {
         size_t k = (size_t)rel;
         if (k >= (size_t)tw->frame_count) k = (size_t)tw->frame_count - 1;
-        float *fs = &f->frame_sum[3 * ((size_t)f->width * f->height * k + px)];
+        float *fs = &f->frame_pass[3 * ((size_t)f->width * f->height * k + px)];
         double wf = 1.0 / tw->width;
         fs[0] += (float)(c.x * wf);
         fs[1] += (float)(c.y * wf);
         fs[2] += (float)(c.z * wf);
     }
     return 1;
+}
+
+/* Adds the pass layer to the sums (and clears it): the pass counts. */
+void film_commit_pass(film *f)
+{
+    size_t n = (size_t)f->width * f->height * 3, nf = n * (size_t)f->window.frame_count;
+#pragma omp parallel for schedule(static)
+    for (size_t i = 0; i < n; i++) {
+        f->sum[i] += f->pass[i];
+        f->pass[i] = 0.0;
+    }
+#pragma omp parallel for schedule(static)
+    for (size_t i = 0; i < nf; i++) {
+        f->frame_sum[i] += f->frame_pass[i];
+        f->frame_pass[i] = 0.0f;
+    }
+    f->passes++;
+}
+
+/* Clears the pass layer: an unfinished pass leaves no trace. */
+void film_drop_pass(film *f)
+{
+    size_t n = (size_t)f->width * f->height * 3, nf = n * (size_t)f->window.frame_count;
+    memset(f->pass, 0, n * sizeof(double));
+    if (nf > 0) memset(f->frame_pass, 0, nf * sizeof(float));
 }
 
 int film_image(const film *f, int k, image_rgb *img, dp_error *err)

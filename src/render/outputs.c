@@ -1,8 +1,14 @@
-/* Film → files: gate image, PNG preview, per-frame images and the frame sidecar (DESIGN §4). */
+/* Film → files: gate image, PNG preview, per-frame images and the frame sidecar (DESIGN §4); the check of
+ * the output path before any work, and the rescue folder when the final write fails anyway. */
 #include "dartspp/render.h"
 
+#include <errno.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
+#include <sys/statvfs.h>
+#include <unistd.h>
 
 #define TIME_UNIT "optical path length in scene units (c = 1)"
 
@@ -14,16 +20,34 @@ static int write_one(const char *path, const image_rgb *img, const image_meta *m
     return 0;
 }
 
+/* Splits PATH.exr / PATH.pfm into its stem and extension; anything else is an error naming the path. */
+static int split_output_path(const char *path, char *stem, size_t n, const char **ext, dp_error *err)
+{
+    const char *dot = strrchr(path, '.');
+    const char *slash = strrchr(path, '/');
+    if (!dot || (slash && dot < slash) || (strcmp(dot, ".exr") && strcmp(dot, ".pfm")))
+        return dp_fail(err, "%s: output must end in .exr or .pfm", path);
+    if ((size_t)(dot - path) + 32 >= n) return dp_fail(err, "%s: output path too long", path);
+    snprintf(stem, n, "%.*s", (int)(dot - path), path);
+    *ext = dot;
+    return 0;
+}
+
+/* Frame k's file: <stem>_<k zero-padded to 4 digits, 5 above 10000 frames><ext> (frame_num <= 100000).
+ * The stem is at most OUTPUT_PATH_MAX - 32 long (split_output_path), so the name always fits. */
+static void frame_path(char *out, size_t n, const char *stem, int frame_count, int k, const char *ext)
+{
+    int digits = frame_count > 10000 ? 5 : 4;
+    if (snprintf(out, n, "%s_%0*d%s", stem, digits, k, ext) >= (int)n) out[n - 1] = '\0';
+}
+
 static int write_frames(const film *f, const char *stem, const char *ext, image_meta meta,
                         void (*wrote)(const char *), dp_error *err)
 {
     const time_window *tw = &f->window;
-    int digits = 4; /* at most 6: frame_count <= 100000 */
-    for (int n = tw->frame_count - 1; n >= 10000; n /= 10) digits++;
     for (int k = 0; k < tw->frame_count; k++) {
-        char path[2300];
-        if (snprintf(path, sizeof path, "%s_%0*d%s", stem, digits, k, ext) >= (int)sizeof path)
-            return dp_fail(err, "%s: output path too long", stem);
+        char path[OUTPUT_PATH_MAX + 64];
+        frame_path(path, sizeof path, stem, tw->frame_count, k, ext);
         image_rgb img = {0};
         if (film_image(f, k, &img, err)) return -1;
         meta.frame_index = k;
@@ -33,7 +57,7 @@ static int write_frames(const film *f, const char *stem, const char *ext, image_
         image_free(&img);
         if (rc) return -1;
     }
-    char csv[2200];
+    char csv[OUTPUT_PATH_MAX + 64];
     snprintf(csv, sizeof csv, "%s_frames.csv", stem);
     if (frames_csv_write(csv, tw->frame_count, tw->start, tw->width, err)) return -1;
     if (wrote) wrote(csv);
@@ -44,20 +68,16 @@ int render_write_outputs(const scene *s, const film *f, const char *path, const 
                          void (*wrote)(const char *path), dp_error *err)
 {
     (void)s;
-    const char *dot = strrchr(path, '.');
-    const char *slash = strrchr(path, '/');
-    if (!dot || (slash && dot < slash) || (strcmp(dot, ".exr") && strcmp(dot, ".pfm")))
-        return dp_fail(err, "%s: output must end in .exr or .pfm", path);
-    char stem[2048];
-    snprintf(stem, sizeof stem, "%.*s", (int)(dot - path), path);
-    if (make_parent_dirs(path, err)) return -1;
+    char stem[OUTPUT_PATH_MAX];
+    const char *dot;
+    if (split_output_path(path, stem, sizeof stem, &dot, err) || make_parent_dirs(path, err)) return -1;
     const time_window *tw = &f->window;
     image_meta meta = {.time_unit = TIME_UNIT, .gated = tw->gated, .gate_start = tw->start,
                        .gate_end = time_window_end(tw), .camera_warped = 1, .frame_index = -1,
                        .integrator = integrator};
     image_rgb img = {0};
     if (film_image(f, -1, &img, err)) return -1;
-    char png[2200];
+    char png[OUTPUT_PATH_MAX + 64];
     snprintf(png, sizeof png, "%s.png", stem);
     int rc = write_one(path, &img, &meta, wrote, err);
     if (!rc) rc = png_write_preview(png, &img, err);
@@ -65,4 +85,68 @@ int render_write_outputs(const scene *s, const film *f, const char *path, const 
     image_free(&img);
     if (!rc && tw->frame_count > 0) rc = write_frames(f, stem, dot, meta, wrote, err);
     return rc;
+}
+
+/* The folder of a file path ("." for a bare name). */
+static void parent_dir(const char *path, char *dir, size_t n)
+{
+    const char *slash = strrchr(path, '/');
+    if (!slash) snprintf(dir, n, ".");
+    else if (slash == path) snprintf(dir, n, "/");
+    else snprintf(dir, n, "%.*s", (int)(slash - path), path);
+}
+
+int render_outputs_check(const char *path, int width, int height, int frame_count, dp_error *err)
+{
+    char stem[OUTPUT_PATH_MAX], dir[OUTPUT_PATH_MAX], probe[OUTPUT_PATH_MAX + 64];
+    const char *ext;
+    struct stat st;
+    if (split_output_path(path, stem, sizeof stem, &ext, err)) return -1;
+    if (stat(path, &st) == 0 && S_ISDIR(st.st_mode)) return dp_fail(err, "%s: output is a folder", path);
+    if (make_parent_dirs(path, err)) return -1;
+    parent_dir(path, dir, sizeof dir);
+    /* writability: create and remove a probe file where the outputs will go */
+    snprintf(probe, sizeof probe, "%s/.dartspp-probe-XXXXXX", dir);
+    int fd = mkstemp(probe);
+    if (fd < 0) return dp_fail(err, "%s: cannot write in the output folder %s: %s", path, dir, strerror(errno));
+    close(fd);
+    unlink(probe);
+    /* room: float32 RGB images (an upper bound: EXR's ZIP only shrinks them), the PNG, the frame files */
+    double files = 2 + (frame_count > 0 ? frame_count + 1 : 0);
+    double bytes = (1.0 + frame_count) * ((double)width * height * 12 + 4096) + (double)width * height * 4;
+    struct statvfs vfs;
+    if (statvfs(dir, &vfs) == 0) {
+        double room = (double)vfs.f_bavail * vfs.f_frsize;
+        char need[32], have[32];
+        format_bytes(bytes, need, sizeof need);
+        format_bytes(room, have, sizeof have);
+        if (bytes > room)
+            return dp_fail(err, "%s: the outputs (%.0f files%s) need up to %s, the folder %s has %s free", path, files,
+                           frame_count > 0 ? ", integrator.frame_num" : "", need, dir, have);
+        if (vfs.f_files > 0 && files > (double)vfs.f_favail)
+            return dp_fail(err, "%s: the outputs are %.0f files, the file system of %s has room for %lu more", path,
+                           files, dir, (unsigned long)vfs.f_favail);
+    }
+    return 0;
+}
+
+int render_write_rescue(const scene *s, const film *f, const char *path, const char *integrator,
+                        void (*wrote)(const char *path), char *rescue_dir, size_t n, dp_error *err)
+{
+    const char *tmp = getenv("TMPDIR");
+    const char *dirs[] = {tmp && tmp[0] ? tmp : "/tmp", "/tmp", "."};
+    const char *base = strrchr(path, '/');
+    base = base ? base + 1 : path;
+    dp_error last = *err;
+    for (int i = 0; i < 3; i++) {
+        if (i > 0 && !strcmp(dirs[i], dirs[i - 1])) continue;
+        if ((size_t)snprintf(rescue_dir, n, "%s/dartspp-rescue-XXXXXX", dirs[i]) >= n || !mkdtemp(rescue_dir)) continue;
+        char target[OUTPUT_PATH_MAX + 64];
+        snprintf(target, sizeof target, "%s/%s", rescue_dir, base);
+        if (!render_write_outputs(s, f, target, integrator, wrote, &last)) return 0;
+        rmdir(rescue_dir); /* only if it stayed empty */
+    }
+    rescue_dir[0] = '\0';
+    *err = last;
+    return -1;
 }

@@ -159,13 +159,14 @@ static void trace_camera_path(pixel_ctx *c, vec3 d)
     }
 }
 
-double path_tracer_pass(const scene *s, film *f, uint64_t seed, long pass, long *nonfinite)
+double path_tracer_pass(const scene *s, film *f, uint64_t seed, long pass, const dp_stop_flag *stop, long *nonfinite)
 {
     const camera *cam = &s->cam;
     double rays = 0.0;
     long bad = 0;
 #pragma omp parallel for schedule(dynamic, 1) reduction(+ : rays, bad)
     for (int y = 0; y < cam->height; y++) {
+        if (dp_stopped(stop)) continue; /* interrupted: the pass is dropped, finish fast */
         for (int x = 0; x < cam->width; x++) {
             size_t px = (size_t)y * cam->width + x;
             dp_rng rng = rng_stream(seed, (uint64_t)pass, px);

@@ -10,15 +10,20 @@ double progressive_radius(double r0, double alpha, long iteration, int dims)
 }
 
 int photon_points_pass(const scene *s, const struct eda_set *eda, film *f, uint64_t seed, long iteration,
-                       render_stats *st, dp_error *err)
+                       const dp_stop_flag *stop, render_stats *st, dp_error *err)
 {
     const integrator_settings *in = &s->integrator;
     photon_set ps;
-    gather_input g = {.k_surf = in->gather_photon_count, .camera_leg_projected = in->camera_leg_projected};
+    gather_input g = {.k_surf = in->gather_photon_count, .camera_leg_projected = in->camera_leg_projected,
+                      .stop = stop};
     g.r_vol = progressive_radius(in->volume_gather_radius, in->volume_alpha, iteration, in->radius_schedule_3d ? 3 : 2);
     g.r_surf = progressive_radius(in->gather_radius, in->alpha, iteration, 2);
     double t0 = dp_seconds();
-    if (photon_pass(s, eda, seed, iteration, g.r_surf, &ps, err)) return -1;
+    if (photon_pass(s, eda, seed, iteration, g.r_surf, stop, &ps, err)) return -1;
+    if (ps.interrupted) { /* the iteration is dropped: no maps, no sensor pass */
+        photon_set_free(&ps);
+        return 0;
+    }
     double t1 = dp_seconds();
     volume_photon_map *vm = NULL;
     surface_photon_map *sm = NULL;

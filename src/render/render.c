@@ -5,6 +5,7 @@
 
 #include <omp.h>
 #include <stdio.h>
+#include <string.h>
 #include <unistd.h>
 
 typedef struct {
@@ -37,9 +38,9 @@ static void progress_print(progress_line *pl, const render_stats *st, long spp, 
     fflush(stderr);
 }
 
-static int keep_going(const render_stats *st, long spp, double limit, volatile sig_atomic_t *stop)
+static int keep_going(const render_stats *st, long spp, double limit, const dp_stop_flag *stop)
 {
-    if (stop && *stop) return 0;
+    if (dp_stopped(stop)) return 0;
     if (st->passes == 0) return 1;
     if (spp > 0 && st->passes >= spp) return 0;
     if (limit > 0) {
@@ -49,9 +50,21 @@ static int keep_going(const render_stats *st, long spp, double limit, volatile s
     return 1;
 }
 
+/* One pass of the scene's integrator into the film's pass layer. */
+static int render_pass(const scene *s, const eda_set *eda, const render_options *opt, film *f, render_stats *st,
+                       dp_error *err)
+{
+    if (s->integrator.type == INTEGRATOR_PATH_TRACER) {
+        st->rays += path_tracer_pass(s, f, opt->seed, st->passes, opt->stop, &f->nonfinite);
+        return 0;
+    }
+    return photon_points_pass(s, eda, f, opt->seed, st->passes, opt->stop, st, err);
+}
+
 int render_scene(const scene *s, const render_options *opt, film *f, render_stats *st, dp_error *err)
 {
     *st = (render_stats){0};
+    memset(f, 0, sizeof *f);
     if (s->integrator.volume_beams)
         return dp_fail(err, "%s: integrator.volume_photon_type: 'beams' is not supported (supported: points)", s->path);
     if (opt->threads > 0) omp_set_num_threads(opt->threads);
@@ -65,27 +78,25 @@ int render_scene(const scene *s, const render_options *opt, film *f, render_stat
     double limit = opt->time_limit >= 0 ? opt->time_limit : s->renderer.timeout_seconds;
     progress_line pl = {.tty = isatty(2), .last_print = -1e9};
     double t0 = dp_seconds();
-    while (keep_going(st, spp, limit, opt->stop)) {
-        if (s->integrator.type == INTEGRATOR_PATH_TRACER)
-            st->rays += path_tracer_pass(s, f, opt->seed, st->passes, &f->nonfinite);
-        else if (photon_points_pass(s, &eda, f, opt->seed, st->passes, st, err)) {
-            film_free(f);
-            eda_set_free(&eda);
-            return -1;
+    int rc = 0;
+    if (opt->passes_started) *opt->passes_started = 1;
+    while (!rc && keep_going(st, spp, limit, opt->stop)) {
+        if ((rc = render_pass(s, &eda, opt, f, st, err))) break;
+        if (dp_stopped(opt->stop)) { /* interrupted inside the pass: it is incomplete */
+            film_drop_pass(f);
+            break;
         }
+        film_commit_pass(f);
         st->camera_rays += (double)s->cam.width * s->cam.height;
-        f->passes = ++st->passes;
+        st->passes = f->passes;
         st->seconds = dp_seconds() - t0;
         if (opt->progress) progress_print(&pl, st, spp, limit, 0);
-        if (opt->after_pass && opt->after_pass(opt->after_pass_ctx, f, st, err)) {
-            film_free(f);
-            eda_set_free(&eda);
-            return -1;
-        }
+        if (opt->after_pass) rc = opt->after_pass(opt->after_pass_ctx, f, st, err);
     }
     eda_set_free(&eda);
+    st->seconds = dp_seconds() - t0;
     st->nonfinite = f->nonfinite;
-    st->interrupted = opt->stop && *opt->stop;
+    st->interrupted = dp_stopped(opt->stop);
     if (opt->progress) progress_print(&pl, st, spp, limit, 1);
-    return 0;
+    return rc ? -1 : 0;
 }
