@@ -27,6 +27,8 @@ static int in_list(const char *const *list, const char *key)
 
 static cJSON *override_value(const char *text)
 {
+    cJSON *json = text[0] == '[' ? cJSON_Parse(text) : NULL; /* arrays, e.g. eda_shape=[64,64,128] */
+    if (json) return json;
     if (!strcmp(text, "true")) return cJSON_CreateTrue();
     if (!strcmp(text, "false")) return cJSON_CreateFalse();
     char *end;
