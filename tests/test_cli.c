@@ -161,7 +161,7 @@ static void test_refused_before_any_work(void **state)
     assert_string_equal(out, "blocker\nfolder.exr\n");
 }
 
-/* Bad input of every kind exits 2 with a message and without a leak report. */
+/* Bad input of every kind, in every subcommand, exits 2 with a message and without a leak report. */
 static void test_error_exits_without_leaks(void **state)
 {
     const char *d = *state;
@@ -180,11 +180,16 @@ static void test_error_exits_without_leaks(void **state)
         "render " DEMO " --set integrator.nope",
         "render " DEMO " --set max_bounces=-3 --output %s/a.exr",
         "render " DEMO " --log %s/log.csv --reference %s/missing.exr --output %s/a.exr",
+        "compare /nonexistent/a.exr /nonexistent/b.exr",
+        "merge %s/m.exr /nonexistent/a.exr /nonexistent/b.exr",
+        "patch-mean /nonexistent/a.exr 0 0 1 1",
+        "table --sigma-s -1 --sigma-a 0 --g 0 --output %s/t.bin",
+        "frobnicate",
     };
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
         char args[1024];
         snprintf(args, sizeof args, cases[i], d, d, d);
-        snprintf(cmd, sizeof cmd, DARTSPP_BIN " %s --quiet", args);
+        snprintf(cmd, sizeof cmd, DARTSPP_BIN " %s%s", args, strncmp(args, "render", 6) ? "" : " --quiet");
         int rc = test_run(cmd, out, sizeof out);
         print_message("  exit %d: %s", rc, out);
         assert_int_equal(rc, 2);

@@ -33,7 +33,7 @@ static void progress(void *ctx, int done, int rows)
 
 int cli_table(int argc, char **argv)
 {
-    double ss = -1, sa = -1, g = 0, s_max = 16.0, r_lo = EDA_DEFAULT_R_LO, r_hi = EDA_DEFAULT_R_HI;
+    double ss = NAN, sa = NAN, g = 0, s_max = 16.0, r_lo = EDA_DEFAULT_R_LO, r_hi = EDA_DEFAULT_R_HI;
     int shape[3] = {128, 128, 256}, have_g = 0;
     const char *out = NULL;
     for (int i = 0; i < argc; i++) {
@@ -57,7 +57,7 @@ int cli_table(int argc, char **argv)
         }
         i++;
     }
-    if (ss < 0 || sa < 0 || !have_g || !out) {
+    if (isnan(ss) || isnan(sa) || !have_g || !out) {
         fprintf(stderr, "dartspp table: --sigma-s, --sigma-a, --g and --output are required\n");
         usage();
         return 2;
