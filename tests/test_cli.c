@@ -91,6 +91,15 @@ static int log_wait_for(const child *c, const char *what, double bound)
     return 0;
 }
 
+/* Prints what a command said, at most its last 700 characters, always ending the line (the test runner reads
+ * cmocka's result lines at the start of a line). */
+static void print_tail(const char *what)
+{
+    size_t n = strlen(what);
+    const char *t = n > 700 ? what + n - 700 : what;
+    print_message("%s%s", t, n && what[n - 1] == '\n' ? "" : "\n");
+}
+
 static void rm_rf(const char *dir)
 {
     char cmd[700];
@@ -148,7 +157,8 @@ static void test_refused_before_any_work(void **state)
         double t0 = now_s();
         int rc = test_run(cmd, out, sizeof out);
         double dt = now_s() - t0;
-        print_message("  %-60s exit %d after %.2f s: %s", args + strlen(d) - 2, rc, dt, out);
+        print_message("  %-60s exit %d after %.2f s: ", args + strlen(d) - 2, rc, dt);
+        print_tail(out);
         assert_int_equal(rc, 2);
         assert_true(dt < 30.0); /* far less than the 60 s asked for (sanitized binary, loaded machine) */
         for (int k = 0; k < 2; k++)
@@ -191,7 +201,8 @@ static void test_error_exits_without_leaks(void **state)
         snprintf(args, sizeof args, cases[i], d, d, d);
         snprintf(cmd, sizeof cmd, DARTSPP_BIN " %s%s", args, strncmp(args, "render", 6) ? "" : " --quiet");
         int rc = test_run(cmd, out, sizeof out);
-        print_message("  exit %d: %s", rc, out);
+        print_message("  exit %d: ", rc);
+        print_tail(out);
         assert_int_equal(rc, 2);
         assert_true(strstr(out, "dartspp") != NULL);
         assert_null(strstr(out, "LeakSanitizer"));
@@ -216,7 +227,8 @@ static double interrupt_mid_pass(const char *dir, const char *const *extra, int 
     kill(c.pid, sig);
     *status = child_wait(&c, EXIT_BOUND_S, &waited);
     char *log = read_text(c.log);
-    print_message("  signal %d after %.1f s: exit %d, %.3f s after the signal\n%s", sig, settle, *status, now_s() - t0, log);
+    print_message("  signal %d after %.1f s: exit %d, %.3f s after the signal\n", sig, settle, *status, now_s() - t0);
+    print_tail(log);
     /* the signal came inside a pass (not while loading, where the CLI exits at once for other reasons) */
     int mid_pass = strstr(log, "stopping the pass in progress") != NULL, leak = strstr(log, "LeakSanitizer") != NULL;
     free(log);
@@ -314,7 +326,8 @@ static void test_interrupt_while_preparing(void **state)
     kill(c.pid, SIGINT);
     int rc = child_wait(&c, EXIT_BOUND_S, &waited);
     char *log = read_text(c.log);
-    print_message("  exit %d, %.3f s after the signal\n%s", rc, waited, log);
+    print_message("  exit %d, %.3f s after the signal\n", rc, waited);
+    print_tail(log);
     int now = strstr(log, "exiting now") != NULL;
     free(log);
     assert_int_equal(rc, 130);
@@ -344,7 +357,8 @@ static void test_rescue_when_output_folder_disappears(void **state)
         double waited;
         int rc = child_wait(&c, 60.0, &waited);
         char *log = read_text(c.log), rescued[900] = "";
-        print_message("  folder %s: exit %d\n%s", replace ? "replaced by a file" : "removed", rc, log);
+        print_message("  folder %s: exit %d\n", replace ? "replaced by a file" : "removed", rc);
+        print_tail(log);
         const char *w = strstr(log, "were written to ");
         if (w) snprintf(rescued, sizeof rescued, "%.*s/fog.exr", (int)strcspn(w + 16, " \n"), w + 16);
         free(log);
