@@ -1,8 +1,35 @@
 /* Path tracer end to end: determinism across thread counts, frames against the union gate, finite
- * outputs of the command line on the paper's fog box and the demo scene. */
+ * outputs of the command line on our fog Cornell box (scenes/cbox-fog, the paper's fog box rebuilt from
+ * quads and cubes) and the demo scene. */
 #include "test_util.h"
 
 #include "dartspp/render.h"
+
+/* What a test allocates lives here, so that the teardown frees it even when an assertion fails part-way
+ * (LeakSanitizer then reports nothing but the real failure). scene_free, film_free and image_free accept
+ * zeroed and already freed values. */
+static struct {
+    scene scenes[3];
+    film films[3];
+    image_rgb images[8];
+    char *dir;
+} fx;
+
+static int teardown_fx(void **state)
+{
+    (void)state;
+    for (int i = 0; i < 3; i++) scene_free(&fx.scenes[i]);
+    for (int i = 0; i < 3; i++) film_free(&fx.films[i]);
+    for (int i = 0; i < 8; i++) image_free(&fx.images[i]);
+    if (fx.dir) {
+        char cmd[1200];
+        snprintf(cmd, sizeof cmd, "rm -rf '%s'", fx.dir);
+        (void)!system(cmd);
+        free(fx.dir);
+    }
+    memset(&fx, 0, sizeof fx);
+    return 0;
+}
 
 static void load(const char *path, const char *const *sets, int nsets, scene *s)
 {
@@ -21,30 +48,25 @@ static void render(const scene *s, int threads, uint64_t seed, long passes, film
     assert_int_equal(st.nonfinite, 0);
 }
 
-/* Same seed, 1 vs 2 threads: bit-identical sums, on the paper's fog box (gated so that time matters). */
+/* Same seed, 1 vs 2 threads: bit-identical sums, on our fog Cornell box (gated so that time matters). */
 static void test_threads_bit_identical(void **state)
 {
     (void)state;
     const char *sets[] = {"transient_time_center=14", "transient_time_width=2"};
-    scene s;
-    load(SHARED_SCENES "/path_tracer.json", sets, 2, &s);
-    s.cam.width = 48;
-    s.cam.height = 40;
-    film a, b;
-    render(&s, 1, 7, 3, &a);
-    render(&s, 2, 7, 3, &b);
-    size_t n = (size_t)s.cam.width * s.cam.height * 3;
+    scene *s = &fx.scenes[0];
+    load(CBOX_FOG "/path_tracer.json", sets, 2, s);
+    s->cam.width = 48;
+    s->cam.height = 40;
+    film *a = &fx.films[0], *b = &fx.films[1], *c = &fx.films[2];
+    render(s, 1, 7, 3, a);
+    render(s, 2, 7, 3, b);
+    size_t n = (size_t)s->cam.width * s->cam.height * 3;
     double total = 0;
-    for (size_t i = 0; i < n; i++) total += a.sum[i];
+    for (size_t i = 0; i < n; i++) total += a->sum[i];
     assert_true(total > 0); /* the comparison is not between two black images */
-    assert_memory_equal(a.sum, b.sum, n * sizeof(double));
-    film c;
-    render(&s, 2, 8, 3, &c); /* and a different seed does change it */
-    assert_true(memcmp(a.sum, c.sum, n * sizeof(double)) != 0);
-    film_free(&a);
-    film_free(&b);
-    film_free(&c);
-    scene_free(&s);
+    assert_memory_equal(a->sum, b->sum, n * sizeof(double));
+    render(s, 2, 8, 3, c); /* and a different seed does change it */
+    assert_true(memcmp(a->sum, c->sum, n * sizeof(double)) != 0);
 }
 
 /* Frames k of width w over [start, start + F w) summed and divided by F equal the gate image of the union
@@ -56,46 +78,37 @@ static void test_frames_sum_to_union_gate(void **state)
     const char *frames[] = {"frame_num=4", "start_time=7", "transient_time_width=0.5", "type=path_tracer"};
     const char *gate[] = {"transient_time_center=8", "transient_time_width=2", "type=path_tracer"};
     const char *gate1[] = {"transient_time_center=7.25", "transient_time_width=0.5", "type=path_tracer"};
-    scene sf, sg, s1;
-    load("scenes/fogbox/fogbox.json", frames, 4, &sf);
-    load("scenes/fogbox/fogbox.json", gate, 3, &sg);
-    load("scenes/fogbox/fogbox.json", gate1, 3, &s1);
-    sf.cam.width = sg.cam.width = s1.cam.width = 32;
-    sf.cam.height = sg.cam.height = s1.cam.height = 32;
-    film ff, fg, f1;
-    render(&sf, 2, 3, 4, &ff);
-    render(&sg, 2, 3, 4, &fg);
-    render(&s1, 2, 3, 4, &f1);
+    scene *sf = &fx.scenes[0], *sg = &fx.scenes[1], *s1 = &fx.scenes[2];
+    load("scenes/fogbox/fogbox.json", frames, 4, sf);
+    load("scenes/fogbox/fogbox.json", gate, 3, sg);
+    load("scenes/fogbox/fogbox.json", gate1, 3, s1);
+    sf->cam.width = sg->cam.width = s1->cam.width = 32;
+    sf->cam.height = sg->cam.height = s1->cam.height = 32;
+    film *ff = &fx.films[0], *fg = &fx.films[1], *f1 = &fx.films[2];
+    render(sf, 2, 3, 4, ff);
+    render(sg, 2, 3, 4, fg);
+    render(s1, 2, 3, 4, f1);
     dp_error err;
-    image_rgb union_img, gate_img, frame[4], gate1_img;
-    assert_int_equal(film_image(&fg, -1, &gate_img, &err), 0);
-    assert_int_equal(film_image(&ff, -1, &union_img, &err), 0);
-    assert_int_equal(film_image(&f1, -1, &gate1_img, &err), 0);
-    for (int k = 0; k < 4; k++) assert_int_equal(film_image(&ff, k, &frame[k], &err), 0);
+    image_rgb *union_img = &fx.images[0], *gate_img = &fx.images[1], *gate1_img = &fx.images[2];
+    image_rgb *frame = &fx.images[3]; /* 4 frames */
+    assert_int_equal(film_image(fg, -1, gate_img, &err), 0);
+    assert_int_equal(film_image(ff, -1, union_img, &err), 0);
+    assert_int_equal(film_image(f1, -1, gate1_img, &err), 0);
+    for (int k = 0; k < 4; k++) assert_int_equal(film_image(ff, k, &frame[k], &err), 0);
     size_t n = 32 * 32 * 3;
     double total = 0, max_rel = 0, max_rel1 = 0;
     for (size_t i = 0; i < n; i++) {
         double sum = 0;
         for (int k = 0; k < 4; k++) sum += frame[k].rgb[i];
-        double g = gate_img.rgb[i];
+        double g = gate_img->rgb[i];
         total += g;
-        assert_float_equal(union_img.rgb[i], g, 1e-6 * fabs(g) + 1e-30);
+        assert_float_equal(union_img->rgb[i], g, 1e-6 * fabs(g) + 1e-30);
         max_rel = fmax(max_rel, fabs(sum / 4 - g) / fmax(fabs(g), 1e-12));
-        max_rel1 = fmax(max_rel1, fabs(frame[0].rgb[i] - gate1_img.rgb[i]) / fmax(fabs(gate1_img.rgb[i]), 1e-12));
+        max_rel1 = fmax(max_rel1, fabs(frame[0].rgb[i] - gate1_img->rgb[i]) / fmax(fabs(gate1_img->rgb[i]), 1e-12));
     }
     assert_true(total > 0);
     assert_true(max_rel < 1e-5);  /* frames are summed in float */
     assert_true(max_rel1 < 1e-5);
-    for (int k = 0; k < 4; k++) image_free(&frame[k]);
-    image_free(&union_img);
-    image_free(&gate_img);
-    image_free(&gate1_img);
-    film_free(&ff);
-    film_free(&fg);
-    film_free(&f1);
-    scene_free(&sf);
-    scene_free(&sg);
-    scene_free(&s1);
 }
 
 /* DARTS in frame mode (one target frame per path): the union-window image is still exactly the mean of the
@@ -129,29 +142,32 @@ static void test_darts_frames_sum_to_union(void **state)
     scene_free(&s);
 }
 
+/* Reads into the fixture's last image slot (freed by the teardown if an assertion fails). */
 static void assert_all_finite(const char *path)
 {
-    image_rgb img;
+    image_rgb *img = &fx.images[7];
     dp_error err;
-    if (image_read(path, &img, &err)) fail_msg("%s", err.msg);
-    size_t n = (size_t)img.width * img.height * 3, nonzero = 0;
+    if (image_read(path, img, &err)) fail_msg("%s", err.msg);
+    size_t n = (size_t)img->width * img->height * 3, nonzero = 0;
     for (size_t i = 0; i < n; i++) {
-        assert_true(isfinite(img.rgb[i]));
-        assert_true(img.rgb[i] >= 0);
-        nonzero += img.rgb[i] > 0;
+        assert_true(isfinite(img->rgb[i]));
+        assert_true(img->rgb[i] >= 0);
+        nonzero += img->rgb[i] > 0;
     }
     assert_true(nonzero > n / 10);
-    image_free(&img);
+    image_free(img);
 }
 
-/* The command line on the paper's fog box (gated, and as a 3-frame transient) and the demo scene: exit 0,
+/* The command line on our fog Cornell box (gated) and the demo scene (as a 3-frame transient): exit 0,
  * the files it reports exist, no NaN or Inf in any output. */
 static void test_cli_outputs_finite(void **state)
 {
     (void)state;
-    char *dir = test_tmpdir(), cmd[2048], out[8192], path[1024];
+    char cmd[2048], out[8192], path[1024];
+    const char *dir = fx.dir = test_tmpdir();
+    assert_non_null(dir);
     snprintf(cmd, sizeof cmd,
-             DARTSPP_BIN " render " SHARED_SCENES "/path_tracer.json --spp 2 --quiet --seed 3 --set transient_time_center=12"
+             DARTSPP_BIN " render " CBOX_FOG "/path_tracer.json --spp 2 --quiet --seed 3 --set transient_time_center=12"
                          " --set transient_time_width=4 --output %s/pt.exr",
              dir);
     assert_int_equal(test_run(cmd, out, sizeof out), 0);
@@ -175,18 +191,15 @@ static void test_cli_outputs_finite(void **state)
     snprintf(cmd, sizeof cmd, DARTSPP_BIN " compare %s/fb_0001.pfm %s/fb_0001.pfm --csv", dir, dir);
     assert_int_equal(test_run(cmd, out, sizeof out), 0);
     assert_true(strncmp(out, "0,0,0,0,", 8) == 0);
-    snprintf(cmd, sizeof cmd, "rm -rf %s", dir);
-    (void)!system(cmd);
-    free(dir);
 }
 
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_threads_bit_identical),
-        cmocka_unit_test(test_frames_sum_to_union_gate),
+        cmocka_unit_test_teardown(test_threads_bit_identical, teardown_fx),
+        cmocka_unit_test_teardown(test_frames_sum_to_union_gate, teardown_fx),
         cmocka_unit_test(test_darts_frames_sum_to_union),
-        cmocka_unit_test(test_cli_outputs_finite),
+        cmocka_unit_test_teardown(test_cli_outputs_finite, teardown_fx),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

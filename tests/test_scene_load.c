@@ -1,14 +1,14 @@
-/* Scene loading: the paper's scenes load with the values written in them, the camera basis follows
- * Tungsten's JSON transform, bad input ends with a message naming the file and key (through the CLI),
- * `--set` overrides, verbose notes, texture fallback, and an in-process fuzz of the JSON and `.wo3`
- * readers (under ASan/UBSan every load must succeed or fail with a message, never crash).
+/* Scene loading: the paper's scenes load with the values written in them (skipped when the paper's scenes
+ * are not beside the checkout, see test_need_paper_files), the camera basis follows Tungsten's JSON
+ * transform, bad input ends with a message naming the file and key (through the CLI), `--set` overrides,
+ * verbose notes, texture fallback, and an in-process fuzz of the JSON and `.wo3` readers (under ASan/UBSan
+ * every load must succeed or fail with a message, never crash); those use our own scenes/cbox-fog.
  * Expected values are worked out by hand from the scene files and docs/scene-format.md. */
 #include "test_util.h"
 
 #include "dartspp/render.h"
 
 #include <glob.h>
-#include <limits.h>
 #include <math.h>
 #include <sys/stat.h>
 #include <time.h>
@@ -55,11 +55,13 @@ static char *read_all(const char *path, size_t *len)
     fseek(f, 0, SEEK_END);
     long n = ftell(f);
     fseek(f, 0, SEEK_SET);
-    assert_true(n >= 0);
-    char *buf = malloc((size_t)n + 1);
-    assert_non_null(buf);
-    assert_int_equal(fread(buf, 1, (size_t)n, f), (size_t)n);
+    char *buf = n >= 0 ? malloc((size_t)n + 1) : NULL;
+    size_t got = buf ? fread(buf, 1, (size_t)n, f) : 0;
     fclose(f);
+    if (!buf || got != (size_t)n) {
+        free(buf);
+        fail_msg("cannot read %s", path);
+    }
     buf[n] = 0;
     if (len) *len = (size_t)n;
     return buf;
@@ -206,18 +208,36 @@ static const char BASE_SCENE[] =
 
 /* ---- 1. the paper's scenes ---- */
 
-/* ---- 1. the paper's scenes ---- */
+/* The meshes of the paper's Cornell box that every one of its scene files uses, relative to the paper scenes
+ * folder; path_tracer.json and transient-beams.json add Cube.001.wo3, transient.json adds scatter.wo3. */
+#define CBOX_WALL_MESHES                                                                                         \
+    "cbox-trans/meshes/cbox_back.001.wo3", "cbox-trans/meshes/cbox_ceiling.001.wo3",                             \
+        "cbox-trans/meshes/cbox_floor.001.wo3", "cbox-trans/meshes/cbox_greenwall.001.wo3",                      \
+        "cbox-trans/meshes/cbox_largebox.001.wo3", "cbox-trans/meshes/cbox_redwall.001.wo3",                     \
+        "cbox-trans/meshes/cbox_smallbox.001.wo3"
+
+/* dir/cbox-trans/name into out */
+static void paper_file(char *out, size_t n, const char *dir, const char *name)
+{
+    snprintf(out, n, "%s/cbox-trans/%s", dir, name);
+}
 
 static void test_shared_scenes_load(void **state)
 {
     (void)state;
+    const char *dir = test_need_paper_files("cbox-trans/path_tracer.json", "cbox-trans/scene.json",
+                                            "cbox-trans/transient.json", "cbox-trans/transient-beams.json",
+                                            CBOX_WALL_MESHES, "cbox-trans/meshes/Cube.001.wo3",
+                                            "cbox-trans/meshes/scatter.wo3", NULL);
+    char pattern[4200];
+    paper_file(pattern, sizeof pattern, dir, "*.json");
     glob_t *g = fx_keep(calloc(1, sizeof(glob_t)));
-    int grc = glob(SHARED_SCENES "/*.json", 0, NULL, g);
+    int grc = glob(pattern, 0, NULL, g);
     size_t count = grc == 0 ? g->gl_pathc : 0;
     char **paths = fx_keep(calloc(count + 1, sizeof(char *)));
     for (size_t i = 0; i < count; i++) paths[i] = fx_keep(strdup(g->gl_pathv[i]));
     if (grc == 0) globfree(g);
-    if (count < 4) fail_msg("expected at least 4 scene files in %s, found %zu", SHARED_SCENES, count);
+    if (count < 4) fail_msg("expected at least 4 scene files in %s/cbox-trans, found %zu", dir, count);
     for (size_t i = 0; i < count; i++) {
         const char *path = paths[i];
         char *text = read_all(path, NULL);
@@ -235,7 +255,10 @@ static void test_shared_scenes_load(void **state)
             render_options ro = {.spp = 1, .time_limit = 0};
             film f;
             render_stats st;
-            if (render_scene(s, &ro, &f, &st, &err) == 0) fail_msg("%s asks for volume beams, yet it rendered", path);
+            if (render_scene(s, &ro, &f, &st, &err) == 0) {
+                film_free(&f);
+                fail_msg("%s asks for volume beams, yet it rendered", path);
+            }
             ASSERT_CONTAINS(err.msg, path);
             ASSERT_CONTAINS(err.msg, "volume_photon_type");
             ASSERT_CONTAINS(err.msg, "beams");
@@ -251,7 +274,11 @@ static void test_shared_scenes_load(void **state)
 static void test_path_tracer_json_values(void **state)
 {
     (void)state;
-    const scene *s = fx_load(SHARED_SCENES "/path_tracer.json", NULL);
+    const char *dir = test_need_paper_files("cbox-trans/path_tracer.json", CBOX_WALL_MESHES,
+                                            "cbox-trans/meshes/Cube.001.wo3", NULL);
+    char path[4200];
+    paper_file(path, sizeof path, dir, "path_tracer.json");
+    const scene *s = fx_load(path, NULL);
     assert_int_equal(s->medium_count, 1);
     ASSERT_VEC(s->media[0].sigma_s, 0.01, 0.01, 0.01, 1e-12);
     ASSERT_VEC(s->media[0].sigma_a, 0, 0, 0, 0);
@@ -295,7 +322,11 @@ static void test_path_tracer_json_values(void **state)
 static void test_transient_json_values(void **state)
 {
     (void)state;
-    const scene *s = fx_load(SHARED_SCENES "/transient.json", NULL);
+    const char *dir = test_need_paper_files("cbox-trans/transient.json", CBOX_WALL_MESHES,
+                                            "cbox-trans/meshes/scatter.wo3", NULL);
+    char path[4200];
+    paper_file(path, sizeof path, dir, "transient.json");
+    const scene *s = fx_load(path, NULL);
     const time_window *tw = &s->integrator.window;
     assert_int_equal(tw->gated, 1);
     assert_int_equal(tw->frame_count, 0);
@@ -347,7 +378,10 @@ static void test_transient_json_values(void **state)
 static void test_scene_json_values(void **state)
 {
     (void)state;
-    const scene *s = fx_load(SHARED_SCENES "/scene.json", NULL);
+    const char *dir = test_need_paper_files("cbox-trans/scene.json", CBOX_WALL_MESHES, NULL);
+    char path[4200];
+    paper_file(path, sizeof path, dir, "scene.json");
+    const scene *s = fx_load(path, NULL);
     assert_int_equal(s->medium_count, 0);
     assert_int_equal(s->light_count, 1);
     double I = 200.0 / (4.0 * M_PI); /* "power": 200 -> intensity P / (4 pi) */
@@ -367,7 +401,10 @@ static void test_scene_json_values(void **state)
 static void test_scene_json_without_time_keys_is_steady(void **state)
 {
     (void)state;
-    const scene *s = fx_load(SHARED_SCENES "/scene.json", NULL);
+    const char *dir = test_need_paper_files("cbox-trans/scene.json", CBOX_WALL_MESHES, NULL);
+    char path[4200];
+    paper_file(path, sizeof path, dir, "scene.json");
+    const scene *s = fx_load(path, NULL);
     const time_window *tw = &s->integrator.window;
     if (tw->gated)
         fail_msg("scene.json has no transient_time_center/width but loads gated [%g, %g): the steady-state "
@@ -380,7 +417,7 @@ static void test_scene_json_without_time_keys_is_steady(void **state)
 static void test_camera_axes_cbox(void **state)
 {
     (void)state;
-    const scene *s = fx_load(SHARED_SCENES "/path_tracer.json", NULL);
+    const scene *s = fx_load(CBOX_FOG "/path_tracer.json", NULL); /* the paper's camera */
     const camera *c = &s->cam;
     /* position (2.78,2.73,-8), look_at (2.78,2.73,0): z = (0,0,8) -> (0,0,1); up (0,1,0) kept; the default
      * x (1,0,0) is already orthonormal and x cross y . z = +1, so no flip; Tungsten then negates x. */
@@ -671,7 +708,7 @@ static void test_set_overrides(void **state)
     (void)state;
     const char *const sets[] = {"transient_time_width=0.5", "spp=7", "enable_guiding=false"};
     scene_load_options opt = {.sets = sets, .set_count = 3, .verbose = 0};
-    scene *s = fx_load(SHARED_SCENES "/transient.json", &opt);
+    scene *s = fx_load(CBOX_FOG "/transient.json", &opt);
     ASSERT_NEAR(s->integrator.window.width, 0.5, 0.0);
     ASSERT_NEAR(s->integrator.window.start, 16.15 - 0.25, 1e-9);
     assert_int_equal(s->integrator.window.gated, 1);
@@ -689,14 +726,14 @@ static void test_set_overrides(void **state)
     scene_load_options o1 = {.sets = bad1, .set_count = 1};
     memset(&err, 0, sizeof err);
     s = fx_slot();
-    if (scene_load(SHARED_SCENES "/transient.json", &o1, s, &err) == 0) {
+    if (scene_load(CBOX_FOG "/transient.json", &o1, s, &err) == 0) {
         fx_mark(s, 1);
         fail_msg("--set spp (no '=') was accepted");
     }
     assert_true(err.msg[0] != 0);
     scene_load_options o2 = {.sets = bad2, .set_count = 1};
     memset(&err, 0, sizeof err);
-    if (scene_load(SHARED_SCENES "/transient.json", &o2, s, &err) == 0) {
+    if (scene_load(CBOX_FOG "/transient.json", &o2, s, &err) == 0) {
         fx_mark(s, 1);
         fail_msg("--set nosuchkey=1 was accepted");
     }
@@ -709,7 +746,7 @@ static void test_unknown_keys_notes(void **state)
 {
     (void)state;
     scene_load_options verbose = {.verbose = 1}, quiet = {.verbose = 0};
-    scene *s = fx_load(SHARED_SCENES "/transient.json", &verbose);
+    scene *s = fx_load(CBOX_FOG "/transient.json", &verbose);
     ASSERT_CONTAINS(s->notes, "ignored key");
     ASSERT_CONTAINS(s->notes, "camera.tonemap");
     ASSERT_CONTAINS(s->notes, "camera.reconstruction_filter");
@@ -718,10 +755,10 @@ static void test_unknown_keys_notes(void **state)
         strstr(s->notes, "media[0].sigma_s"))
         fail_msg("a key that is read is listed as ignored:\n%s", s->notes);
     fx_drop(s);
-    s = fx_load(SHARED_SCENES "/transient.json", &quiet);
+    s = fx_load(CBOX_FOG "/transient.json", &quiet);
     if (s->notes && strstr(s->notes, "ignored key")) fail_msg("ignored keys listed without verbose:\n%s", s->notes);
     fx_drop(s);
-    s = fx_load(SHARED_SCENES "/transient.json", NULL);
+    s = fx_load(CBOX_FOG "/transient.json", NULL);
     if (s->notes && strstr(s->notes, "ignored key")) fail_msg("ignored keys listed with no options:\n%s", s->notes);
 }
 
@@ -805,12 +842,56 @@ static size_t json_tokens(const char *t, size_t n, size_t *start, size_t *end, i
     return k;
 }
 
-static void make_meshes_link(const char *dir)
+static void put_u64(unsigned char *b, uint64_t v)
 {
-    char meshes[PATH_MAX], link[1100];
-    if (!realpath(SHARED_SCENES "/meshes", meshes)) fail_msg("cannot resolve %s/meshes", SHARED_SCENES);
-    snprintf(link, sizeof link, "%s/meshes", dir);
-    if (symlink(meshes, link)) fail_msg("cannot symlink %s", link);
+    for (int i = 0; i < 8; i++) b[i] = (unsigned char)(v >> (8 * i));
+}
+
+static void put_u32(unsigned char *b, uint32_t v)
+{
+    for (int i = 0; i < 4; i++) b[i] = (unsigned char)(v >> (8 * i));
+}
+
+static void put_f32(unsigned char *b, float f)
+{
+    uint32_t u;
+    memcpy(&u, &f, 4);
+    put_u32(b, u);
+}
+
+/* A Cornell-box floor as a `.wo3` mesh (scene-format.md §1), the size of the paper's cbox_floor.001.wo3:
+ * 4 vertices (position, normal +y, uv) at offset 8, triangle count at 136, 2 triangles at 144; 176 bytes. */
+#define FLOOR_WO3_SIZE 176
+static void make_floor_wo3(unsigned char b[FLOOR_WO3_SIZE])
+{
+    static const float corner[4][2] = {{0, 0}, {0, 5.592f}, {5.56f, 5.592f}, {5.56f, 0}}; /* x, z */
+    static const uint32_t tri[2][3] = {{0, 1, 2}, {0, 2, 3}};
+    memset(b, 0, FLOOR_WO3_SIZE);
+    put_u64(b, 4);
+    for (int i = 0; i < 4; i++) {
+        unsigned char *v = b + 8 + 32 * i;
+        put_f32(v, corner[i][0]);
+        put_f32(v + 4, 0);
+        put_f32(v + 8, corner[i][1]);
+        put_f32(v + 16, 1); /* normal (0, 1, 0) */
+        put_f32(v + 24, corner[i][0] / 5.56f);
+        put_f32(v + 28, corner[i][1] / 5.592f);
+    }
+    put_u64(b + 136, 2);
+    for (int t = 0; t < 2; t++)
+        for (int k = 0; k < 3; k++) put_u32(b + 144 + 16 * t + 4 * k, tri[t][k]);
+}
+
+/* Writes make_floor_wo3 to dir/meshes/floor.wo3. */
+static void write_meshes_folder(const char *dir)
+{
+    char path[1100];
+    unsigned char floor[FLOOR_WO3_SIZE];
+    make_floor_wo3(floor);
+    snprintf(path, sizeof path, "%s/meshes", dir);
+    if (mkdir(path, 0700)) fail_msg("cannot create %s", path);
+    snprintf(path, sizeof path, "%s/meshes/floor.wo3", dir);
+    write_bytes(path, floor, sizeof floor);
 }
 
 static double now_seconds(void)
@@ -824,14 +905,18 @@ static void test_fuzz_scene_json(void **state)
 {
     (void)state;
     double t0 = now_seconds();
-    size_t n;
-    char *orig = fx_keep(read_all(SHARED_SCENES "/transient.json", &n));
+    /* our fog box with one `.wo3` mesh added, so that mesh file names are fuzzed too */
+    char *base = fx_keep(read_all(CBOX_FOG "/transient.json", NULL));
+    char *orig = fx_keep(replace1(base, "\"primitives\": [",
+                                  "\"primitives\": [\n        {\"name\": \"floor-mesh\", \"type\": \"mesh\", "
+                                  "\"file\": \"./meshes/floor.wo3\", \"bsdf\": \"white\", \"smooth\": false},"));
+    size_t n = strlen(orig);
     const char *dir = fx_dir();
-    make_meshes_link(dir);
+    write_meshes_folder(dir);
     char *buf = fx_keep(malloc(n + 64));
     fuzz_tally t = {0, 0}, t_trunc, t_mut, t_tok, t_val;
 
-    /* the unmodified copy loads from the temp folder (mesh paths resolve through the symlink) */
+    /* the unmodified copy loads from the temp folder (its mesh from the meshes folder written there) */
     fuzz_one(dir, "orig.json", orig, n, &t, "original");
     assert_int_equal(t.loaded, 1);
 
@@ -868,7 +953,8 @@ static void test_fuzz_scene_json(void **state)
     static const char *const odd[] = {"-1", "0", "-0", "1e999", "-1e999", "1e308", "4294967296", "9e18", "0.5",
                                       "\"\"", "\"x\"", "\"1e6\"", "\"nan\"", "\"inf\"", "null", "true", "false",
                                       "[]", "{}", "[1,2]", "[1,2,3]", "[1,\"a\",3]", "[[1,2,3]]", "{\"a\":1}",
-                                      "\"./meshes\"", "\"/\"", "\"./meshes/none.wo3\"", "\"gas\"", "\"light\""};
+                                      "\"./meshes\"", "\"/\"", "\"./meshes/none.wo3\"", "\"gas\"", "\"light\"",
+                                      "\"fog\"", "\"white\""};
     char *big = fx_keep(malloc(n + 64));
     size_t nvals = 0;
     for (size_t k = 0; k < ntok; k++) nvals += isv[k];
@@ -900,16 +986,6 @@ static const char WO3_SCENE[] =
     "   \"transform\": {\"position\": [2.78, 2.73, -8], \"look_at\": [2.78, 2.73, 0], \"up\": [0, 1, 0]}},\n"
     " \"integrator\": {\"type\": \"path_tracer\"}, \"renderer\": {\"spp\": 1}}\n";
 
-static void put_u64(unsigned char *b, uint64_t v)
-{
-    for (int i = 0; i < 8; i++) b[i] = (unsigned char)(v >> (8 * i));
-}
-
-static void put_u32(unsigned char *b, uint32_t v)
-{
-    for (int i = 0; i < 4; i++) b[i] = (unsigned char)(v >> (8 * i));
-}
-
 /* Loads WO3_SCENE with floor.wo3 = data[0..len); returns the scene_load result (the scene is freed). */
 static int load_wo3(const char *dir, const unsigned char *data, size_t len, const char *what, uint32_t *tri_count)
 {
@@ -936,8 +1012,9 @@ static void test_fuzz_wo3(void **state)
 {
     (void)state;
     double t0 = now_seconds();
-    size_t n;
-    unsigned char *orig = fx_keep(read_all(SHARED_SCENES "/meshes/cbox_floor.001.wo3", &n));
+    unsigned char *orig = fx_keep(malloc(FLOOR_WO3_SIZE));
+    make_floor_wo3(orig);
+    size_t n = FLOOR_WO3_SIZE;
     /* §1: 176 B = 16 + 4*32 + 2*16 (the floor: 4 vertices, 2 triangles) */
     assert_int_equal(n, 176);
     const char *dir = fx_dir();

@@ -11,11 +11,53 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
-/* The paper's scenes live beside the checkout (../shared), as in CI. */
-#define SHARED_SCENES "../shared/scenes/cbox-trans"
+/* Our own fog Cornell box (quads and cubes with the paper's dimensions, camera, medium, light and gate):
+ * the scene of every test that is not about the paper's files themselves. */
+#define CBOX_FOG "scenes/cbox-fog"
+
+/* The folder of the paper's scenes (a copy of shared/scenes, holding cbox-trans/): $DARTSPP_PAPER_SCENES when
+ * set and not empty, else ../shared/scenes when it is a folder (development and CI), else NULL. A repository
+ * alone has none: the tests about the paper's files then skip (test_need_paper_files). */
+static inline const char *test_paper_scenes(void)
+{
+    const char *env = getenv("DARTSPP_PAPER_SCENES");
+    if (env && env[0]) return env;
+    struct stat st;
+    if (stat("../shared/scenes", &st) == 0 && S_ISDIR(st.st_mode)) return "../shared/scenes";
+    return NULL;
+}
+
+/* For a test about the paper's own files: returns the paper scenes folder when every file of the
+ * NULL-terminated list (paths relative to that folder) is readable there. Otherwise prints one line naming
+ * the test and the reason and skips the test: cmocka's skip() does not return, so call this before the test
+ * allocates anything that only its own code would free. */
+#define test_need_paper_files(...) test_need_paper_files_(__func__, __VA_ARGS__)
+static inline const char *test_need_paper_files_(const char *test, const char *first, ...)
+{
+    static const char hint[] = "paper scenes not found: set DARTSPP_PAPER_SCENES=DIR or put shared/ beside the checkout";
+    const char *dir = test_paper_scenes();
+    if (!dir) {
+        print_message("skipped %s: no $DARTSPP_PAPER_SCENES and no ../shared/scenes; %s\n", test, hint);
+        skip();
+    }
+    va_list ap;
+    va_start(ap, first);
+    for (const char *rel = first; rel; rel = va_arg(ap, const char *)) {
+        char path[4096];
+        snprintf(path, sizeof path, "%s/%s", dir, rel);
+        if (access(path, R_OK) != 0) {
+            va_end(ap);
+            print_message("skipped %s: %s is missing; %s\n", test, path, hint);
+            skip();
+        }
+    }
+    va_end(ap);
+    return dir;
+}
 /* The sanitized command-line binary built by `make test`. */
 #define DARTSPP_BIN "build/san/dartspp"
 
