@@ -5,8 +5,8 @@
 #ifndef DARTSPP_GATHER_H
 #define DARTSPP_GATHER_H
 
+#include "dartspp/film.h"
 #include "dartspp/photon.h"
-#include "dartspp/render.h"
 
 typedef struct {
     const volume_photon_map *vol;   /* may be NULL */

@@ -1,6 +1,7 @@
 /* Progressive photon points, one iteration: photon pass → photon maps (radii of this iteration) →
  * sensor pass → film. Iterations are independent draws; the film keeps their mean. */
 #include "dartspp/gather.h"
+#include "dartspp/render.h"
 
 double progressive_radius(double r0, double alpha, long iteration, int dims)
 {

@@ -1,6 +1,6 @@
 /* The film: per-pixel sums of pass estimates for the gate image and each transient frame. A pass splats into
  * its own layer, which joins the sums only when the pass completes: an interrupted pass is dropped whole. */
-#include "dartspp/render.h"
+#include "dartspp/film.h"
 
 #include <stdlib.h>
 #include <string.h>

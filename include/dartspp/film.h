@@ -1,0 +1,38 @@
+/* dartspp film: the accumulation of passes — per-pixel sums for the gate image and each transient frame,
+ * the pass in progress kept apart until it completes, and the count of suppressed non-finite samples. The
+ * integrators write into it; the outputs and error logs read images from it. */
+#ifndef DARTSPP_FILM_H
+#define DARTSPP_FILM_H
+
+#include "dartspp/io.h"
+#include "dartspp/scene.h"
+
+/* Sums of per-pass pixel estimates; the image is sum / passes. Gate image: contributions weighted by
+ * 1/width inside [start, end) (steady state: weight 1, no test). Frame k: 1/w inside its own window, so a
+ * frame is exactly the gate image of its window (DESIGN §4). In frame mode the gate image is the image of
+ * the union window. A pass splats into the pass layer, which joins the sums at film_commit_pass; an
+ * interrupted pass is dropped with film_drop_pass, so the sums only ever hold completed passes. */
+typedef struct {
+    int width, height;
+    time_window window;
+    double *sum;       /* 3 per pixel: completed passes */
+    float *frame_sum;  /* frame_count × 3 per pixel: completed passes */
+    double *pass;      /* the pass in progress, same layout as sum */
+    float *frame_pass; /* the pass in progress, same layout as frame_sum */
+    long passes;       /* completed passes */
+    long nonfinite;    /* non-finite contributions suppressed (never written into an image) */
+} film;
+
+int film_init(film *f, int width, int height, const time_window *tw, dp_error *err);
+void film_free(film *f);
+/* Adds contribution c arriving at path time t to pixel index px (not thread-safe for one pixel).
+ * frame >= 0 (DARTS frame mode): c counts only if t falls in that frame, in the frames and the gate image.
+ * Returns 0 when c was non-finite and was dropped (the caller counts it). */
+int film_splat(film *f, size_t px, double t, vec3 c, int frame);
+/* The pass layer joins the sums (passes + 1), or is cleared. */
+void film_commit_pass(film *f);
+void film_drop_pass(film *f);
+/* Gate image (k < 0) or frame k, as the mean over passes. */
+int film_image(const film *f, int k, image_rgb *img, dp_error *err);
+
+#endif
