@@ -151,11 +151,13 @@ static int medium_segment(light_path *lp, double tmax)
     new_vertex(lp);
     const eda_table *et = darts && lp->eda ? lp->eda->table[lp->med] : NULL;
     if (et) { /* EDA with MIS against the phase function (§7.2, eq. 20) */
-        double u[4] = {rng_uniform(lp->rng), rng_uniform(lp->rng), rng_uniform(lp->rng), rng_uniform(lp->rng)}, w;
+        double u[4], w;
+        for (int k = 0; k < 4; k++) u[k] = rng_uniform(lp->rng);
         lp->d = eda_sample_direction(et, lp->eda->alpha[lp->med], &m->phase, lp->d, &lp->rec, u, &w);
         lp->beta = v3_scale(lp->beta, w);
     } else {
-        lp->d = phase_sample(&m->phase, lp->d, rng_uniform(lp->rng), rng_uniform(lp->rng));
+        double u1 = rng_uniform(lp->rng), u2 = rng_uniform(lp->rng);
+        lp->d = phase_sample(&m->phase, lp->d, u1, u2);
     }
     return 1;
 }
@@ -179,7 +181,8 @@ static int surface_event(light_path *lp, const hit_record *h)
     else {
         if (s->integrator.include_surfaces && surface_time_ok(lp, h->p))
             store(lp, &lp->tb->surf, &lp->pc->n_surf, h->p, lp->d, lp->beta, lp->bounce, lp->time);
-        vec3 l = sample_cosine_hemisphere(rng_uniform(lp->rng), rng_uniform(lp->rng)), t1, t2;
+        double u1 = rng_uniform(lp->rng), u2 = rng_uniform(lp->rng);
+        vec3 l = sample_cosine_hemisphere(u1, u2), t1, t2;
         v3_basis(n_in, &t1, &t2);
         lp->d = v3_norm(v3_add(v3_add(v3_scale(t1, l.x), v3_scale(t2, l.y)), v3_scale(n_in, l.z)));
     }
@@ -208,7 +211,8 @@ static void trace_light_path(const scene *s, const darts_guide *g, const eda_set
     if (g->active && !darts_sample_bin(g, L->pos, rng_uniform(rng), &lp.bin)) return;
     darts_bin reach = lp.bin; /* the early exit keeps every path whose surface photons could still count */
     reach.end += surface_slack;
-    lp.d = sample_uniform_sphere(rng_uniform(rng), rng_uniform(rng));
+    double u1 = rng_uniform(rng), u2 = rng_uniform(rng);
+    lp.d = sample_uniform_sphere(u1, u2);
     lp.beta = v3_scale(L->intensity, 4.0 * M_PI * s->light_count);
     double t_end = in->window.gated ? time_window_end(&in->window) : INFINITY;
     new_vertex(&lp);

@@ -85,7 +85,8 @@ static int scatter_medium(pixel_ctx *c, path_state *ps, double t, int *medium_ev
     if (++*medium_events > m->max_bounces) return 0;
     phase_ctx pc = {&m->phase, ps->d};
     if (path_counts(&s->integrator, ps->depth + 1)) connect_lights(c, ps, ps->o, eval_phase, &pc);
-    ps->d = phase_sample(&m->phase, ps->d, rng_uniform(c->rng), rng_uniform(c->rng));
+    double u1 = rng_uniform(c->rng), u2 = rng_uniform(c->rng);
+    ps->d = phase_sample(&m->phase, ps->d, u1, u2);
     return 1;
 }
 
@@ -112,7 +113,8 @@ static int scatter_surface(pixel_ctx *c, path_state *ps, const hit_record *h, in
         at.beta = v3_mul(ps->beta, b->albedo);
         if (path_counts(&s->integrator, ps->depth + 1))
             connect_lights(c, &at, offset_ray_origin(c->s, h->p, n_in), eval_lambert_cos, &lc);
-        vec3 l = sample_cosine_hemisphere(rng_uniform(c->rng), rng_uniform(c->rng)), t1, t2;
+        double u1 = rng_uniform(c->rng), u2 = rng_uniform(c->rng);
+        vec3 l = sample_cosine_hemisphere(u1, u2), t1, t2;
         v3_basis(n_in, &t1, &t2);
         ps->d = v3_norm(v3_add(v3_add(v3_scale(t1, l.x), v3_scale(t2, l.y)), v3_scale(n_in, l.z)));
     }
