@@ -72,6 +72,43 @@ void atomic_abort(int fd, const char *tmp_path)
     if (tmp_path && tmp_path[0]) unlink(tmp_path);
 }
 
+FILE *atomic_fopen(const char *path, const char *mode, atomic_file *af, dp_error *err)
+{
+    af->path = path;
+    af->f = NULL;
+    af->fd = atomic_open(path, af->tmp_path, sizeof af->tmp_path, err);
+    if (af->fd < 0) return NULL;
+    int dup_fd = dup(af->fd);
+    af->f = dup_fd >= 0 ? fdopen(dup_fd, mode) : NULL;
+    if (!af->f) {
+        int e = errno;
+        if (dup_fd >= 0) close(dup_fd);
+        atomic_abort(af->fd, af->tmp_path);
+        dp_fail(err, "%s: cannot open for writing: %s", path, strerror(e));
+    }
+    return af->f;
+}
+
+int atomic_fclose(atomic_file *af, int failed, dp_error *err)
+{
+    int bad = failed || ferror(af->f);
+    if (fclose(af->f) != 0) bad = 1;
+    af->f = NULL;
+    if (bad) {
+        int e = errno;
+        atomic_abort(af->fd, af->tmp_path);
+        return dp_fail(err, "%s: write failed: %s", af->path, strerror(e));
+    }
+    return atomic_commit(af->fd, af->tmp_path, af->path, err);
+}
+
+void atomic_fabort(atomic_file *af)
+{
+    if (af->f) fclose(af->f);
+    af->f = NULL;
+    atomic_abort(af->fd, af->tmp_path);
+}
+
 /* mkdir of one prefix of the path; an existing folder is fine. */
 static int mkdir_one(const char *dir, const char *path, dp_error *err)
 {
