@@ -888,6 +888,42 @@ static void test_atomic_open_commit_abort(void **state)
     remove_tree(dir);
 }
 
+/* The stream form: nothing visible before the close, nothing left by an abort or a failed write. */
+static void test_atomic_fopen_fclose_fabort(void **state)
+{
+    (void)state;
+    char *dir = test_tmpdir(), path[512];
+    dp_error err = {{0}};
+    atomic_file af;
+    join(path, sizeof path, dir, "s.txt");
+    FILE *f = atomic_fopen(path, "w", &af, &err);
+    assert_non_null(f);
+    assert_int_equal(fputs("abc", f) >= 0, 1);
+    atomic_fabort(&af);
+    assert_int_equal(file_size(path), -1);
+    assert_int_equal(count_temp_files(dir), 0);
+    f = atomic_fopen(path, "w", &af, &err);
+    assert_non_null(f);
+    assert_int_equal(fputs("hello", f) >= 0, 1);
+    assert_int_equal(atomic_fclose(&af, 1, &err), -1); /* the caller's write failed */
+    assert_non_null(strstr(err.msg, path));
+    assert_non_null(strstr(err.msg, "write failed"));
+    assert_int_equal(file_size(path), -1);
+    assert_int_equal(count_temp_files(dir), 0);
+    f = atomic_fopen(path, "w", &af, &err);
+    assert_non_null(f);
+    assert_int_equal(fputs("hello", f) >= 0, 1);
+    assert_int_equal(file_size(path), -1); /* not visible before the close */
+    assert_int_equal(atomic_fclose(&af, 0, &err), 0);
+    assert_int_equal(file_size(path), 5);
+    assert_int_equal(count_temp_files(dir), 0);
+    join(path, sizeof path, dir, "no/such/s.txt");
+    assert_null(atomic_fopen(path, "w", &af, &err));
+    assert_non_null(strstr(err.msg, path));
+    assert_non_null(strstr(err.msg, "No such file or directory"));
+    remove_tree(dir);
+}
+
 /* ---- frame CSV ---- */
 
 static void test_frames_csv(void **state)
@@ -974,6 +1010,7 @@ int main(void)
         cmocka_unit_test(test_atomic_missing_folder_and_make_parent_dirs),
         cmocka_unit_test(test_atomic_failed_write_keeps_old_file),
         cmocka_unit_test(test_atomic_open_commit_abort),
+        cmocka_unit_test(test_atomic_fopen_fclose_fabort),
         cmocka_unit_test(test_frames_csv),
         cmocka_unit_test(test_image_dispatch_by_extension),
         cmocka_unit_test(test_mean_of_hand_values),

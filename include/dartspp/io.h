@@ -5,6 +5,8 @@
 
 #include "dartspp/core.h"
 
+#include <stdio.h>
+
 /* An RGB float32 image, row 0 at the top, 3 interleaved floats per pixel. */
 typedef struct {
     int width, height;
@@ -29,6 +31,23 @@ typedef struct {
 int atomic_open(const char *path, char *tmp_path, size_t tmp_len, dp_error *err); /* returns fd or -1 */
 int atomic_commit(int fd, const char *tmp_path, const char *path, dp_error *err);  /* fsync, close, rename */
 void atomic_abort(int fd, const char *tmp_path);
+
+/* The same through a stdio stream (it writes through a dup of the temporary file's descriptor). */
+typedef struct {
+    const char *path;    /* the caller's string: must outlive the write */
+    int fd;
+    FILE *f;
+    char tmp_path[4096];
+} atomic_file;
+
+/* Opens the temporary file of <path> as a stream with `mode` ("w" or "wb"); NULL with err set (and
+ * nothing left behind) on failure. */
+FILE *atomic_fopen(const char *path, const char *mode, atomic_file *af, dp_error *err);
+/* Closes the stream and commits. If `failed` (the caller's writing went wrong), the stream has an error
+ * or cannot be closed: "<path>: write failed: <errno text>", the temporary file removed, -1. */
+int atomic_fclose(atomic_file *af, int failed, dp_error *err);
+/* Closes the stream and removes the temporary file (the caller reports why). */
+void atomic_fabort(atomic_file *af);
 
 /* Float32 RGB EXR (channels R, G, B, ZIP compression) with the metadata as header attributes
  * `dartspp.timeUnit`, `dartspp.gateStart`/`dartspp.gateEnd` (gated images only), `dartspp.cameraWarped`,

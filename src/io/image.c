@@ -1,12 +1,9 @@
-/* Images in memory: allocation, the quantile used for display scaling, the error metrics of
- * `dartspp compare`, reading/writing by file extension, and creating output folders. */
+/* The image type: allocation, the quantile used for display scaling, the error metrics of
+ * `dartspp compare` and the mean of `dartspp merge`. Knows nothing of files (image_file.c does). */
 #include "dartspp/io.h"
 
-#include <errno.h>
 #include <stdlib.h>
 #include <string.h>
-#include <strings.h>
-#include <sys/stat.h>
 
 /* Largest image accepted anywhere (also bounds what a corrupt file header can make us allocate). */
 #define IMAGE_MAX_PIXELS ((size_t)1 << 28)
@@ -184,57 +181,4 @@ int image_mean_of(const image_rgb *imgs, int k, image_rgb *mean, double *var_of_
     }
     *var_of_mean = used ? v / (double)used : 0.0;
     return 0;
-}
-
-/* Case-insensitive test of the file name's extension (ext includes the dot). */
-static int has_ext(const char *path, const char *ext)
-{
-    size_t n = strlen(path), e = strlen(ext);
-    return n > e && strcasecmp(path + n - e, ext) == 0;
-}
-
-int image_write(const char *path, const image_rgb *img, const image_meta *meta, dp_error *err)
-{
-    if (has_ext(path, ".exr")) return exr_write(path, img, meta, err);
-    if (has_ext(path, ".pfm")) return pfm_write(path, img, err);
-    return dp_fail(err, "%s: unknown image format (expected .exr or .pfm)", path);
-}
-
-int image_read(const char *path, image_rgb *img, dp_error *err)
-{
-    if (has_ext(path, ".exr")) return exr_read(path, img, err);
-    if (has_ext(path, ".pfm")) return pfm_read(path, img, err);
-    img->width = img->height = 0;
-    img->rgb = NULL;
-    return dp_fail(err, "%s: unknown image format (expected .exr or .pfm)", path);
-}
-
-/* mkdir of one prefix of the path; an existing folder is fine. */
-static int mkdir_one(const char *dir, const char *path, dp_error *err)
-{
-    struct stat st;
-    if (mkdir(dir, 0777) == 0) return 0;
-    int e = errno;
-    if (e == EEXIST && stat(dir, &st) == 0 && S_ISDIR(st.st_mode)) return 0;
-    if (e == EEXIST) e = ENOTDIR;
-    return dp_fail(err, "%s: cannot create folder %s: %s", path, dir, strerror(e));
-}
-
-int make_parent_dirs(const char *path, dp_error *err)
-{
-    const char *slash = strrchr(path, '/');
-    if (!slash || slash == path) return 0;
-    char *dir = strndup(path, (size_t)(slash - path));
-    if (!dir) return dp_fail(err, "%s: out of memory", path);
-    int rc = 0;
-    for (char *p = dir + 1; rc == 0; ++p) {
-        if (*p != '/' && *p != '\0') continue;
-        char c = *p;
-        *p = '\0';
-        if (p[-1] != '/') rc = mkdir_one(dir, path, err);
-        *p = c;
-        if (c == '\0') break;
-    }
-    free(dir);
-    return rc;
 }

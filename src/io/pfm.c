@@ -8,7 +8,6 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
-#include <unistd.h>
 
 #define PFM_HEADER_MAX 256
 
@@ -43,25 +42,10 @@ int pfm_write(const char *path, const image_rgb *img, dp_error *err)
 {
     if (!img || !img->rgb || img->width <= 0 || img->height <= 0)
         return dp_fail(err, "%s: cannot write an empty image", path);
-    char tmp[4096];
-    int fd = atomic_open(path, tmp, sizeof tmp, err);
-    if (fd < 0) return -1;
-    int dup_fd = dup(fd);
-    FILE *f = dup_fd >= 0 ? fdopen(dup_fd, "wb") : NULL;
-    if (!f) {
-        int e = errno;
-        if (dup_fd >= 0) close(dup_fd);
-        atomic_abort(fd, tmp);
-        return dp_fail(err, "%s: cannot open for writing: %s", path, strerror(e));
-    }
-    int bad = write_rows(f, img) != 0 || ferror(f);
-    if (fclose(f) != 0) bad = 1;
-    if (bad) {
-        int e = errno;
-        atomic_abort(fd, tmp);
-        return dp_fail(err, "%s: write failed: %s", path, strerror(e));
-    }
-    return atomic_commit(fd, tmp, path, err);
+    atomic_file af;
+    FILE *f = atomic_fopen(path, "wb", &af, err);
+    if (!f) return -1;
+    return atomic_fclose(&af, write_rows(f, img) != 0, err);
 }
 
 /* ---- reading ---- */

@@ -6,7 +6,6 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <unistd.h>
 
 /* Linear [0,1] to an 8-bit sRGB code (IEC 61966-2-1 transfer curve). */
 static unsigned char srgb8(double v)
@@ -65,7 +64,7 @@ static int encode(FILE *f, const image_rgb *img, double scale, png_byte *row, dp
     return 0;
 }
 
-/* Writes the PNG to the stream and closes it; on failure err->msg holds the reason (no path). */
+/* Writes the PNG to the stream (left open); on failure err->msg holds the reason (no path). */
 static int write_stream(FILE *f, const image_rgb *img, dp_error *err)
 {
     double q = image_quantile(img, 0.99);
@@ -74,8 +73,8 @@ static int write_stream(FILE *f, const image_rgb *img, dp_error *err)
     int rc = row ? encode(f, img, scale, row, err) : dp_fail(err, "out of memory");
     int e = errno;
     free(row);
-    if (ferror(f)) rc = dp_fail(err, "write failed: %s", strerror(e)); /* better than libpng's text */
-    if (fclose(f) != 0 && rc == 0) rc = dp_fail(err, "write failed: %s", strerror(errno));
+    if (rc != 0 && ferror(f)) /* better than libpng's text */
+        rc = dp_fail(err, "write failed: %s", strerror(e));
     return rc;
 }
 
@@ -83,21 +82,13 @@ int png_write_preview(const char *path, const image_rgb *img, dp_error *err)
 {
     if (!img || !img->rgb || img->width <= 0 || img->height <= 0)
         return dp_fail(err, "%s: cannot write an empty image", path);
-    char tmp[4096];
-    int fd = atomic_open(path, tmp, sizeof tmp, err);
-    if (fd < 0) return -1;
-    int dup_fd = dup(fd);
-    FILE *f = dup_fd >= 0 ? fdopen(dup_fd, "wb") : NULL;
-    if (!f) {
-        int e = errno;
-        if (dup_fd >= 0) close(dup_fd);
-        atomic_abort(fd, tmp);
-        return dp_fail(err, "%s: cannot open for writing: %s", path, strerror(e));
-    }
+    atomic_file af;
+    FILE *f = atomic_fopen(path, "wb", &af, err);
+    if (!f) return -1;
     dp_error local = {{0}};
     if (write_stream(f, img, &local) != 0) {
-        atomic_abort(fd, tmp);
+        atomic_fabort(&af);
         return dp_fail(err, "%s: %s", path, local.msg);
     }
-    return atomic_commit(fd, tmp, path, err);
+    return atomic_fclose(&af, 0, err); /* a stream error or failed close: "write failed" */
 }
