@@ -7,6 +7,7 @@
 
 #include <omp.h>
 
+#include "dartspp/darts.h"
 #include "dartspp/gather.h"
 #include "dartspp/photon.h"
 #include "dartspp/render.h"
@@ -43,6 +44,108 @@ static void load_scene(const char *path, const char *const *sets, int nsets, sce
     if (scene_load(path, &lo, s, &err)) fail_msg("%s", err.msg);
 }
 
+/* Per-pass image totals. The passes of a progressive render are independent draws (their random numbers
+ * are keyed by seed and pass), so the per-pass totals of one or several renders are independent samples of
+ * the estimator's image total: their spread gives the standard error of the mean total with hundreds of
+ * degrees of freedom, where a few seeds would give two or three. The radii shrink from pass to pass, so the
+ * samples are not identically distributed; the pooled sample variance then exceeds the variance of their
+ * mean by the spread of the per-pass expectations, which only makes the standard error conservative. */
+typedef struct {
+    int images;   /* 1 + frames: image 0 is the gate image (frame mode: the union window), image 1 + k frame k */
+    long n, cap;  /* passes recorded */
+    double *x;    /* x[(i·images + m)·3 + c]: pass i, image m, channel c */
+    double *last; /* the film's totals after the previous pass, images × 3 */
+} pass_totals;
+
+static void pass_totals_init(pass_totals *t, int frames)
+{
+    *t = (pass_totals){.images = 1 + frames};
+    t->last = calloc((size_t)t->images * 3, sizeof(double));
+    assert_non_null(t->last);
+}
+
+static void pass_totals_free(pass_totals *t)
+{
+    free(t->x);
+    free(t->last);
+    *t = (pass_totals){0};
+}
+
+/* Mean over the recorded passes of image m, channel c (c = 3: the sum of the channels), and its standard
+ * error from the spread of the passes. */
+static void pass_totals_mean_se(const pass_totals *t, int m, int c, double *mean, double *se)
+{
+    assert_true(t->n > 1 && m < t->images);
+    double s = 0, s2 = 0;
+    for (long i = 0; i < t->n; i++) {
+        const double *v = &t->x[((size_t)i * t->images + m) * 3];
+        double x = c < 3 ? v[c] : v[0] + v[1] + v[2];
+        s += x;
+        s2 += x * x;
+    }
+    *mean = s / t->n;
+    *se = sqrt(fmax(0.0, (s2 - t->n * *mean * *mean) / (t->n - 1)) / t->n);
+}
+
+/* What a render records after each pass: the per-pass totals, and optionally the mean image after pass
+ * snap_pass (for the error of an early iteration count, from the same passes). */
+typedef struct {
+    pass_totals *t;
+    long snap_pass;
+    double *snap;
+} pass_probe;
+
+static int pass_probe_after(void *ctx, const film *f, const render_stats *st, dp_error *err)
+{
+    (void)err;
+    pass_probe *pr = ctx;
+    size_t npx = (size_t)f->width * f->height;
+    if (pr->snap && st->passes == pr->snap_pass)
+        for (size_t i = 0; i < 3 * npx; i++) pr->snap[i] = f->sum[i] / (double)f->passes;
+    pass_totals *t = pr->t;
+    if (!t) return 0;
+    assert_int_equal(t->images, 1 + f->window.frame_count);
+    if (st->passes == 1) memset(t->last, 0, (size_t)t->images * 3 * sizeof(double));
+    if (t->n == t->cap) {
+        t->cap = t->cap ? 2 * t->cap : 256;
+        t->x = realloc(t->x, (size_t)t->cap * t->images * 3 * sizeof(double));
+        assert_non_null(t->x);
+    }
+    double *row = &t->x[(size_t)t->n * t->images * 3];
+    for (int m = 0; m < t->images; m++) {
+        double tot[3] = {0, 0, 0};
+        for (size_t p = 0; p < npx; p++)
+            for (int c = 0; c < 3; c++)
+                tot[c] += m == 0 ? f->sum[3 * p + c] : (double)f->frame_sum[3 * (npx * (size_t)(m - 1) + p) + c];
+        for (int c = 0; c < 3; c++) {
+            row[3 * m + c] = tot[c] - t->last[3 * m + c]; /* this pass's estimate: the increment of the sum */
+            t->last[3 * m + c] = tot[c];
+        }
+    }
+    t->n++;
+    return 0;
+}
+
+/* Mean image of a render as doubles (film sum / passes), 3 values per pixel; with probe, its per-pass
+ * totals and snapshot are recorded too. */
+static double *render_probe(const scene *s, int threads, uint64_t seed, long passes, pass_probe *probe)
+{
+    dp_error err;
+    film f;
+    render_stats st;
+    render_options ro = {.threads = threads, .seed = seed, .spp = passes, .time_limit = 0,
+                         .after_pass = probe ? pass_probe_after : NULL, .after_pass_ctx = probe};
+    if (render_scene(s, &ro, &f, &st, &err)) fail_msg("%s", err.msg);
+    assert_int_equal(st.passes, passes);
+    assert_int_equal(st.nonfinite, 0);
+    size_t n = (size_t)s->cam.width * s->cam.height * 3;
+    double *m = malloc(n * sizeof(double));
+    assert_non_null(m);
+    for (size_t i = 0; i < n; i++) m[i] = f.sum[i] / (double)f.passes;
+    film_free(&f);
+    return m;
+}
+
 static void render_passes(const scene *s, int threads, uint64_t seed, long passes, film *f, render_stats *st)
 {
     dp_error err;
@@ -55,15 +158,16 @@ static void render_passes(const scene *s, int threads, uint64_t seed, long passe
 /* Mean image of a render as doubles (film sum / passes), 3 values per pixel. */
 static double *render_mean(const scene *s, int threads, uint64_t seed, long passes)
 {
-    film f;
-    render_stats st;
-    render_passes(s, threads, seed, passes, &f, &st);
-    size_t n = (size_t)s->cam.width * s->cam.height * 3;
-    double *m = malloc(n * sizeof(double));
-    assert_non_null(m);
-    for (size_t i = 0; i < n; i++) m[i] = f.sum[i] / (double)f.passes;
-    film_free(&f);
-    return m;
+    return render_probe(s, threads, seed, passes, NULL);
+}
+
+/* Renders `seeds` renders (seeds seed0, seed0 + 1, ...) of `passes` passes, recording their per-pass totals
+ * into t (initialised here for the scene's frames). */
+static void render_totals(const scene *s, uint64_t seed0, int seeds, long passes, pass_totals *t)
+{
+    pass_totals_init(t, s->integrator.window.frame_count);
+    pass_probe pr = {.t = t};
+    for (int k = 0; k < seeds; k++) free(render_probe(s, 2, seed0 + k, passes, &pr));
 }
 
 /* A fog box open towards the camera: Lambertian floor, ceiling, back and side walls (2 × 2 × 2), fog
@@ -852,6 +956,160 @@ static void test_eda_consistency_anisotropic(void **state)
     consistency_suite(-0.3, CO_DARTS_EDA, CO_DARTS_EDA);
 }
 
+/* ---------------------------------------------------------------------------------------------------- */
+/* 5. refractive index: DARTS against baseline photon points                                             */
+
+static const char *const DARTS_KEYS = "\"enable_guiding\": true, \"enable_elliptical\": true, \"strict_time_width\": true";
+static const char *const BASELINE_KEYS = "\"enable_guiding\": false, \"enable_elliptical\": false";
+
+/* A fog box as box_scene_text_g but with one medium everywhere: refractive index 1/speed in the fog, the
+ * camera and the light in it (no clear pocket: no path tracer renders this scene), surfaces only (no volume
+ * photons: with the camera in the fog, the volume photons next to the camera give the image total a
+ * heavy-tailed distribution, and strict mode acts on surface photons only). */
+static void eta_box_scene_text(char *text, size_t len, double speed, const char *darts)
+{
+    snprintf(text, len,
+             "{ \"media\": [ { \"name\": \"fog\", \"type\": \"homogeneous\", \"sigma_s\": [0.45, 0.4, 0.5],"
+             "    \"sigma_a\": [0.05, 0.08, 0.03], \"speed_of_light\": %.17g,"
+             "    \"phase_function\": { \"type\": \"henyey_greenstein\", \"g\": 0.3 } } ],"
+             "  \"bsdfs\": [ { \"name\": \"white\", \"type\": \"lambert\", \"albedo\": 0.7 },"
+             "               { \"name\": \"red\", \"type\": \"lambert\", \"albedo\": [0.7, 0.15, 0.1] },"
+             "               { \"name\": \"green\", \"type\": \"lambert\", \"albedo\": [0.15, 0.6, 0.2] } ],"
+             "  \"primitives\": ["
+             "    { \"type\": \"quad\", \"bsdf\": \"white\", \"transform\": { \"position\": [0, 0, 0], \"scale\": [2, 1, 2] } },"
+             "    { \"type\": \"quad\", \"bsdf\": \"white\", \"transform\": { \"position\": [0, 2, 0], \"scale\": [2, 1, 2],"
+             "      \"rotation\": [180, 0, 0] } },"
+             "    { \"type\": \"quad\", \"bsdf\": \"white\", \"transform\": { \"position\": [0, 1, 1], \"scale\": [2, 1, 2],"
+             "      \"rotation\": [-90, 0, 0] } },"
+             "    { \"type\": \"quad\", \"bsdf\": \"green\", \"transform\": { \"position\": [-1, 1, 0], \"scale\": [2, 1, 2],"
+             "      \"rotation\": [0, 0, -90] } },"
+             "    { \"type\": \"quad\", \"bsdf\": \"red\", \"transform\": { \"position\": [1, 1, 0], \"scale\": [2, 1, 2],"
+             "      \"rotation\": [0, 0, 90] } },"
+             "    { \"type\": \"point\", \"emission\": [4, 4, 4], \"ext_medium\": \"fog\","
+             "      \"transform\": { \"position\": [0.3, 1.5, 0.2] } } ],"
+             "  \"camera\": { \"type\": \"pinhole\", \"resolution\": [24, 24], \"fov\": 45, \"medium\": \"fog\","
+             "    \"transform\": { \"position\": [0, 1, -3], \"look_at\": [0, 1, 0], \"up\": [0, 1, 0] } },"
+             "  \"integrator\": { \"type\": \"progressive_transient_photon_map\", \"volume_photon_type\": \"points\","
+             "    \"photon_count\": 10000, \"volume_photon_count\": 0, \"gather_photon_count\": 256,"
+             "    \"gather_radius\": 0.1, \"alpha\": 0.7, \"max_bounces\": 4,"
+             "    \"transient_time_center\": 6.5, \"transient_time_width\": 1.0, %s },"
+             "  \"renderer\": { \"spp\": 1 } }",
+             speed, darts);
+}
+
+/* A fog slab (6 × 6 × 3, index-matched boundary, refractive index 1/speed) seen from a camera in vacuum
+ * 1.5 in front of it, lit by a point light in vacuum 1 in front of it: volume only, no clear pocket needed
+ * (the path tracer's next-event estimation never comes closer to the light than 1), and no volume photon
+ * near the camera. The slab is wider than the view (fov 30°), so the image border cuts through the fog and
+ * rays leave through the back face. `time` holds the time keys, `darts` the photon-pass keys. */
+static void slab_scene_text(char *text, size_t len, double speed, const char *type, const char *time, const char *darts)
+{
+    snprintf(text, len,
+             "{ \"media\": [ { \"name\": \"fog\", \"type\": \"homogeneous\", \"sigma_s\": [0.45, 0.4, 0.5],"
+             "    \"sigma_a\": [0.05, 0.08, 0.03], \"speed_of_light\": %.17g,"
+             "    \"phase_function\": { \"type\": \"henyey_greenstein\", \"g\": 0.3 } } ],"
+             "  \"primitives\": ["
+             "    { \"type\": \"cube\", \"bsdf\": { \"type\": \"forward\" }, \"int_medium\": \"fog\","
+             "      \"transform\": { \"position\": [0, 0, 0], \"scale\": [6, 6, 3] } },"
+             "    { \"type\": \"point\", \"emission\": [4, 4, 4], \"transform\": { \"position\": [0.6, 0.4, -2.5] } } ],"
+             "  \"camera\": { \"type\": \"pinhole\", \"resolution\": [16, 16], \"fov\": 30,"
+             "    \"transform\": { \"position\": [0, 0, -3], \"look_at\": [0, 0, 0], \"up\": [0, 1, 0] } },"
+             "  \"integrator\": { \"type\": \"%s\", \"volume_photon_type\": \"points\","
+             "    \"photon_count\": 10000, \"volume_photon_count\": 1e6, \"volume_gather_radius\": 0.06,"
+             "    \"volume_alpha\": 0.7, \"max_bounces\": 4, %s%s%s },"
+             "  \"renderer\": { \"spp\": 1 } }",
+             speed, type, time, darts[0] ? ", " : "", darts);
+}
+
+/* DARTS against baseline photon points on one scene with the same radii: both estimate the same
+ * kernel-smoothed image (DARTS only leaves out photons that its time bounds prove cannot be gathered in the
+ * gate: surface photons are gathered within R, k = 256 is never reached, so every gather uses the same
+ * disc), so their per-channel image totals agree in expectation and need no bias allowance. z from the
+ * per-pass standard errors (hundreds of passes: normal); 6 checks in this test at |z| < 4 (two-sided
+ * 6.3e-5 each): false-alarm rate below 4e-4. */
+static void darts_vs_baseline(const char *label, const char *darts_text, const char *base_text, int seeds, long passes)
+{
+    pass_totals t[2];
+    const char *texts[2] = {base_text, darts_text};
+    for (int m = 0; m < 2; m++) {
+        tmp_scene ts;
+        tmp_scene_write(&ts, texts[m]);
+        scene s;
+        load_scene(ts.path, NULL, 0, &s);
+        render_totals(&s, 700, seeds, passes, &t[m]);
+        scene_free(&s);
+        tmp_scene_remove(&ts);
+    }
+    for (int c = 0; c < 3; c++) {
+        double mb, sb, md, sd;
+        pass_totals_mean_se(&t[0], 0, c, &mb, &sb);
+        pass_totals_mean_se(&t[1], 0, c, &md, &sd);
+        double z = (md - mb) / sqrt(sb * sb + sd * sd);
+        print_message("  %s, channel %d: baseline %.5g (se %.2g), DARTS %.5g (se %.2g): %+.2f %%, z = %+.2f\n", label, c,
+                      mb, sb, md, sd, 100 * (md - mb) / mb, z);
+        assert_true(mb > 0);
+        assert_true(sqrt(sb * sb + sd * sd) < 0.02 * mb); /* sharp enough to see a bias of a few percent */
+        assert_true(fabs(z) < 4.0);
+    }
+    pass_totals_free(&t[0]);
+    pass_totals_free(&t[1]);
+}
+
+/* Refractive index η = 4/3 (speed_of_light 0.75) with vacuum's η = 1 in the bounds (issue 15, items 5-6).
+ * (1) Strict time mode drops a surface photon when its full path time is surely before the gate; that needs
+ *     an upper bound of the camera leg, η_ub·|cam − x|. With the lower bound η_lb = 1 used for both tests,
+ *     DARTS dropped the in-gate surface photons of the narrow gate here, whose camera leg takes 4/3 of its
+ *     length: the total came out 98 % darker than the baseline's (z = -305, -291, -275 per channel).
+ * (2) Camera in vacuum, fog slab with η = 4/3: the true camera leg of a volume photon is piecewise (η = 4/3 in
+ *     the fog, 1 outside), but elliptical control vertices sit on the equal-time ellipsoid of the vertex
+ *     medium's single η. With control vertices on, no free-flight volume photon is stored, so in-gate places
+ *     off that ellipsoid got no photons: -45 % (z = -32, -33, -31). The photon pass now turns control
+ *     vertices off when the regions of the scene do not share one η (DA distance sampling stays on), and
+ *     the command line says so. */
+static void test_darts_refractive_index(void **state)
+{
+    (void)state;
+    char darts[8192], base[8192];
+    /* (1) */
+    eta_box_scene_text(darts, sizeof darts, 0.75, DARTS_KEYS);
+    eta_box_scene_text(base, sizeof base, 0.75, BASELINE_KEYS);
+    darts_vs_baseline("one medium, eta 4/3, strict", darts, base, 4, 32);
+    /* (2) */
+    const char *gate = "\"transient_time_center\": 4.0, \"transient_time_width\": 1.0";
+    slab_scene_text(darts, sizeof darts, 0.75, "progressive_transient_photon_map", gate, DARTS_KEYS);
+    slab_scene_text(base, sizeof base, 0.75, "progressive_transient_photon_map", gate, BASELINE_KEYS);
+    darts_vs_baseline("camera in vacuum, fog eta 4/3", darts, base, 4, 64);
+
+    /* the guide's decision, and the command line's warning about it */
+    tmp_scene t;
+    tmp_scene_write(&t, darts);
+    scene s;
+    load_scene(t.path, NULL, 0, &s);
+    darts_guide g;
+    darts_guide_init(&s, &g);
+    assert_true(g.active && !g.control_vertices);
+    assert_float_equal(g.eta_lb, 1.0, 0.0);
+    assert_float_equal(g.eta_ub, 4.0 / 3.0, 1e-15);
+    scene_free(&s);
+    char cmd[1024], out[8192];
+    snprintf(cmd, sizeof cmd, DARTSPP_BIN " render %s --spp 1 --quiet --output %s/out.exr", t.path, t.dir);
+    assert_int_equal(test_run(cmd, out, sizeof out), 0);
+    assert_non_null(strstr(out, "control vertices are off"));
+    assert_non_null(strstr(out, "vaccum_speed_of_light = 0.75"));
+    tmp_scene_remove(&t);
+    /* one medium everywhere (its η 4/3, vacuum's 1 only in the bounds): control vertices on, no warning */
+    eta_box_scene_text(darts, sizeof darts, 0.75, DARTS_KEYS);
+    tmp_scene_write(&t, darts);
+    load_scene(t.path, NULL, 0, &s);
+    darts_guide_init(&s, &g);
+    assert_true(g.active && g.control_vertices);
+    scene_free(&s);
+    snprintf(cmd, sizeof cmd, DARTSPP_BIN " render %s --spp 1 --quiet --output %s/out.exr", t.path, t.dir);
+    assert_int_equal(test_run(cmd, out, sizeof out), 0);
+    assert_null(strstr(out, "control vertices are off"));
+    tmp_scene_remove(&t);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -863,6 +1121,9 @@ int main(void)
         cmocka_unit_test(test_single_scatter_total),
         cmocka_unit_test(test_consistency_vs_path_tracer),
         cmocka_unit_test(test_eda_consistency_anisotropic),
+        cmocka_unit_test(test_darts_refractive_index),
     };
+    /* DARTSPP_TEST_FILTER=name (cmocka wildcards) runs only the matching tests */
+    if (getenv("DARTSPP_TEST_FILTER")) cmocka_set_test_filter(getenv("DARTSPP_TEST_FILTER"));
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -4,9 +4,18 @@
  *
  * Units. Times are optical path lengths (DESIGN §4): a geometric length d in a medium of refractive index
  * η takes time η·d. Records convert residual times to geometric residual lengths with the η of the medium
- * the vertex is in (the straight line to the camera is assumed to stay in it; where it does not, the
- * samplers stay unbiased and only aim less well). Bounds that must never be wrong (early exit, the
- * reachable set of the distance sampler, the surface time test) use η_lb, the smallest η in the scene. */
+ * the vertex is in (the straight line to the camera is assumed to stay in it; where it does not, DA
+ * distance sampling and EDA stay unbiased and only aim less well). Bounds that must never be wrong bound
+ * the time of the straight camera leg from x, which lies in [η_lb·|cam − x|, η_ub·|cam − x|] whatever
+ * media it crosses (η_lb, η_ub: the smallest and largest η of the scene, vacuum's included): a photon is
+ * dropped as too late (early exit, the reachable set of the distance sampler, the end test of the surface
+ * time test) against the lower bound, as too early (the start test of strict time mode) against the upper
+ * bound. So with straight camera legs strict mode never drops a photon that could be gathered in its bin
+ * (a camera-side mirror makes the leg longer: the documented exception). Elliptical control vertices need
+ * the exact camera-leg time, which the vertex medium's single η gives only when every region of the scene
+ * (each medium present, and vacuum if present) has the same η: otherwise they are off
+ * (darts_guide.control_vertices), as a control vertex is then placed on the wrong equal-time surface and
+ * in-gate places get no photon at all (free-flight volume photons are not stored while they are on). */
 #ifndef DARTSPP_DARTS_H
 #define DARTSPP_DARTS_H
 
@@ -22,6 +31,7 @@ typedef struct {
     int frames;        /* 0: gate mode (one bin); else the frame count */
     double eta_lb;     /* smallest refractive index in the scene: time >= eta_lb * distance */
     double eta_ub;     /* largest: time <= eta_ub * distance along a straight segment */
+    int control_vertices; /* elliptical control vertices run: active, enable_elliptical, and one η in the scene */
 } darts_guide;
 
 typedef struct {
@@ -32,6 +42,11 @@ typedef struct {
 
 /* Fills g from the scene; g->active is 0 when no DARTS sampler is on or the scene is not gated. */
 void darts_guide_init(const scene *s, darts_guide *g);
+/* Whether a region (medium index or MEDIUM_VACUUM) occurs in the scene: the camera's, a light's, or a side
+ * of a surface that sets media (a surface that sets none keeps the medium it is crossed from). */
+int darts_region_present(const scene *s, int region);
+/* Whether every region present in the scene has the same refractive index (control vertices need it). */
+int darts_eta_uniform(const scene *s);
 /* Samples the target bin of a path from a light at x_light: uniform in time over the part of the window
  * reachable from the light, [max(beg, η_lb·|cam − x_light|), end). Returns 0 when nothing is reachable. */
 int darts_sample_bin(const darts_guide *g, vec3 x_light, double u, darts_bin *b);

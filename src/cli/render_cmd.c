@@ -173,8 +173,11 @@ static int after_pass(void *ctx, const film *f, const render_stats *st, dp_error
  * a mirror"): the path tracer cannot reach a point light through a mirror, so light that hits a mirror
  * before any diffuse or medium vertex is missing; DARTS's time bounds and control vertices assume a
  * straight camera leg, so what the camera sees through a mirror is biased. */
+static void warn_mixed_eta(const scene *s);
+
 static void warn_mirrors(const scene *s)
 {
+    warn_mixed_eta(s);
     const char *mirror = NULL;
     for (int i = 0; i < s->surface_count && !mirror; i++)
         if (s->surfaces[i].tri_count > 0 && s->bsdfs[s->surfaces[i].bsdf].type == BSDF_MIRROR)
@@ -193,6 +196,37 @@ static void warn_mirrors(const scene *s)
                 "and strict_time_width=false render it without that bias\n", s->path, mirror);
 }
 
+/* Elliptical control vertices assume one refractive index along the camera leg; when the media and vacuum
+ * present in the scene differ in η, the photon pass turns them off (darts_guide.control_vertices) and the
+ * user should hear why and how to get them back. Called by warn_mirrors. */
+static void warn_mixed_eta(const scene *s)
+{
+    darts_guide g;
+    darts_guide_init(s, &g);
+    if (s->integrator.type != INTEGRATOR_PHOTON_POINTS || !g.active || !s->integrator.enable_elliptical ||
+        g.control_vertices)
+        return;
+    char list[1024] = "";
+    size_t len = 0;
+    int media = 0, medium = MEDIUM_VACUUM, vacuum = 0;
+    for (int r = MEDIUM_VACUUM; r < s->medium_count; r++) {
+        if (!darts_region_present(s, r)) continue;
+        if (r == MEDIUM_VACUUM) vacuum = 1;
+        else media++, medium = r;
+        int n = snprintf(list + len, sizeof list - len, "%s%s%s%s η = %g", len ? ", " : "", r == MEDIUM_VACUUM ? "" : "'",
+                         r == MEDIUM_VACUUM ? "vacuum" : s->media[r].name, r == MEDIUM_VACUUM ? "" : "'", medium_eta(s, r));
+        if (n > 0 && (size_t)n < sizeof list - len) len += (size_t)n;
+    }
+    fprintf(stderr, "warning: %s: the refractive index differs between the regions of the scene (%s): elliptical "
+            "control vertices are off, since they need one η along the whole camera leg (DA distance sampling and "
+            "the other DARTS samplers stay on)", s->path, list);
+    if (vacuum && media == 1)
+        fprintf(stderr, "; if the camera, the lights and every light path stay inside '%s', "
+                "vaccum_speed_of_light = %g (its speed_of_light) restores them", s->media[medium].name,
+                1.0 / s->media[medium].eta);
+    fprintf(stderr, "\n");
+}
+
 /* Which photon-pass samplers run (DESIGN §4: the summary says which parts are active). */
 static void print_samplers(const scene *s)
 {
@@ -206,7 +240,8 @@ static void print_samplers(const scene *s)
     }
     printf("photon pass: DARTS, %s target bins; DA distance sampling %s; elliptical control vertices %s (residual %s); "
            "strict time %s", g.frames ? "per-frame" : "gate", in->enable_guiding ? "on" : "off",
-           in->enable_elliptical ? "on" : "off", in->ellipse_residual ? "exponential" : "uniform",
+           g.control_vertices ? "on" : in->enable_elliptical ? "off: refractive index not uniform" : "off",
+           in->ellipse_residual ? "exponential" : "uniform",
            in->strict_time_width ? "on" : "off");
     const char *sep = "; EDA direction sampling in ";
     for (int i = 0; i < s->medium_count; i++) {

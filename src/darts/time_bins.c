@@ -20,6 +20,33 @@ void darts_guide_init(const scene *s, darts_guide *g)
         g->eta_lb = fmin(g->eta_lb, s->media[i].eta);
         g->eta_ub = fmax(g->eta_ub, s->media[i].eta);
     }
+    g->control_vertices = g->active && in->enable_elliptical && darts_eta_uniform(s);
+}
+
+int darts_region_present(const scene *s, int region)
+{
+    if (s->cam.medium == region) return 1;
+    for (int i = 0; i < s->light_count; i++)
+        if (s->lights[i].medium == region) return 1;
+    for (int i = 0; i < s->surface_count; i++) {
+        const surface *sf = &s->surfaces[i];
+        if (sf->tri_count > 0 && sf->overrides_media && (sf->int_medium == region || sf->ext_medium == region)) return 1;
+    }
+    return 0;
+}
+
+int darts_eta_uniform(const scene *s)
+{
+    int seen = 0;
+    double eta0 = 0.0;
+    for (int r = MEDIUM_VACUUM; r < s->medium_count; r++) {
+        if (!darts_region_present(s, r)) continue;
+        double eta = medium_eta(s, r);
+        if (seen && eta != eta0) return 0;
+        eta0 = eta;
+        seen = 1;
+    }
+    return 1;
 }
 
 int darts_sample_bin(const darts_guide *g, vec3 x_light, double u, darts_bin *b)

@@ -95,17 +95,20 @@ static void new_vertex(light_path *lp)
                         v3_avg(m->sigma_t), rng_uniform(lp->rng));
 }
 
-/* Surface photons with DARTS: the straight-line lower bound of the full path time must be before the bin
- * end, and in strict mode not before its start (reference §8.2) — both widened by the slack. The gather
- * tests the time again at the gather point x', up to r away, where the camera leg differs by up to η·r:
- * tested only here, at the photon (as the reference does), a photon that counts at x' could be dropped,
- * and the surfaces near the edges of the in-gate band would come out too dark. */
+/* Surface photons with DARTS: the full path time with a straight camera leg lies in [t_lb, t_ub], the leg
+ * taking at least η_lb and at most η_ub times its length. The photon is kept when t_lb is before the bin
+ * end and, in strict mode, t_ub is not before its start (reference §8.2, which uses the lower bound for
+ * both: with η > 1 somewhere that drops in-gate photons) — both widened by the slack. The gather tests the
+ * time again at the gather point x', up to r away, where the camera leg differs by up to η_ub·r: tested
+ * only here, at the photon (as the reference does), a photon that counts at x' could be dropped, and the
+ * surfaces near the edges of the in-gate band would come out too dark. */
 static int surface_time_ok(const light_path *lp, vec3 x)
 {
     if (!lp->g->active) return 1;
-    double t_lb = lp->time + lp->g->eta_lb * v3_len(v3_sub(lp->g->cam, x));
+    double dist = v3_len(v3_sub(lp->g->cam, x));
+    double t_lb = lp->time + lp->g->eta_lb * dist, t_ub = lp->time + lp->g->eta_ub * dist;
     return t_lb < lp->bin.end + lp->surface_slack &&
-           (!lp->s->integrator.strict_time_width || t_lb >= lp->bin.start - lp->surface_slack);
+           (!lp->s->integrator.strict_time_width || t_ub >= lp->bin.start - lp->surface_slack);
 }
 
 /* One medium segment up to tmax: the control vertex (elliptical), then the distance sample. Returns 1 for
@@ -116,7 +119,7 @@ static int medium_segment(light_path *lp, double tmax)
     const medium *m = &lp->s->media[lp->med];
     /* nothing to aim where nothing scatters, or once no volume photon can be stored */
     int darts = aims_at_volume(lp) && medium_scatters(m);
-    if (darts && in->enable_elliptical) {
+    if (darts && lp->g->control_vertices) {
         double t, pdf;
         double sigma = v3_avg(m->sigma_t), u1 = rng_uniform(lp->rng), u2 = rng_uniform(lp->rng);
         int made = in->control_vertex_mis
@@ -146,7 +149,7 @@ static int medium_segment(light_path *lp, double tmax)
     if (++lp->medium_events > m->max_bounces) return -1;
     /* classic photons (no control vertices); low_order_scattering off: none at the first vertex after a
      * light or surface */
-    if (lp->volume_open && !(darts && in->enable_elliptical) && (in->low_order_scattering || lp->medium_events > 1))
+    if (lp->volume_open && !(darts && lp->g->control_vertices) && (in->low_order_scattering || lp->medium_events > 1))
         store(lp, &lp->tb->vol, &lp->pc->n_vol, lp->o, lp->d, lp->beta, lp->bounce, lp->time);
     new_vertex(lp);
     const eda_table *et = darts && lp->eda ? lp->eda->table[lp->med] : NULL;
