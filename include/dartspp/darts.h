@@ -20,6 +20,7 @@
 #define DARTSPP_DARTS_H
 
 #include "dartspp/core.h"
+#include "dartspp/plan.h"
 #include "dartspp/scene.h"
 
 /* ---- time window and target bins (reference §2) ---- */
@@ -32,6 +33,12 @@ typedef struct {
     double eta_lb;     /* smallest refractive index in the scene: time >= eta_lb * distance */
     double eta_ub;     /* largest: time <= eta_ub * distance along a straight segment */
     int control_vertices; /* elliptical control vertices run: active, enable_elliptical, and one η in the scene */
+    int distance_sampling;  /* DA distance sampling */
+    int control_vertex_mis; /* control vertices by one-sample MIS with an exponential (control_vertex_sample) */
+    residual_sampling residual;
+    int strict;             /* strict time mode: surface photons that cannot be in their bin are dropped */
+    int early_exit;         /* paths end once no photon can reach their bin */
+    double da_defensive;
 } darts_guide;
 
 typedef struct {
@@ -40,13 +47,8 @@ typedef struct {
     int frame;         /* -1 in gate mode, else the target frame: the path's photons count only there */
 } darts_bin;
 
-/* Fills g from the scene; g->active is 0 when no DARTS sampler is on or the scene is not gated. */
-void darts_guide_init(const scene *s, darts_guide *g);
-/* Whether a region (medium index or MEDIUM_VACUUM) occurs in the scene: the camera's, a light's, or a side
- * of a surface that sets media (a surface that sets none keeps the medium it is crossed from). */
-int darts_region_present(const scene *s, int region);
-/* Whether every region present in the scene has the same refractive index (control vertices need it). */
-int darts_eta_uniform(const scene *s);
+/* Fills g from the plan and the camera position; g->active is 0 when the plan runs no DARTS sampler. */
+void darts_guide_init(const render_plan *p, vec3 cam, darts_guide *g);
 /* Samples the target bin of a path from a light at x_light: uniform in time over the part of the window
  * reachable from the light, [max(beg, η_lb·|cam − x_light|), end). Returns 0 when nothing is reachable. */
 int darts_sample_bin(const darts_guide *g, vec3 x_light, double u, darts_bin *b);
@@ -55,7 +57,7 @@ int darts_sample_bin(const darts_guide *g, vec3 x_light, double u, darts_bin *b)
  * At a vertex x with elapsed time τ: the admissible residual geometric length S ∈ [S_lo, S_hi] with
  * S_hi = (bin end − τ)/η and S_lo = max((bin start − τ)/η, C), C = |cam − x|, and one sampled residual T
  * shared by the samplers of the vertex. `valid` iff S_hi > C (up to a relative 1e-9). */
-typedef enum { RESIDUAL_UNIFORM = 0, RESIDUAL_EXPONENTIAL = 1 } residual_sampling;
+/* residual_sampling (plan.h): RESIDUAL_UNIFORM or RESIDUAL_EXPONENTIAL. */
 
 typedef struct {
     int valid;
@@ -175,11 +177,11 @@ typedef struct eda_set {
     int count, active;       /* active: at least one medium uses EDA */
 } eda_set;
 
-/* Loads (table_path), or takes from the cache folder integrator.eda_table_dir (building it there when
- * missing), the table of every medium that uses EDA. A scene without EDA touches no file. */
-int eda_set_prepare(const scene *s, eda_set *set, dp_error *err);
+/* Loads (table_path), or takes from the cache folder p->eda_table_dir (building it there when
+ * missing), the table of every medium the plan gives EDA. A plan without EDA touches no file. */
+int eda_set_prepare(const scene *s, const render_plan *p, eda_set *set, dp_error *err);
 void eda_set_free(eda_set *set);
 /* Bytes the tables of eda_set_prepare will hold (the memory guard's estimate), without touching a file. */
-size_t eda_set_bytes(const scene *s);
+size_t eda_set_bytes(const scene *s, const render_plan *p);
 
 #endif

@@ -7,6 +7,7 @@
 
 #include "dartspp/film.h"
 #include "dartspp/photon.h"
+#include "dartspp/plan.h"
 
 typedef struct {
     const volume_photon_map *vol;   /* may be NULL */
@@ -15,6 +16,7 @@ typedef struct {
     double r_vol;                   /* volume gather radius of this iteration */
     double r_surf;                  /* surface search radius R of this iteration */
     int k_surf;                     /* gather_photon_count */
+    bounce_limits bounces;          /* which light + camera paths count */
     int camera_leg_projected;       /* 0: Euclidean distance segment origin → photon (reference) */
     const dp_stop_flag *stop;       /* rows not started once it is set are skipped (may be NULL) */
 } gather_input;

@@ -25,6 +25,7 @@ typedef struct {
     int camera_warped;       /* 1: the camera leg counts in the path time */
     int frame_index;         /* -1 for a gate image, k for frame k */
     const char *integrator;  /* e.g. "path_tracer" (may be NULL) */
+    const char *plan;        /* the render plan as JSON (plan.h; may be NULL) */
 } image_meta;
 
 /* Atomic writes: write to "<path>.tmp.<pid>" in the same folder, then rename over <path>. */

@@ -5,6 +5,8 @@
 #define DARTSPP_PHOTON_H
 
 #include "dartspp/core.h"
+#include "dartspp/darts.h"
+#include "dartspp/plan.h"
 
 typedef struct {
     float pos[3];
@@ -70,15 +72,27 @@ typedef struct {
     int interrupted;       /* the stop flag ended the pass early: the sets are incomplete */
 } photon_set;
 
-struct scene;
-struct eda_set;
-/* eda: the render's EDA tables (darts.h), or NULL for phase-function sampling everywhere. surface_radius:
- * the radius the surface photons will be gathered with; the DARTS time tests of surface photons (and the
- * early exit) are widened by the camera-leg change across it, so that the gather's own gate test decides. */
-/* stop (may be NULL) is read once per batch of light paths: once set, the pass ends early with
- * out->interrupted = 1 and incomplete photon sets (the caller drops the iteration). */
-int photon_pass(const struct scene *s, const struct eda_set *eda, uint64_t seed, long iteration,
-                double surface_radius, const dp_stop_flag *stop, photon_set *out, dp_error *err);
+/* What one photon pass needs, taken from the render plan by photon_pass_input_init. */
+typedef struct {
+    double light_paths;             /* light paths traced (photon_count) */
+    double volume_budget, surface_budget; /* photons kept per map */
+    int max_bounces;                /* path segments; photons of longer paths cannot count */
+    double t_end;                   /* the window's end (INFINITY: steady state) */
+    int include_surfaces, low_order_scattering;
+    darts_guide guide;              /* DARTS bins, bounds and switches; guide.active 0: baseline */
+    double surface_slack;           /* widening of the DARTS surface time tests and early exit: the camera-leg
+                                     * change across the surface gather radius, so the gather's own gate
+                                     * test decides (plan_surface_slack) */
+    const eda_set *eda;             /* EDA tables per medium, or NULL: phase sampling everywhere */
+    uint64_t seed;
+    long iteration;
+    const dp_stop_flag *stop;       /* read once per batch (may be NULL): once set, the pass ends early with
+                                     * out->interrupted = 1 and incomplete sets (the caller drops them) */
+} photon_pass_input;
+
+void photon_pass_input_init(photon_pass_input *in, const scene *s, const render_plan *p, const eda_set *eda,
+                            uint64_t seed, long iteration, const dp_stop_flag *stop);
+int photon_pass(const scene *s, const photon_pass_input *in, photon_set *out, dp_error *err);
 void photon_set_free(photon_set *ps);
 
 #endif

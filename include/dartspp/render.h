@@ -7,12 +7,14 @@
 
 #include "dartspp/film.h"
 #include "dartspp/io.h"
+#include "dartspp/plan.h"
 #include "dartspp/scene.h"
 
 /* ---- driver ---- */
 struct render_stats;
 
 typedef struct {
+    const render_plan *plan; /* the scene's resolved plan; NULL: render_scene resolves it */
     int threads;            /* 0: all cores */
     uint64_t seed;
     long spp;               /* passes; < 0: as the scene says */
@@ -52,17 +54,14 @@ int render_scene(const scene *s, const render_options *opt, film *f, render_stat
 /* One pass of the reference path tracer over every pixel into f's pass layer; returns rays traced.
  * Deterministic: the samples of pixel p in pass i come from rng_stream(seed, i, p). Once stop is set the
  * remaining rows are skipped (the caller drops the pass). */
-double path_tracer_pass(const scene *s, film *f, uint64_t seed, long pass, const dp_stop_flag *stop, long *nonfinite);
-
-/* Progressive radius of iteration i (0-based): r0 · (Π_{j=1..i} (j+α)/(j+1))^{1/dims}; dims 2 shrinks the
- * kernel area by (j+α)/(j+1) per step (Knaus & Zwicker 2011), dims 3 is the reference's cube root. */
-double progressive_radius(double r0, double alpha, long iteration, int dims);
+double path_tracer_pass(const scene *s, const render_plan *p, film *f, uint64_t seed, long pass,
+                        const dp_stop_flag *stop, long *nonfinite);
 
 /* One iteration of photon points: photon pass, maps, sensor pass into f's pass layer. Returns 0 or -1
  * with err. Once stop is set it returns early with the pass incomplete (the caller drops it). */
 struct eda_set;
-int photon_points_pass(const scene *s, const struct eda_set *eda, film *f, uint64_t seed, long iteration,
-                       const dp_stop_flag *stop, render_stats *st, dp_error *err);
+int photon_points_pass(const scene *s, const render_plan *p, const struct eda_set *eda, film *f, uint64_t seed,
+                       long iteration, const dp_stop_flag *stop, render_stats *st, dp_error *err);
 
 /* ---- error log (issue: error against run time) ----
  * CSV rows "seconds,iterations,photon_paths,stored_photons,r_vol,r_surf,mse,rel_mse,mse_q99,nonfinite_pixels"
@@ -94,7 +93,7 @@ typedef struct {
 } memory_estimate;
 
 /* have_reference: an error log holds a reference image. */
-void render_memory_estimate(const scene *s, int have_reference, memory_estimate *m);
+void render_memory_estimate(const scene *s, const render_plan *p, int have_reference, memory_estimate *m);
 /* The item with a key that needs the most (NULL if none). */
 const memory_item *memory_largest(const memory_estimate *m);
 /* Bytes the process can still use: MemAvailable, lowered to the cgroup's limit when there is one; -1 if
@@ -106,8 +105,9 @@ void format_bytes(double bytes, char *out, size_t n);
 /* ---- outputs ----
  * Writes the gate image to `path` (.exr or .pfm), a PNG preview `<stem>.png`, and in frame mode one image
  * per frame `<stem>_<NNNN>.<ext>` (0-based, zero-padded to at least 4 digits) and `<stem>_frames.csv`.
- * Every file is written atomically; `wrote` (may be NULL) is called with each path written. */
-int render_write_outputs(const scene *s, const film *f, const char *path, const char *integrator,
+ * integrator and plan (JSON, plan_json) go into the EXR headers (either may be NULL). Every file is written
+ * atomically; `wrote` (may be NULL) is called with each path written. */
+int render_write_outputs(const film *f, const char *path, const char *integrator, const char *plan,
                          void (*wrote)(const char *path), dp_error *err);
 
 #define OUTPUT_PATH_MAX 2048
@@ -117,7 +117,7 @@ int render_outputs_check(const char *path, int width, int height, int frame_coun
 /* When writing to `path` failed at the end: the same outputs, under the same file names, in a new folder
  * dartspp-rescue-XXXXXX in $TMPDIR, else /tmp, else the working folder (the first that takes them);
  * rescue_dir receives that folder. 0, or -1 with err when no folder took them. */
-int render_write_rescue(const scene *s, const film *f, const char *path, const char *integrator,
+int render_write_rescue(const film *f, const char *path, const char *integrator, const char *plan,
                         void (*wrote)(const char *path), char *rescue_dir, size_t n, dp_error *err);
 
 #endif

@@ -130,11 +130,6 @@ typedef struct {
     int ellipse_residual;           /* ellipse_residual: 0 "uniform" (reference), 1 "exponential" (paper eq. 21-22) */
 } integrator_settings;
 
-/* Does a path of `segments` segments (light connection included) count? (DESIGN §4) */
-static inline int path_counts(const integrator_settings *in, int segments)
-{
-    return segments <= in->max_bounces && segments - 1 >= in->min_bounces;
-}
 
 typedef struct {
     long spp;                /* progressive passes; 0 = no limit */
@@ -196,6 +191,12 @@ vec3 offset_ray_origin(const scene *s, vec3 p, vec3 n);
 /* Transmittance and time from p (in medium `med`) to the point q, crossing only null/forward surfaces;
  * returns 0 (and tr = 0) when an opaque surface is in the way. time accumulates eta * length. */
 int scene_transmittance(const scene *s, vec3 p, int med, vec3 q, vec3 *tr, double *time);
+
+/* Whether a region (medium index or MEDIUM_VACUUM) occurs in the scene: the camera's, a light's, or a side
+ * of a surface that sets media (a surface that sets none keeps the medium it is crossed from). */
+int scene_region_present(const scene *s, int region);
+/* Whether every region present in the scene has the same refractive index (control vertices need it). */
+int scene_eta_uniform(const scene *s);
 
 /* Whether the medium scatters in any channel (the DARTS samplers and EDA only run where it does). */
 static inline int medium_scatters(const medium *m)

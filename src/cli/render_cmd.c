@@ -144,7 +144,8 @@ static void print_written(const char *path) { printf("wrote %s\n", path); }
 /* Checkpoints: every `every` seconds of rendering, the outputs of all completed passes, written atomically
  * (an interrupted or killed render keeps the last complete set). */
 typedef struct {
-    const scene *s;
+    const render_plan *p;
+    const char *plan_json;
     const char *out;
     double every, last;
     int quiet;
@@ -158,7 +159,7 @@ static int after_pass(void *ctx, const film *f, const render_stats *st, dp_error
     if (c->every <= 0 || st->seconds - c->last < c->every) return 0;
     c->last = st->seconds;
     dp_error werr;
-    if (render_write_outputs(c->s, f, c->out, c->s->integrator.type_name, NULL, &werr)) {
+    if (render_write_outputs(f, c->out, c->p->type_name, c->plan_json, NULL, &werr)) {
         /* the render goes on: its end writes again, to a rescue folder if need be */
         fprintf(stderr, "%swarning: checkpoint not written: %s\n", isatty(2) ? "\r\033[K" : "", werr.msg);
         return 0;
@@ -173,24 +174,21 @@ static int after_pass(void *ctx, const film *f, const render_stats *st, dp_error
  * a mirror"): the path tracer cannot reach a point light through a mirror, so light that hits a mirror
  * before any diffuse or medium vertex is missing; DARTS's time bounds and control vertices assume a
  * straight camera leg, so what the camera sees through a mirror is biased. */
-static void warn_mixed_eta(const scene *s);
+static void warn_mixed_eta(const scene *s, const render_plan *p);
 
-static void warn_mirrors(const scene *s)
+static void warn_mirrors(const scene *s, const render_plan *p)
 {
-    warn_mixed_eta(s);
+    warn_mixed_eta(s, p);
     const char *mirror = NULL;
     for (int i = 0; i < s->surface_count && !mirror; i++)
         if (s->surfaces[i].tri_count > 0 && s->bsdfs[s->surfaces[i].bsdf].type == BSDF_MIRROR)
             mirror = s->surfaces[i].name;
     if (!mirror) return;
-    if (s->integrator.type == INTEGRATOR_PATH_TRACER && s->light_count > 0)
+    if (p->type == INTEGRATOR_PATH_TRACER && s->light_count > 0)
         fprintf(stderr, "warning: %s: surface '%s' is a mirror: the path tracer cannot connect to point lights "
                 "through it, so light reflected by it before any diffuse or medium vertex (caustics) is missing "
                 "from the image; photon points render it\n", s->path, mirror);
-    darts_guide g;
-    darts_guide_init(s, &g);
-    int straight_leg = s->integrator.enable_elliptical || s->integrator.strict_time_width;
-    if (s->integrator.type == INTEGRATOR_PHOTON_POINTS && g.active && straight_leg)
+    if (p->darts.active && (p->darts.control_vertices || p->darts.strict))
         fprintf(stderr, "warning: %s: surface '%s' is a mirror: DARTS time bounds and control vertices assume a "
                 "straight camera leg, so what the camera sees through it is too dark; enable_elliptical=false "
                 "and strict_time_width=false render it without that bias\n", s->path, mirror);
@@ -199,18 +197,14 @@ static void warn_mirrors(const scene *s)
 /* Elliptical control vertices assume one refractive index along the camera leg; when the media and vacuum
  * present in the scene differ in η, the photon pass turns them off (darts_guide.control_vertices) and the
  * user should hear why and how to get them back. Called by warn_mirrors. */
-static void warn_mixed_eta(const scene *s)
+static void warn_mixed_eta(const scene *s, const render_plan *p)
 {
-    darts_guide g;
-    darts_guide_init(s, &g);
-    if (s->integrator.type != INTEGRATOR_PHOTON_POINTS || !g.active || !s->integrator.enable_elliptical ||
-        g.control_vertices)
-        return;
+    if (!p->darts.active || !p->darts.elliptical_asked || p->darts.control_vertices) return;
     char list[1024] = "";
     size_t len = 0;
     int media = 0, medium = MEDIUM_VACUUM, vacuum = 0;
     for (int r = MEDIUM_VACUUM; r < s->medium_count; r++) {
-        if (!darts_region_present(s, r)) continue;
+        if (!scene_region_present(s, r)) continue;
         if (r == MEDIUM_VACUUM) vacuum = 1;
         else media++, medium = r;
         int n = snprintf(list + len, sizeof list - len, "%s%s%s%s η = %g", len ? ", " : "", r == MEDIUM_VACUUM ? "" : "'",
@@ -228,26 +222,22 @@ static void warn_mixed_eta(const scene *s)
 }
 
 /* Which photon-pass samplers run (DESIGN §4: the summary says which parts are active). */
-static void print_samplers(const scene *s)
+static void print_samplers(const scene *s, const render_plan *p)
 {
-    const integrator_settings *in = &s->integrator;
-    darts_guide g;
-    darts_guide_init(s, &g);
-    if (!g.active) {
+    const darts_plan *d = &p->darts;
+    if (!d->active) {
         printf("photon pass: baseline (free-flight distances, photons at scattering vertices)%s\n",
-               (in->enable_guiding || in->enable_elliptical) ? "; DARTS samplers off: the scene has no medium or no gate" : "");
+               (d->distance_sampling || d->elliptical_asked) ? "; DARTS samplers off: the scene has no medium or no gate" : "");
         return;
     }
     printf("photon pass: DARTS, %s target bins; DA distance sampling %s; elliptical control vertices %s (residual %s); "
-           "strict time %s", g.frames ? "per-frame" : "gate", in->enable_guiding ? "on" : "off",
-           g.control_vertices ? "on" : in->enable_elliptical ? "off: refractive index not uniform" : "off",
-           in->ellipse_residual ? "exponential" : "uniform",
-           in->strict_time_width ? "on" : "off");
+           "strict time %s", p->window.frame_count ? "per-frame" : "gate", d->distance_sampling ? "on" : "off",
+           d->control_vertices ? "on" : d->elliptical_asked ? "off: refractive index not uniform" : "off",
+           d->residual == RESIDUAL_EXPONENTIAL ? "exponential" : "uniform", d->strict ? "on" : "off");
     const char *sep = "; EDA direction sampling in ";
     for (int i = 0; i < s->medium_count; i++) {
-        const medium *m = &s->media[i];
-        if (!m->eda && !(in->eda && medium_scatters(m))) continue;
-        printf("%s'%s' (alpha %g)", sep, m->name, m->eda_alpha > 0 ? m->eda_alpha : in->eda_alpha);
+        if (!p->eda[i].on) continue;
+        printf("%s'%s' (alpha %g)", sep, s->media[i].name, p->eda[i].alpha);
         sep = ", ";
     }
     printf("%s", sep[0] == ';' ? "; EDA off" : "");
@@ -260,17 +250,17 @@ static void print_samplers(const scene *s)
     printf("\n");
 }
 
-static void print_summary(const scene *s, const render_stats *st)
+static void print_summary(const scene *s, const render_plan *p, const render_stats *st)
 {
-    const time_window *tw = &s->integrator.window;
-    printf("scene %s: %s, %dx%d, ", s->path, s->integrator.type_name, s->cam.width, s->cam.height);
+    const time_window *tw = &p->window;
+    printf("scene %s: %s, %dx%d, ", s->path, p->type_name, s->cam.width, s->cam.height);
     if (!tw->gated) printf("steady state (no gate)\n");
     else if (tw->frame_count) printf("%d frames of width %g from %g (camera-warped optical path length)\n", tw->frame_count, tw->width, tw->start);
     else printf("gate [%g, %g) (camera-warped optical path length)\n", tw->start, time_window_end(tw));
     printf("rendered %ld passes in %.2f s (%.2f M camera rays/s, %.2f M rays/s)%s; non-finite samples suppressed: %ld\n",
            st->passes, st->seconds, st->seconds > 0 ? st->camera_rays / st->seconds * 1e-6 : 0.0,
            st->seconds > 0 ? st->rays / st->seconds * 1e-6 : 0.0, st->interrupted ? " (interrupted)" : "", st->nonfinite);
-    if (s->integrator.type == INTEGRATOR_PHOTON_POINTS) print_samplers(s);
+    if (p->type == INTEGRATOR_PHOTON_POINTS) print_samplers(s, p);
     if (st->early_exits > 0)
         printf("early exit: %.1f%% of the light paths ended as soon as no photon could reach their bin\n",
                100.0 * st->early_exits / st->photon_paths);
@@ -287,16 +277,28 @@ static void print_summary(const scene *s, const render_stats *st)
 
 /* The memory guard (before any work): the plan's estimate against the limit; exit 2 naming the key that
  * drives it when it does not fit. */
-static int check_memory(const scene *s, const render_args *a, memory_estimate *m)
+/* What one render command works on: the scene, its plan, and where the images go. */
+typedef struct {
+    scene s;
+    render_plan p;
+    char plan_json[8192];
+    char out[OUTPUT_PATH_MAX];
+    memory_estimate mem;
+} render_job;
+
+/* The memory guard (before any work): the plan's estimate against the limit; exit 2 naming the key that
+ * drives it when it does not fit. */
+static int check_memory(render_job *j, const render_args *a)
 {
-    render_memory_estimate(s, a->reference != NULL, m);
+    render_memory_estimate(&j->s, &j->p, a->reference != NULL, &j->mem);
+    const memory_estimate *m = &j->mem;
     double limit = a->max_memory > 0 ? a->max_memory : memory_available();
     if (!(limit > 0) || m->total <= limit) return 0;
     const memory_item *big = memory_largest(m);
     char need[32], have[32], item[32];
     format_bytes(m->total, need, sizeof need);
     format_bytes(limit, have, sizeof have);
-    fprintf(stderr, "dartspp render: %s: the render needs about %s of memory, more than the %s %s", s->path, need,
+    fprintf(stderr, "dartspp render: %s: the render needs about %s of memory, more than the %s %s", j->s.path, need,
             have, a->max_memory > 0 ? "allowed by --max-memory" : "available");
     if (big) {
         format_bytes(big->bytes, item, sizeof item);
@@ -315,15 +317,15 @@ static void print_memory(const memory_estimate *m)
     printf("memory: estimated %s before the render, peak resident %s\n", est, peak);
 }
 
-/* Writes the completed passes to `out`, or to a rescue folder when that fails: finished work is never
+/* Writes the completed passes to the output, or to a rescue folder when that fails: finished work is never
  * thrown away. 0, or 1 when the images had to go elsewhere (or nowhere). */
-static int write_outputs(const scene *s, const film *f, const char *out)
+static int write_outputs(const render_job *j, const film *f)
 {
     dp_error err;
-    if (!render_write_outputs(s, f, out, s->integrator.type_name, print_written, &err)) return 0;
+    if (!render_write_outputs(f, j->out, j->p.type_name, j->plan_json, print_written, &err)) return 0;
     fprintf(stderr, "dartspp render: %s\n", err.msg);
     char rescue[OUTPUT_PATH_MAX];
-    if (render_write_rescue(s, f, out, s->integrator.type_name, print_written, rescue, sizeof rescue, &err))
+    if (render_write_rescue(f, j->out, j->p.type_name, j->plan_json, print_written, rescue, sizeof rescue, &err))
         fprintf(stderr, "dartspp render: no rescue folder took the images either (%s): they are lost\n", err.msg);
     else
         fprintf(stderr, "dartspp render: the images of the %ld completed passes were written to %s instead\n",
@@ -331,49 +333,62 @@ static int write_outputs(const scene *s, const film *f, const char *out)
     return 1;
 }
 
+/* Loads the scene, resolves its plan and checks the outputs and the memory: everything that can refuse the
+ * render before any work is spent (exit 2). On success the job holds the scene and the plan. */
+static int prepare(const render_args *a, render_job *j)
+{
+    dp_error err;
+    scene_load_options lo = {.sets = a->sets, .set_count = a->set_count, .verbose = a->verbose};
+    if (scene_load(a->scene_path, &lo, &j->s, &err)) {
+        fprintf(stderr, "dartspp render: %s\n", err.msg);
+        return 2;
+    }
+    int rc = 0;
+    if (plan_resolve(&j->s, &j->p, &err) ||
+        (plan_json(&j->p, &j->s, j->plan_json, sizeof j->plan_json) && dp_fail(&err, "%s: plan too long", j->s.path))) {
+        fprintf(stderr, "dartspp render: %s\n", err.msg);
+        rc = 2;
+    }
+    output_path(a, &j->s, j->out, sizeof j->out);
+    if (!rc && render_outputs_check(j->out, j->s.cam.width, j->s.cam.height, j->p.window.frame_count, &err)) {
+        fprintf(stderr, "dartspp render: %s\n", err.msg);
+        rc = 2;
+    }
+    if (!rc) rc = check_memory(j, a);
+    if (rc) {
+        plan_free(&j->p);
+        scene_free(&j->s);
+    }
+    return rc;
+}
+
 int cli_render(int argc, char **argv)
 {
     render_args a = {0};
     int rc = parse_args(argc, argv, &a);
-    if (rc) {
-        free(a.sets);
-        return rc;
-    }
     /* Interrupts count from here: while loading, an interrupt exits at once (nothing to keep yet). */
     signal(SIGINT, on_signal);
     signal(SIGTERM, on_signal);
-    scene s;
-    dp_error err;
-    scene_load_options lo = {.sets = a.sets, .set_count = a.set_count, .verbose = a.verbose};
-    if (scene_load(a.scene_path, &lo, &s, &err)) {
-        fprintf(stderr, "dartspp render: %s\n", err.msg);
-        free(a.sets);
-        return 2;
-    }
-    char out[OUTPUT_PATH_MAX];
-    output_path(&a, &s, out, sizeof out);
-    memory_estimate mem;
-    /* bad outputs and plans too big are refused before any work is spent */
-    if (render_outputs_check(out, s.cam.width, s.cam.height, s.integrator.window.frame_count, &err)) {
-        fprintf(stderr, "dartspp render: %s\n", err.msg);
-        rc = 2;
-    } else {
-        rc = check_memory(&s, &a, &mem);
-    }
-    after_pass_ctx cp = {.s = &s, .out = out, .quiet = a.quiet,
-                         .every = a.checkpoint >= 0 ? a.checkpoint : s.renderer.checkpoint_seconds};
-    if (!rc && a.log && !(cp.log = error_log_open(a.log, a.reference, s.cam.width, s.cam.height,
-                                                  s.integrator.window.frame_count, a.log_every, &err))) {
-        fprintf(stderr, "dartspp render: %s\n", err.msg);
-        rc = 2;
-    }
-    if (rc) {
-        scene_free(&s);
+    static render_job j; /* large (the plan's JSON, paths): not on the stack */
+    if (rc || (rc = prepare(&a, &j))) {
         free(a.sets);
         return rc;
     }
-    if (s.notes) fputs(s.notes, stderr);
-    warn_mirrors(&s);
+    dp_error err;
+    after_pass_ctx cp = {.p = &j.p, .plan_json = j.plan_json, .out = j.out, .quiet = a.quiet,
+                         .every = a.checkpoint >= 0 ? a.checkpoint : j.p.checkpoint_seconds};
+    if (a.log && !(cp.log = error_log_open(a.log, a.reference, j.s.cam.width, j.s.cam.height, j.p.window.frame_count,
+                                           a.log_every, &err))) {
+        fprintf(stderr, "dartspp render: %s\n", err.msg);
+        plan_free(&j.p);
+        scene_free(&j.s);
+        free(a.sets);
+        return 2;
+    }
+    if (j.s.notes) fputs(j.s.notes, stderr);
+    if (a.verbose) fprintf(stderr, "plan: %s\n", j.plan_json);
+    warn_mirrors(&j.s, &j.p);
+    a.ro.plan = &j.p;
     a.ro.progress = !a.quiet;
     a.ro.stop = &stop_requested;
     a.ro.passes_started = &passes_started;
@@ -381,25 +396,26 @@ int cli_render(int argc, char **argv)
     a.ro.after_pass_ctx = &cp;
     film f;
     render_stats st;
-    int failed = render_scene(&s, &a.ro, &f, &st, &err) != 0;
+    int failed = render_scene(&j.s, &a.ro, &f, &st, &err) != 0;
     if (failed) fprintf(stderr, "dartspp render: %s\n", err.msg);
     else if (cp.log && error_log_pass(cp.log, &f, &st, 1, &err)) {
         fprintf(stderr, "dartspp render: %s\n", err.msg);
         failed = 1;
     }
     if (!failed) {
-        print_summary(&s, &st);
-        print_memory(&mem);
+        print_summary(&j.s, &j.p, &st);
+        print_memory(&j.mem);
         if (cp.log)
             printf("error log: %s (%.3f s spent logging, %.2f%% of the render)\n", a.log, error_log_overhead(cp.log),
                    st.seconds > 0 ? 100.0 * error_log_overhead(cp.log) / st.seconds : 0.0);
     }
-    if (f.passes > 0) failed |= write_outputs(&s, &f, out);
+    if (f.passes > 0) failed |= write_outputs(&j, &f);
     else if (st.interrupted) fprintf(stderr, "dartspp render: interrupted before the first pass completed: nothing written\n");
     rc = failed ? 1 : st.interrupted ? EXIT_INTERRUPTED : 0;
     error_log_close(cp.log);
     film_free(&f);
-    scene_free(&s);
+    plan_free(&j.p);
+    scene_free(&j.s);
     free(a.sets);
     return rc;
 }

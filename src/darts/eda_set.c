@@ -5,17 +5,10 @@
 
 #include "dartspp/darts.h"
 
-static int medium_uses_eda(const scene *s, const medium *m)
-{
-    /* integrator-wide EDA skips media that do not scatter (there is no direction to pick); a medium that
-     * asks for EDA itself (phase "ida") and cannot have it is an error below */
-    return s->integrator.window.gated && (m->eda || (s->integrator.eda && medium_scatters(m)));
-}
-
 /* The medium's table: the authors' headerless file (relative to the scene's folder), or our cache. The
  * table is scalar: σs and σa are averaged over the colour channels (it only steers directions, the
  * weights stay exact). S range: max_T, else the latest residual any vertex in the medium can have. */
-static int load_for_medium(const scene *s, const medium *m, eda_table *t, dp_error *err)
+static int load_for_medium(const scene *s, const render_plan *p, const medium *m, eda_table *t, dp_error *err)
 {
     if (m->eda_table_path[0]) {
         char path[2048];
@@ -23,18 +16,18 @@ static int load_for_medium(const scene *s, const medium *m, eda_table *t, dp_err
         else snprintf(path, sizeof path, "%s/%s", s->dir, m->eda_table_path);
         return eda_table_load_raw(t, path, m->eda_s_max, m->eda_r_lo, m->eda_r_hi, err);
     }
-    double s_max = m->eda_s_max > 0.0 ? m->eda_s_max : time_window_end(&s->integrator.window) / m->eta;
+    double s_max = m->eda_s_max > 0.0 ? m->eda_s_max : time_window_end(&p->window) / m->eta;
     double g = m->phase.type == PHASE_ISOTROPIC ? 0.0 : m->phase.g;
     if (!(v3_avg(m->sigma_s) > 0.0))
         return dp_fail(err, "%s: medium '%s': EDA needs sigma_s > 0 (the diffusion approximation is undefined "
                             "without scattering)", s->path, m->name);
     if (!(s_max > 0.0))
         return dp_fail(err, "%s: medium '%s': EDA needs a gate that ends after time 0", s->path, m->name);
-    return eda_table_cached(t, s->integrator.eda_table_dir, v3_avg(m->sigma_s), v3_avg(m->sigma_a), g,
-                            s->integrator.eda_shape[0], s->integrator.eda_shape[1], s->integrator.eda_shape[2], s_max, m->eda_r_lo, m->eda_r_hi, err);
+    return eda_table_cached(t, p->eda_table_dir, v3_avg(m->sigma_s), v3_avg(m->sigma_a), g, p->eda_shape[0],
+                            p->eda_shape[1], p->eda_shape[2], s_max, m->eda_r_lo, m->eda_r_hi, err);
 }
 
-int eda_set_prepare(const scene *s, eda_set *set, dp_error *err)
+int eda_set_prepare(const scene *s, const render_plan *p, eda_set *set, dp_error *err)
 {
     memset(set, 0, sizeof *set);
     int n = s->medium_count;
@@ -49,25 +42,25 @@ int eda_set_prepare(const scene *s, eda_set *set, dp_error *err)
     }
     for (int i = 0; i < n; i++) {
         const medium *m = &s->media[i];
-        if (!medium_uses_eda(s, m)) continue;
-        if (load_for_medium(s, m, &set->tables[i], err)) {
+        if (!p->eda[i].on) continue;
+        if (load_for_medium(s, p, m, &set->tables[i], err)) {
             eda_set_free(set);
             return -1;
         }
         set->table[i] = &set->tables[i];
-        set->alpha[i] = m->eda_alpha > 0.0 ? m->eda_alpha : s->integrator.eda_alpha;
+        set->alpha[i] = p->eda[i].alpha;
         set->active = 1;
     }
     return 0;
 }
 
-size_t eda_set_bytes(const scene *s)
+size_t eda_set_bytes(const scene *s, const render_plan *p)
 {
     size_t bytes = 0;
-    const int *shape = s->integrator.eda_shape;
+    const int *shape = p->eda_shape;
     for (int i = 0; i < s->medium_count; i++) {
         const medium *m = &s->media[i];
-        if (!medium_uses_eda(s, m)) continue;
+        if (!p->eda[i].on) continue;
         size_t cells = m->eda_table_path[0] ? (size_t)128 * 128 * 256 : (size_t)shape[0] * shape[1] * shape[2];
         bytes += cells * sizeof(float);
     }

@@ -2,51 +2,15 @@
  * frame mode one frame, drawn uniformly in time over the part of the window the light can reach. */
 #include "dartspp/darts.h"
 
-void darts_guide_init(const scene *s, darts_guide *g)
+void darts_guide_init(const render_plan *p, vec3 cam, darts_guide *g)
 {
-    const integrator_settings *in = &s->integrator;
-    const time_window *tw = &in->window;
-    *g = (darts_guide){0};
-    int eda = in->eda;
-    for (int i = 0; i < s->medium_count; i++) eda |= s->media[i].eda;
-    g->active = tw->gated && (in->enable_guiding || in->enable_elliptical || eda) && s->medium_count > 0;
-    g->cam = s->cam.pos;
-    g->beg = tw->start;
-    g->end = time_window_end(tw);
-    g->width = tw->width;
-    g->frames = tw->frame_count;
-    g->eta_lb = g->eta_ub = in->vacuum_eta;
-    for (int i = 0; i < s->medium_count; i++) {
-        g->eta_lb = fmin(g->eta_lb, s->media[i].eta);
-        g->eta_ub = fmax(g->eta_ub, s->media[i].eta);
-    }
-    g->control_vertices = g->active && in->enable_elliptical && darts_eta_uniform(s);
-}
-
-int darts_region_present(const scene *s, int region)
-{
-    if (s->cam.medium == region) return 1;
-    for (int i = 0; i < s->light_count; i++)
-        if (s->lights[i].medium == region) return 1;
-    for (int i = 0; i < s->surface_count; i++) {
-        const surface *sf = &s->surfaces[i];
-        if (sf->tri_count > 0 && sf->overrides_media && (sf->int_medium == region || sf->ext_medium == region)) return 1;
-    }
-    return 0;
-}
-
-int darts_eta_uniform(const scene *s)
-{
-    int seen = 0;
-    double eta0 = 0.0;
-    for (int r = MEDIUM_VACUUM; r < s->medium_count; r++) {
-        if (!darts_region_present(s, r)) continue;
-        double eta = medium_eta(s, r);
-        if (seen && eta != eta0) return 0;
-        eta0 = eta;
-        seen = 1;
-    }
-    return 1;
+    const time_window *tw = &p->window;
+    const darts_plan *d = &p->darts;
+    *g = (darts_guide){.active = d->active, .cam = cam, .beg = tw->start, .end = time_window_end(tw),
+                       .width = tw->width, .frames = tw->frame_count, .eta_lb = d->eta_lb, .eta_ub = d->eta_ub,
+                       .control_vertices = d->control_vertices, .distance_sampling = d->distance_sampling,
+                       .control_vertex_mis = d->control_vertex_mis, .residual = d->residual, .strict = d->strict,
+                       .early_exit = d->early_exit, .da_defensive = d->da_defensive};
 }
 
 int darts_sample_bin(const darts_guide *g, vec3 x_light, double u, darts_bin *b)

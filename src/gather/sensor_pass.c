@@ -33,13 +33,13 @@ static vec3 photon_vec(const float *v) { return v3(v[0], v[1], v[2]); }
 static void visit_volume_photon(void *ctx, const photon *p, double t, double d2)
 {
     beam_ctx *b = ctx;
-    const scene *s = b->c->s;
-    if (!path_counts(&s->integrator, p->bounce + b->b_cam)) return;
-    double r2 = b->c->g->r_vol * b->c->g->r_vol;
+    const gather_input *g = b->c->g;
+    if (!bounces_count(&g->bounces, p->bounce + b->b_cam)) return;
+    double r2 = g->r_vol * g->r_vol;
     double u = 1.0 - d2 / r2;
     double K = 3.0 / (M_PI * r2) * u * u;
     vec3 x = photon_vec(p->pos);
-    double leg = b->c->g->camera_leg_projected ? t : v3_len(v3_sub(x, b->o));
+    double leg = g->camera_leg_projected ? t : v3_len(v3_sub(x, b->o));
     double time = b->t_cam + p->time + b->m->eta * leg;
     double f = K * phase_eval(&b->m->phase, photon_vec(p->dir), v3_neg(b->d));
     vec3 tr = v3_exp_neg(v3_scale(b->m->sigma_t, t));
@@ -62,7 +62,7 @@ static void gather_surface(pixel_ctx *c, vec3 x, vec3 n_in, const bsdf *b, vec3 
     for (int i = 0; i < n; i++) {
         const photon *p = &g->surf_photons[idx[i]];
         if (v3_dot(photon_vec(p->dir), n_in) >= 0.0) continue; /* arrived on the other side */
-        if (!path_counts(&c->s->integrator, p->bounce + b_cam)) continue;
+        if (!bounces_count(&g->bounces, p->bounce + b_cam)) continue;
         splat(c, t_cam + p->time, v3_mul(v3_mul(thr, f), photon_vec(p->power)), p->frame);
     }
 }
@@ -73,7 +73,7 @@ static void trace_sensor_path(pixel_ctx *c, vec3 d)
     vec3 o = s->cam.pos, thr = v3s(1.0);
     int med = s->cam.medium, b_cam = 1;
     double t_cam = 0.0;
-    for (int guard = 0; guard < 10000 && b_cam <= s->integrator.max_bounces; guard++) {
+    for (int guard = 0; guard < 10000 && b_cam <= c->g->bounces.max; guard++) {
         hit_record h;
         c->rays += 1;
         int hit = scene_intersect(s, o, d, INFINITY, &h);

@@ -127,6 +127,7 @@ static exr_result_t write_meta(exr_context_t ctx, int part, const image_meta *m)
     if (rv == EXR_OK) rv = exr_attr_set_int(ctx, part, "dartspp.frame", m->frame_index);
     if (rv == EXR_OK && m->integrator)
         rv = exr_attr_set_string(ctx, part, "dartspp.integrator", m->integrator);
+    if (rv == EXR_OK && m->plan) rv = exr_attr_set_string(ctx, part, "dartspp.plan", m->plan);
     return rv;
 }
 

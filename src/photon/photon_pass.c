@@ -55,13 +55,12 @@ static void make_photon(photon *ph, vec3 x, vec3 d, vec3 beta, int bounce, doubl
 /* One light path in flight: where it is, what it carries, and (DARTS) the bin it aims at. */
 typedef struct {
     const scene *s;
-    const darts_guide *g;  /* g->active: DARTS samplers on */
-    const eda_set *eda;    /* EDA tables per medium (may be NULL) */
+    const photon_pass_input *in;
+    const darts_guide *g;  /* &in->guide; g->active: DARTS samplers on */
     thread_bufs *tb;
     path_count *pc;
     dp_rng *rng;
     int volume_open;       /* the volume budget still has room (decided per batch, in path order) */
-    double surface_slack;  /* DARTS: widening of the surface time tests, η_max × the surface gather radius */
     darts_bin bin;         /* target bin; gate mode: the gate with pdf 1 */
     ellipse_record rec;    /* of the current vertex (DARTS, in a medium) */
     vec3 o, d, beta;
@@ -91,8 +90,8 @@ static void new_vertex(light_path *lp)
 {
     if (!aims_at_volume(lp) || lp->med == MEDIUM_VACUUM) return;
     const medium *m = &lp->s->media[lp->med];
-    ellipse_record_init(&lp->rec, lp->g, &lp->bin, lp->o, lp->time, m->eta, lp->s->integrator.ellipse_residual,
-                        v3_avg(m->sigma_t), rng_uniform(lp->rng));
+    ellipse_record_init(&lp->rec, lp->g, &lp->bin, lp->o, lp->time, m->eta, lp->g->residual, v3_avg(m->sigma_t),
+                        rng_uniform(lp->rng));
 }
 
 /* Surface photons with DARTS: the full path time with a straight camera leg lies in [t_lb, t_ub], the leg
@@ -107,23 +106,24 @@ static int surface_time_ok(const light_path *lp, vec3 x)
     if (!lp->g->active) return 1;
     double dist = v3_len(v3_sub(lp->g->cam, x));
     double t_lb = lp->time + lp->g->eta_lb * dist, t_ub = lp->time + lp->g->eta_ub * dist;
-    return t_lb < lp->bin.end + lp->surface_slack &&
-           (!lp->s->integrator.strict_time_width || t_ub >= lp->bin.start - lp->surface_slack);
+    double slack = lp->in->surface_slack;
+    return t_lb < lp->bin.end + slack && (!lp->g->strict || t_ub >= lp->bin.start - slack);
 }
 
 /* One medium segment up to tmax: the control vertex (elliptical), then the distance sample. Returns 1 for
  * a medium event (lp advanced to the scattering vertex), 0 for the surface at tmax, -1 to end the path. */
 static int medium_segment(light_path *lp, double tmax)
 {
-    const integrator_settings *in = &lp->s->integrator;
+    const photon_pass_input *in = lp->in;
+    const darts_guide *g = lp->g;
     const medium *m = &lp->s->media[lp->med];
     /* nothing to aim where nothing scatters, or once no volume photon can be stored */
     int darts = aims_at_volume(lp) && medium_scatters(m);
     if (darts && lp->g->control_vertices) {
         double t, pdf;
         double sigma = v3_avg(m->sigma_t), u1 = rng_uniform(lp->rng), u2 = rng_uniform(lp->rng);
-        int made = in->control_vertex_mis
-                       ? control_vertex_sample(&lp->rec, lp->d, tmax, in->ellipse_residual, sigma, u1, u2, &t, &pdf)
+        int made = g->control_vertex_mis
+                       ? control_vertex_sample(&lp->rec, lp->d, tmax, g->residual, sigma, u1, u2, &t, &pdf)
                        : ellipse_control_vertex(&lp->rec, lp->d, tmax, &t, &pdf);
         if (made) { /* W = σs e^{−σt t}/p(t) (§6) */
             vec3 w = v3_scale(v3_mul(m->sigma_s, v3_exp_neg(v3_scale(m->sigma_t, t))), 1.0 / pdf);
@@ -133,9 +133,9 @@ static int medium_segment(light_path *lp, double tmax)
     }
     int event;
     double t;
-    if (darts && in->enable_guiding && (lp->rec.valid || lp->rec.S_reach > lp->rec.C)) {
+    if (darts && g->distance_sampling && (lp->rec.valid || lp->rec.S_reach > lp->rec.C)) {
         da_sample ds;
-        da_sample_distance(m, &lp->rec, lp->d, tmax, in->da_defensive, lp->rng, &ds);
+        da_sample_distance(m, &lp->rec, lp->d, tmax, g->da_defensive, lp->rng, &ds);
         lp->beta = v3_mul(lp->beta, ds.weight);
         t = ds.t;
         event = ds.medium_event;
@@ -152,11 +152,11 @@ static int medium_segment(light_path *lp, double tmax)
     if (lp->volume_open && !(darts && lp->g->control_vertices) && (in->low_order_scattering || lp->medium_events > 1))
         store(lp, &lp->tb->vol, &lp->pc->n_vol, lp->o, lp->d, lp->beta, lp->bounce, lp->time);
     new_vertex(lp);
-    const eda_table *et = darts && lp->eda ? lp->eda->table[lp->med] : NULL;
+    const eda_table *et = darts && in->eda ? in->eda->table[lp->med] : NULL;
     if (et) { /* EDA with MIS against the phase function (§7.2, eq. 20) */
         double u[4], w;
         for (int k = 0; k < 4; k++) u[k] = rng_uniform(lp->rng);
-        lp->d = eda_sample_direction(et, lp->eda->alpha[lp->med], &m->phase, lp->d, &lp->rec, u, &w);
+        lp->d = eda_sample_direction(et, in->eda->alpha[lp->med], &m->phase, lp->d, &lp->rec, u, &w);
         lp->beta = v3_scale(lp->beta, w);
     } else {
         double u1 = rng_uniform(lp->rng), u2 = rng_uniform(lp->rng);
@@ -182,7 +182,7 @@ static int surface_event(light_path *lp, const hit_record *h)
     lp->medium_events = 0;
     if (b->type == BSDF_MIRROR) lp->d = v3_sub(lp->d, v3_scale(h->ng, 2.0 * v3_dot(lp->d, h->ng)));
     else {
-        if (s->integrator.include_surfaces && surface_time_ok(lp, h->p))
+        if (lp->in->include_surfaces && surface_time_ok(lp, h->p))
             store(lp, &lp->tb->surf, &lp->pc->n_surf, h->p, lp->d, lp->beta, lp->bounce, lp->time);
         double u1 = rng_uniform(lp->rng), u2 = rng_uniform(lp->rng);
         vec3 l = sample_cosine_hemisphere(u1, u2), t1, t2;
@@ -201,26 +201,25 @@ static int surface_event(light_path *lp, const hit_record *h)
  * Once the volume budget is full (volume_open = 0) the path only feeds surface photons, so it is traced with
  * plain free flight and phase sampling: every sampler is unbiased, and DA, control vertices and EDA only pay
  * off for the volume map. Bin sampling, the surface time test and the early exit stay on. */
-static void trace_light_path(const scene *s, const darts_guide *g, const eda_set *eda, int volume_open,
-                             double surface_slack, dp_rng *rng, thread_bufs *tb, path_count *pc)
+static void trace_light_path(const scene *s, const photon_pass_input *in, int volume_open, dp_rng *rng,
+                             thread_bufs *tb, path_count *pc)
 {
-    const integrator_settings *in = &s->integrator;
+    const darts_guide *g = &in->guide;
     int li = (int)(rng_uniform(rng) * s->light_count);
     if (li >= s->light_count) li = s->light_count - 1;
     const point_light *L = &s->lights[li];
-    light_path lp = {.s = s, .g = g, .eda = eda, .tb = tb, .pc = pc, .rng = rng, .o = L->pos, .med = L->medium,
-                     .volume_open = volume_open, .surface_slack = surface_slack,
+    light_path lp = {.s = s, .in = in, .g = g, .tb = tb, .pc = pc, .rng = rng, .o = L->pos, .med = L->medium,
+                     .volume_open = volume_open,
                      .bin = {.start = -INFINITY, .end = INFINITY, .pdf = 1.0, .frame = -1}};
     if (g->active && !darts_sample_bin(g, L->pos, rng_uniform(rng), &lp.bin)) return;
     darts_bin reach = lp.bin; /* the early exit keeps every path whose surface photons could still count */
-    reach.end += surface_slack;
+    reach.end += in->surface_slack;
     double u1 = rng_uniform(rng), u2 = rng_uniform(rng);
     lp.d = sample_uniform_sphere(u1, u2);
     lp.beta = v3_scale(L->intensity, 4.0 * M_PI * s->light_count);
-    double t_end = in->window.gated ? time_window_end(&in->window) : INFINITY;
     new_vertex(&lp);
-    while (lp.bounce + 1 < in->max_bounces && lp.time < t_end && !v3_is_zero(lp.beta)) {
-        if (g->active && in->early_exit && !darts_can_reach(g, &reach, lp.o, lp.time)) {
+    while (lp.bounce + 1 < in->max_bounces && lp.time < in->t_end && !v3_is_zero(lp.beta)) {
+        if (g->active && g->early_exit && !darts_can_reach(g, &reach, lp.o, lp.time)) {
             pc->early_exit = 1;
             return;
         }
@@ -265,18 +264,27 @@ static void scale_powers(photon *p, size_t n, long paths)
         for (int c = 0; c < 3; c++) p[i].power[c] *= inv;
 }
 
-int photon_pass(const scene *s, const eda_set *eda, uint64_t seed, long iteration, double surface_radius,
-                const dp_stop_flag *stop, photon_set *out, dp_error *err)
+void photon_pass_input_init(photon_pass_input *in, const scene *s, const render_plan *p, const eda_set *eda,
+                            uint64_t seed, long iteration, const dp_stop_flag *stop)
+{
+    *in = (photon_pass_input){.light_paths = p->light_paths, .volume_budget = p->volume_budget,
+                              .surface_budget = p->surface_budget, .max_bounces = p->bounces.max,
+                              .t_end = p->window.gated ? time_window_end(&p->window) : INFINITY,
+                              .include_surfaces = p->include_surfaces, .low_order_scattering = p->low_order_scattering,
+                              .surface_slack = plan_surface_slack(p, iteration), .eda = eda, .seed = seed,
+                              .iteration = iteration, .stop = stop};
+    darts_guide_init(p, s->cam.pos, &in->guide);
+}
+
+int photon_pass(const scene *s, const photon_pass_input *in, photon_set *out, dp_error *err)
 {
     memset(out, 0, sizeof *out);
     if (s->light_count == 0) return 0;
-    long max_paths = (long)s->integrator.photon_count;
-    budget_state bv = {.budget = (size_t)s->integrator.volume_photon_count};
-    budget_state bsf = {.budget = (size_t)s->integrator.photon_count};
+    long max_paths = (long)in->light_paths;
+    budget_state bv = {.budget = (size_t)in->volume_budget};
+    budget_state bsf = {.budget = (size_t)in->surface_budget};
     photon_buf vol = {0}, surf = {0};
-    darts_guide guide;
-    darts_guide_init(s, &guide);
-    double slack = s->integrator.include_surfaces ? guide.eta_ub * surface_radius : 0.0;
+    const darts_guide *guide = &in->guide;
     long early = 0, aimed = 0;
     int nt = omp_get_max_threads();
     thread_bufs *tb = calloc((size_t)nt, sizeof(thread_bufs));
@@ -284,18 +292,18 @@ int photon_pass(const scene *s, const eda_set *eda, uint64_t seed, long iteratio
     int rc = (!tb || !pc) ? -1 : 0;
     long next = 0;
     while (!rc && next < max_paths && !(bv.full && bsf.full)) {
-        if ((out->interrupted = dp_stopped(stop))) break; /* read once per batch */
+        if ((out->interrupted = dp_stopped(in->stop))) break; /* read once per batch */
         long nb = max_paths - next < BATCH ? max_paths - next : BATCH;
-        aimed += guide.active && !bv.full ? nb : 0;
+        aimed += guide->active && !bv.full ? nb : 0;
 #pragma omp parallel num_threads(nt)
         {
             thread_bufs *mine = &tb[omp_get_thread_num()];
             mine->vol.n = mine->surf.n = 0;
 #pragma omp for schedule(dynamic, 64) /* paths differ in length; any thread may trace any path */
             for (long i = 0; i < nb; i++) {
-                dp_rng rng = rng_stream(seed ^ 0x70686f746f6eULL, (uint64_t)iteration, (uint64_t)(next + i));
+                dp_rng rng = rng_stream(in->seed ^ 0x70686f746f6eULL, (uint64_t)in->iteration, (uint64_t)(next + i));
                 pc[i] = (path_count){.thread = omp_get_thread_num(), .off_vol = mine->vol.n, .off_surf = mine->surf.n};
-                trace_light_path(s, &guide, eda, !bv.full, slack, &rng, mine, &pc[i]);
+                trace_light_path(s, in, !bv.full, &rng, mine, &pc[i]);
             }
         }
         for (long i = 0; i < nb && !rc; i++) { /* merge in path order */

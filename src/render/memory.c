@@ -27,46 +27,44 @@ static void add(memory_estimate *m, const char *what, const char *key, double by
 
 /* Volume and surface photons one light path stores on average: one photon pass of a single batch (a few
  * milliseconds), without EDA tables and without budget cuts. Returns 0 on failure (then the budgets count). */
-static int pilot_photons_per_path(const scene *s, double *vol, double *surf)
+static int pilot_photons_per_path(const scene *s, const render_plan *p, double *vol, double *surf)
 {
-    scene pilot = *s; /* shallow: the pass only reads the scene */
-    double paths = fmin(s->integrator.photon_count, PHOTON_PASS_BATCH);
-    pilot.integrator.photon_count = paths;
-    pilot.integrator.volume_photon_count = paths * 1e4;
+    photon_pass_input pilot;
+    photon_pass_input_init(&pilot, s, p, NULL, 0x70696c6f74ULL, 0, NULL);
+    pilot.light_paths = fmin(p->light_paths, PHOTON_PASS_BATCH);
+    pilot.volume_budget = pilot.surface_budget = pilot.light_paths * 1e4; /* no budget cut */
     photon_set ps;
     dp_error err;
-    double r_surf = s->integrator.gather_radius;
-    if (photon_pass(&pilot, NULL, 0x70696c6f74ULL, 0, r_surf, NULL, &ps, &err) || ps.paths <= 0) return 0;
+    if (photon_pass(s, &pilot, &ps, &err) || ps.paths <= 0) return 0;
     *vol = (double)ps.n_vol / ps.paths;
     *surf = (double)ps.n_surf / ps.paths;
     photon_set_free(&ps);
     return 1;
 }
 
-void render_memory_estimate(const scene *s, int have_reference, memory_estimate *m)
+void render_memory_estimate(const scene *s, const render_plan *p, int have_reference, memory_estimate *m)
 {
     memset(m, 0, sizeof *m);
-    const integrator_settings *in = &s->integrator;
     double px = (double)s->cam.width * s->cam.height, image = px * 3 * sizeof(float);
     add(m, "libraries and threads", NULL, RUNTIME_BYTES);
     add(m, "geometry (triangles and Embree BVH)", NULL, s->tri_count * BYTES_PER_TRIANGLE);
     /* film_bytes in double: frames × pixels can be large */
-    double film = 2 * px * 3 * sizeof(double) + 2 * px * 3 * (double)in->window.frame_count * sizeof(float);
-    add(m, "film (sums and the pass in progress)", in->window.frame_count > 0 ? "integrator.frame_num" : "camera.resolution",
-        film);
+    int frames = p->window.frame_count;
+    double film = 2 * px * 3 * sizeof(double) + 2 * px * 3 * (double)frames * sizeof(float);
+    add(m, "film (sums and the pass in progress)", frames > 0 ? "integrator.frame_num" : "camera.resolution", film);
     add(m, "output and reference images", "camera.resolution", image * (have_reference ? 3 : 2));
-    if (in->type != INTEGRATOR_PHOTON_POINTS) return;
-    add(m, "EDA tables", "integrator.eda_shape", (double)eda_set_bytes(s));
-    double V = in->volume_photon_count, S = in->photon_count, ph = sizeof(photon), rate_v = 1, rate_s = 1;
-    if (pilot_photons_per_path(s, &rate_v, &rate_s)) { /* the budgets cap what the light paths store */
-        V = fmin(V, rate_v * in->photon_count);
-        S = fmin(S, rate_s * in->photon_count);
+    if (p->type != INTEGRATOR_PHOTON_POINTS) return;
+    add(m, "EDA tables", "integrator.eda_shape", (double)eda_set_bytes(s, p));
+    double V = p->volume_budget, S = p->surface_budget, ph = sizeof(photon), rate_v = 1, rate_s = 1;
+    if (pilot_photons_per_path(s, p, &rate_v, &rate_s)) { /* the budgets cap what the light paths store */
+        V = fmin(V, rate_v * p->light_paths);
+        S = fmin(S, rate_s * p->light_paths);
     }
     /* volume_map_bytes is about (16 + 48) B a photon plus the nodes; in double for huge budgets */
     double per_mapped = (double)volume_map_bytes(1 << 20) / (1 << 20);
     int volume = s->medium_count > 0;
     if (volume) add(m, "volume photons and their map", "integrator.volume_photon_count", V * (ph + per_mapped));
-    if (in->include_surfaces || !volume)
+    if (p->include_surfaces || !volume)
         add(m, "surface photons and their map", "integrator.photon_count", S * (ph + per_mapped));
     add(m, "photon batch buffers", NULL, PHOTON_PASS_BATCH * fmax(rate_v + rate_s, 1.0) * ph);
 }

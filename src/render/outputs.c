@@ -64,17 +64,16 @@ static int write_frames(const film *f, const char *stem, const char *ext, image_
     return 0;
 }
 
-int render_write_outputs(const scene *s, const film *f, const char *path, const char *integrator,
+int render_write_outputs(const film *f, const char *path, const char *integrator, const char *plan,
                          void (*wrote)(const char *path), dp_error *err)
 {
-    (void)s;
     char stem[OUTPUT_PATH_MAX];
     const char *dot;
     if (split_output_path(path, stem, sizeof stem, &dot, err) || make_parent_dirs(path, err)) return -1;
     const time_window *tw = &f->window;
     image_meta meta = {.time_unit = TIME_UNIT, .gated = tw->gated, .gate_start = tw->start,
                        .gate_end = time_window_end(tw), .camera_warped = 1, .frame_index = -1,
-                       .integrator = integrator};
+                       .integrator = integrator, .plan = plan};
     image_rgb img = {0};
     if (film_image(f, -1, &img, err)) return -1;
     char png[OUTPUT_PATH_MAX + 64];
@@ -130,7 +129,7 @@ int render_outputs_check(const char *path, int width, int height, int frame_coun
     return 0;
 }
 
-int render_write_rescue(const scene *s, const film *f, const char *path, const char *integrator,
+int render_write_rescue(const film *f, const char *path, const char *integrator, const char *plan,
                         void (*wrote)(const char *path), char *rescue_dir, size_t n, dp_error *err)
 {
     const char *tmp = getenv("TMPDIR");
@@ -143,7 +142,7 @@ int render_write_rescue(const scene *s, const film *f, const char *path, const c
         if ((size_t)snprintf(rescue_dir, n, "%s/dartspp-rescue-XXXXXX", dirs[i]) >= n || !mkdtemp(rescue_dir)) continue;
         char target[OUTPUT_PATH_MAX + 64];
         snprintf(target, sizeof target, "%s/%s", rescue_dir, base);
-        if (!render_write_outputs(s, f, target, integrator, wrote, &last)) return 0;
+        if (!render_write_outputs(f, target, integrator, plan, wrote, &last)) return 0;
         rmdir(rescue_dir); /* only if it stayed empty */
     }
     rescue_dir[0] = '\0';

@@ -18,6 +18,7 @@ typedef struct {
 
 typedef struct {
     const scene *s;
+    const render_plan *p;
     film *f;
     size_t px;
     dp_rng *rng;
@@ -84,7 +85,7 @@ static int scatter_medium(pixel_ctx *c, path_state *ps, double t, int *medium_ev
     ps->depth++;
     if (++*medium_events > m->max_bounces) return 0;
     phase_ctx pc = {&m->phase, ps->d};
-    if (path_counts(&s->integrator, ps->depth + 1)) connect_lights(c, ps, ps->o, eval_phase, &pc);
+    if (bounces_count(&c->p->bounces, ps->depth + 1)) connect_lights(c, ps, ps->o, eval_phase, &pc);
     double u1 = rng_uniform(c->rng), u2 = rng_uniform(c->rng);
     ps->d = phase_sample(&m->phase, ps->d, u1, u2);
     return 1;
@@ -111,7 +112,7 @@ static int scatter_surface(pixel_ctx *c, path_state *ps, const hit_record *h, in
         lambert_ctx lc = {n_in};
         path_state at = *ps;
         at.beta = v3_mul(ps->beta, b->albedo);
-        if (path_counts(&s->integrator, ps->depth + 1))
+        if (bounces_count(&c->p->bounces, ps->depth + 1))
             connect_lights(c, &at, offset_ray_origin(c->s, h->p, n_in), eval_lambert_cos, &lc);
         double u1 = rng_uniform(c->rng), u2 = rng_uniform(c->rng);
         vec3 l = sample_cosine_hemisphere(u1, u2), t1, t2;
@@ -128,10 +129,10 @@ static int scatter_surface(pixel_ctx *c, path_state *ps, const hit_record *h, in
  * every later contribution arrives later still. Returns 0 when the path ends. */
 static int survive(pixel_ctx *c, path_state *ps)
 {
-    const time_window *tw = &c->s->integrator.window;
+    const time_window *tw = &c->p->window;
     if (tw->gated && ps->time >= time_window_end(tw)) return 0;
     if (v3_is_zero(ps->beta) || !v3_is_finite(ps->beta)) return 0;
-    if (!c->s->integrator.enable_rr || ps->depth < 5) return 1;
+    if (!c->p->enable_rr || ps->depth < 5) return 1;
     double q = fmin(1.0, v3_max(ps->beta));
     if (rng_uniform(c->rng) >= q) return 0;
     ps->beta = v3_scale(ps->beta, 1.0 / q);
@@ -144,7 +145,7 @@ static void trace_camera_path(pixel_ctx *c, vec3 d)
     path_state ps = {.o = s->cam.pos, .d = d, .medium = s->cam.medium, .beta = v3s(1.0)};
     int medium_events = 0;
     for (int guard = 0; guard < 100000; guard++) {
-        if (ps.depth >= s->integrator.max_bounces - 1) return; /* no later path can count */
+        if (ps.depth >= c->p->bounces.max - 1) return; /* no later path can count */
         hit_record h;
         c->rays += 1;
         int hit = scene_intersect(s, ps.o, ps.d, INFINITY, &h);
@@ -161,7 +162,8 @@ static void trace_camera_path(pixel_ctx *c, vec3 d)
     }
 }
 
-double path_tracer_pass(const scene *s, film *f, uint64_t seed, long pass, const dp_stop_flag *stop, long *nonfinite)
+double path_tracer_pass(const scene *s, const render_plan *p, film *f, uint64_t seed, long pass,
+                        const dp_stop_flag *stop, long *nonfinite)
 {
     const camera *cam = &s->cam;
     double rays = 0.0;
@@ -172,7 +174,7 @@ double path_tracer_pass(const scene *s, film *f, uint64_t seed, long pass, const
         for (int x = 0; x < cam->width; x++) {
             size_t px = (size_t)y * cam->width + x;
             dp_rng rng = rng_stream(seed, (uint64_t)pass, px);
-            pixel_ctx c = {.s = s, .f = f, .px = px, .rng = &rng};
+            pixel_ctx c = {.s = s, .p = p, .f = f, .px = px, .rng = &rng};
             double jx = rng_uniform(&rng), jy = rng_uniform(&rng);
             trace_camera_path(&c, camera_ray_dir(cam, x + jx, y + jy));
             rays += c.rays;

@@ -3,24 +3,17 @@
 #include "dartspp/gather.h"
 #include "dartspp/render.h"
 
-double progressive_radius(double r0, double alpha, long iteration, int dims)
+int photon_points_pass(const scene *s, const render_plan *p, const struct eda_set *eda, film *f, uint64_t seed,
+                       long iteration, const dp_stop_flag *stop, render_stats *st, dp_error *err)
 {
-    double log_ratio = 0.0;
-    for (long j = 1; j <= iteration; j++) log_ratio += log((j + alpha) / (j + 1.0));
-    return r0 * exp(log_ratio / dims);
-}
-
-int photon_points_pass(const scene *s, const struct eda_set *eda, film *f, uint64_t seed, long iteration,
-                       const dp_stop_flag *stop, render_stats *st, dp_error *err)
-{
-    const integrator_settings *in = &s->integrator;
     photon_set ps;
-    gather_input g = {.k_surf = in->gather_photon_count, .camera_leg_projected = in->camera_leg_projected,
-                      .stop = stop};
-    g.r_vol = progressive_radius(in->volume_gather_radius, in->volume_alpha, iteration, in->radius_schedule_3d ? 3 : 2);
-    g.r_surf = progressive_radius(in->gather_radius, in->alpha, iteration, 2);
+    photon_pass_input pin;
+    photon_pass_input_init(&pin, s, p, eda, seed, iteration, stop);
+    gather_input g = {.k_surf = p->k_surf, .bounces = p->bounces, .camera_leg_projected = p->camera_leg_projected,
+                      .stop = stop, .r_vol = schedule_radius(&p->r_vol, iteration),
+                      .r_surf = schedule_radius(&p->r_surf, iteration)};
     double t0 = dp_seconds();
-    if (photon_pass(s, eda, seed, iteration, g.r_surf, stop, &ps, err)) return -1;
+    if (photon_pass(s, &pin, &ps, err)) return -1;
     if (ps.interrupted) { /* the iteration is dropped: no maps, no sensor pass */
         photon_set_free(&ps);
         return 0;

@@ -50,38 +50,35 @@ static int keep_going(const render_stats *st, long spp, double limit, const dp_s
     return 1;
 }
 
-/* One pass of the scene's integrator into the film's pass layer. */
-static int render_pass(const scene *s, const eda_set *eda, const render_options *opt, film *f, render_stats *st,
-                       dp_error *err)
+/* One pass of the plan's integrator into the film's pass layer. */
+static int render_pass(const scene *s, const render_plan *p, const eda_set *eda, const render_options *opt, film *f,
+                       render_stats *st, dp_error *err)
 {
-    if (s->integrator.type == INTEGRATOR_PATH_TRACER) {
-        st->rays += path_tracer_pass(s, f, opt->seed, st->passes, opt->stop, &f->nonfinite);
+    if (p->type == INTEGRATOR_PATH_TRACER) {
+        st->rays += path_tracer_pass(s, p, f, opt->seed, st->passes, opt->stop, &f->nonfinite);
         return 0;
     }
-    return photon_points_pass(s, eda, f, opt->seed, st->passes, opt->stop, st, err);
+    return photon_points_pass(s, p, eda, f, opt->seed, st->passes, opt->stop, st, err);
 }
 
-int render_scene(const scene *s, const render_options *opt, film *f, render_stats *st, dp_error *err)
+/* The passes, with the plan resolved and the film initialised. */
+static int render_passes(const scene *s, const render_plan *p, const render_options *opt, film *f, render_stats *st,
+                         dp_error *err)
 {
-    *st = (render_stats){0};
-    memset(f, 0, sizeof *f);
-    if (s->integrator.volume_beams)
-        return dp_fail(err, "%s: integrator.volume_photon_type: 'beams' is not supported (supported: points)", s->path);
-    if (opt->threads > 0) omp_set_num_threads(opt->threads);
     eda_set eda = {0};
-    if (s->integrator.type == INTEGRATOR_PHOTON_POINTS && eda_set_prepare(s, &eda, err)) return -1;
-    if (film_init(f, s->cam.width, s->cam.height, &s->integrator.window, err)) {
+    if (p->type == INTEGRATOR_PHOTON_POINTS && eda_set_prepare(s, p, &eda, err)) return -1;
+    if (film_init(f, s->cam.width, s->cam.height, &p->window, err)) {
         eda_set_free(&eda);
         return -1;
     }
-    long spp = opt->spp >= 0 ? opt->spp : s->renderer.spp;
-    double limit = opt->time_limit >= 0 ? opt->time_limit : s->renderer.timeout_seconds;
+    long spp = opt->spp >= 0 ? opt->spp : p->spp;
+    double limit = opt->time_limit >= 0 ? opt->time_limit : p->timeout_seconds;
     progress_line pl = {.tty = isatty(2), .last_print = -1e9};
     double t0 = dp_seconds();
     int rc = 0;
     if (opt->passes_started) *opt->passes_started = 1;
     while (!rc && keep_going(st, spp, limit, opt->stop)) {
-        if ((rc = render_pass(s, &eda, opt, f, st, err))) break;
+        if ((rc = render_pass(s, p, &eda, opt, f, st, err))) break;
         if (dp_stopped(opt->stop)) { /* interrupted inside the pass: it is incomplete */
             film_drop_pass(f);
             break;
@@ -99,4 +96,17 @@ int render_scene(const scene *s, const render_options *opt, film *f, render_stat
     st->interrupted = dp_stopped(opt->stop);
     if (opt->progress) progress_print(&pl, st, spp, limit, 1);
     return rc ? -1 : 0;
+}
+
+int render_scene(const scene *s, const render_options *opt, film *f, render_stats *st, dp_error *err)
+{
+    *st = (render_stats){0};
+    memset(f, 0, sizeof *f);
+    if (opt->threads > 0) omp_set_num_threads(opt->threads);
+    if (opt->plan) return render_passes(s, opt->plan, opt, f, st, err);
+    render_plan p;
+    if (plan_resolve(s, &p, err)) return -1;
+    int rc = render_passes(s, &p, opt, f, st, err);
+    plan_free(&p);
+    return rc;
 }

@@ -1,0 +1,92 @@
+/* dartspp plan: the scene's integrator and renderer keys (after --set) resolved once into a typed render
+ * plan. The keys are parsed and range-checked where they are read (scene/settings.c, errors naming file and
+ * key); every decision derived from them — which DARTS samplers run, EDA per medium and its α, the radii of
+ * each iteration, the surface slack, the bounce limits — is taken here and only here. The stages (photon
+ * pass, gather, DARTS samplers, film) take what they need from the plan, never from scene.integrator. */
+#ifndef DARTSPP_PLAN_H
+#define DARTSPP_PLAN_H
+
+#include "dartspp/scene.h"
+
+/* Which light paths count, in path segments including the light connection (DESIGN §4). */
+typedef struct {
+    int min, max;
+} bounce_limits;
+
+static inline int bounces_count(const bounce_limits *b, int segments)
+{
+    return segments <= b->max && segments - 1 >= b->min;
+}
+
+/* Progressive radius of iteration i (0-based): r0 · (Π_{j=1..i} (j+α)/(j+1))^{1/dims}; dims 2 shrinks the
+ * kernel area by (j+α)/(j+1) per step (Knaus & Zwicker 2011), dims 3 is the reference's cube root. */
+typedef struct {
+    double r0, alpha;
+    int dims;
+} radius_schedule;
+
+double progressive_radius(double r0, double alpha, long iteration, int dims);
+static inline double schedule_radius(const radius_schedule *r, long iteration)
+{
+    return progressive_radius(r->r0, r->alpha, iteration, r->dims);
+}
+
+/* The DARTS photon pass as it will run. */
+typedef enum { RESIDUAL_UNIFORM = 0, RESIDUAL_EXPONENTIAL = 1 } residual_sampling;
+
+typedef struct {
+    int active;            /* some DARTS sampler runs: a switch on, the window gated, a medium present */
+    int distance_sampling; /* enable_guiding: DA distance sampling */
+    int control_vertices;  /* enable_elliptical, and one η over every region of the scene */
+    int elliptical_asked;  /* enable_elliptical as written (control vertices may be off for η) */
+    int control_vertex_mis;
+    residual_sampling residual;
+    int strict;            /* strict_time_width */
+    int early_exit;
+    double da_defensive;
+    double eta_lb, eta_ub; /* smallest and largest η of the scene's regions: bounds of a straight camera leg */
+} darts_plan;
+
+/* EDA direction sampling in one medium. */
+typedef struct {
+    int on;
+    double alpha;          /* EDA/phase selection α */
+} eda_plan;
+
+typedef struct render_plan {
+    integrator_type type;
+    char type_name[64];
+    time_window window;
+    bounce_limits bounces;
+    int enable_rr;                   /* path tracer: Russian roulette */
+    /* photon points */
+    double light_paths;              /* photon_count: light paths per iteration */
+    double volume_budget, surface_budget; /* photons per iteration */
+    radius_schedule r_vol, r_surf;
+    int k_surf;                      /* gather_photon_count */
+    int camera_leg_projected;
+    int include_surfaces, low_order_scattering;
+    darts_plan darts;
+    int medium_count;
+    eda_plan *eda;                   /* medium_count entries */
+    int eda_active;                  /* some medium uses EDA */
+    char eda_table_dir[512];
+    int eda_shape[3];
+    /* renderer (the command line may override) */
+    long spp;
+    double timeout_seconds, checkpoint_seconds;
+} render_plan;
+
+/* Resolves the plan of a loaded scene. 0, or -1 with err (out of memory; a plan this code cannot render). */
+int plan_resolve(const scene *s, render_plan *p, dp_error *err);
+void plan_free(render_plan *p);
+
+/* Widening of the DARTS surface time tests in iteration i: η_ub × the surface gather radius (the camera leg
+ * changes by up to that much across the gather disc); 0 without DARTS or surface photons. */
+double plan_surface_slack(const render_plan *p, long iteration);
+
+/* The plan as one line of JSON (for --verbose, the run summary and the EXR header); returns 0, or -1 when n
+ * is too small. */
+int plan_json(const render_plan *p, const scene *s, char *out, size_t n);
+
+#endif

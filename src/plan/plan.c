@@ -1,0 +1,148 @@
+/* The render plan: every decision derived from the integrator and renderer keys, taken once. */
+#include "dartspp/plan.h"
+
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+double progressive_radius(double r0, double alpha, long iteration, int dims)
+{
+    double log_ratio = 0.0;
+    for (long j = 1; j <= iteration; j++) log_ratio += log((j + alpha) / (j + 1.0));
+    return r0 * exp(log_ratio / dims);
+}
+
+/* A medium uses EDA when the window is gated and it asks for it (phase "ida"), or the integrator does and
+ * the medium scatters (there is no direction to pick where nothing scatters). */
+static void resolve_eda(const scene *s, render_plan *p)
+{
+    const integrator_settings *in = &s->integrator;
+    for (int i = 0; i < s->medium_count; i++) {
+        const medium *m = &s->media[i];
+        eda_plan *e = &p->eda[i];
+        e->on = p->type == INTEGRATOR_PHOTON_POINTS && in->window.gated && (m->eda || (in->eda && medium_scatters(m)));
+        e->alpha = m->eda_alpha > 0.0 ? m->eda_alpha : in->eda_alpha;
+        p->eda_active |= e->on;
+    }
+}
+
+/* The DARTS samplers run when one of them is on (EDA included), the window is gated and there is a
+ * medium. Control vertices need one η over every region of the scene (darts.h). */
+static void resolve_darts(const scene *s, render_plan *p)
+{
+    const integrator_settings *in = &s->integrator;
+    darts_plan *d = &p->darts;
+    int asked = in->enable_guiding || in->enable_elliptical || in->eda;
+    for (int i = 0; i < s->medium_count; i++) asked |= s->media[i].eda;
+    d->active = p->type == INTEGRATOR_PHOTON_POINTS && in->window.gated && asked && s->medium_count > 0;
+    d->distance_sampling = in->enable_guiding;
+    d->elliptical_asked = in->enable_elliptical;
+    d->control_vertices = d->active && in->enable_elliptical && scene_eta_uniform(s);
+    d->control_vertex_mis = in->control_vertex_mis;
+    d->residual = in->ellipse_residual ? RESIDUAL_EXPONENTIAL : RESIDUAL_UNIFORM;
+    d->strict = in->strict_time_width;
+    d->early_exit = in->early_exit;
+    d->da_defensive = in->da_defensive;
+    d->eta_lb = d->eta_ub = in->vacuum_eta;
+    for (int i = 0; i < s->medium_count; i++) {
+        d->eta_lb = fmin(d->eta_lb, s->media[i].eta);
+        d->eta_ub = fmax(d->eta_ub, s->media[i].eta);
+    }
+}
+
+int plan_resolve(const scene *s, render_plan *p, dp_error *err)
+{
+    const integrator_settings *in = &s->integrator;
+    memset(p, 0, sizeof *p);
+    if (in->volume_beams)
+        return dp_fail(err, "%s: integrator.volume_photon_type: 'beams' is not supported (supported: points)", s->path);
+    p->type = in->type;
+    snprintf(p->type_name, sizeof p->type_name, "%s", in->type_name);
+    p->window = in->window;
+    p->bounces = (bounce_limits){in->min_bounces, in->max_bounces};
+    p->enable_rr = in->enable_rr;
+    p->light_paths = in->photon_count;
+    p->volume_budget = in->volume_photon_count;
+    p->surface_budget = in->photon_count;
+    p->r_vol = (radius_schedule){in->volume_gather_radius, in->volume_alpha, in->radius_schedule_3d ? 3 : 2};
+    p->r_surf = (radius_schedule){in->gather_radius, in->alpha, 2};
+    p->k_surf = in->gather_photon_count;
+    p->camera_leg_projected = in->camera_leg_projected;
+    p->include_surfaces = in->include_surfaces;
+    p->low_order_scattering = in->low_order_scattering;
+    p->medium_count = s->medium_count;
+    if (s->medium_count > 0 && !(p->eda = calloc((size_t)s->medium_count, sizeof *p->eda)))
+        return dp_fail(err, "%s: out of memory for the render plan", s->path);
+    resolve_eda(s, p);
+    resolve_darts(s, p);
+    snprintf(p->eda_table_dir, sizeof p->eda_table_dir, "%s", in->eda_table_dir);
+    memcpy(p->eda_shape, in->eda_shape, sizeof p->eda_shape);
+    p->spp = s->renderer.spp;
+    p->timeout_seconds = s->renderer.timeout_seconds;
+    p->checkpoint_seconds = s->renderer.checkpoint_seconds;
+    return 0;
+}
+
+void plan_free(render_plan *p)
+{
+    free(p->eda);
+    p->eda = NULL;
+}
+
+double plan_surface_slack(const render_plan *p, long iteration)
+{
+    if (!p->include_surfaces) return 0.0;
+    return p->darts.eta_ub * schedule_radius(&p->r_surf, iteration);
+}
+
+/* Appends printf-style text; keeps track of overflow. */
+static void put(char *out, size_t n, size_t *len, const char *fmt, ...) __attribute__((format(printf, 4, 5)));
+static void put(char *out, size_t n, size_t *len, const char *fmt, ...)
+{
+    if (*len >= n) return;
+    va_list ap;
+    va_start(ap, fmt);
+    int k = vsnprintf(out + *len, n - *len, fmt, ap);
+    va_end(ap);
+    *len = k < 0 ? n : *len + (size_t)k;
+}
+
+int plan_json(const render_plan *p, const scene *s, char *out, size_t n)
+{
+    size_t len = 0;
+    const time_window *tw = &p->window;
+    put(out, n, &len, "{\"integrator\":\"%s\",\"time\":\"camera-warped optical path length\"", p->type_name);
+    if (!tw->gated) put(out, n, &len, ",\"window\":\"steady\"");
+    else put(out, n, &len, ",\"window\":[%.17g,%.17g],\"frames\":%d", tw->start, time_window_end(tw), tw->frame_count);
+    put(out, n, &len, ",\"bounces\":[%d,%d]", p->bounces.min, p->bounces.max);
+    if (p->type == INTEGRATOR_PATH_TRACER) {
+        put(out, n, &len, ",\"russian_roulette\":%s}", p->enable_rr ? "true" : "false");
+        return len < n ? 0 : -1;
+    }
+    const darts_plan *d = &p->darts;
+    put(out, n, &len,
+        ",\"light_paths\":%.17g,\"volume_budget\":%.17g,\"surface_budget\":%.17g"
+        ",\"r_vol\":{\"r0\":%.17g,\"alpha\":%.17g,\"dims\":%d},\"r_surf\":{\"r0\":%.17g,\"alpha\":%.17g,\"k\":%d}"
+        ",\"camera_leg\":\"%s\",\"surfaces\":%s,\"low_order_scattering\":%s",
+        p->light_paths, p->volume_budget, p->surface_budget, p->r_vol.r0, p->r_vol.alpha, p->r_vol.dims, p->r_surf.r0,
+        p->r_surf.alpha, p->k_surf, p->camera_leg_projected ? "projected" : "euclidean",
+        p->include_surfaces ? "true" : "false", p->low_order_scattering ? "true" : "false");
+    put(out, n, &len, ",\"darts\":{\"active\":%s", d->active ? "true" : "false");
+    if (d->active)
+        put(out, n, &len,
+            ",\"distance_sampling\":%s,\"control_vertices\":%s,\"control_vertex_mis\":%s,\"residual\":\"%s\""
+            ",\"strict\":%s,\"early_exit\":%s,\"da_defensive\":%.17g,\"eta\":[%.17g,%.17g]",
+            d->distance_sampling ? "true" : "false", d->control_vertices ? "true" : "false",
+            d->control_vertex_mis ? "true" : "false", d->residual == RESIDUAL_EXPONENTIAL ? "exponential" : "uniform",
+            d->strict ? "true" : "false", d->early_exit ? "true" : "false", d->da_defensive, d->eta_lb, d->eta_ub);
+    put(out, n, &len, "},\"eda\":{");
+    const char *sep = "";
+    for (int i = 0; i < p->medium_count; i++) {
+        if (!p->eda[i].on) continue;
+        put(out, n, &len, "%s\"%s\":{\"alpha\":%.17g}", sep, s->media[i].name, p->eda[i].alpha);
+        sep = ",";
+    }
+    put(out, n, &len, "}}");
+    return len < n ? 0 : -1;
+}
