@@ -137,7 +137,7 @@ static void test_exr_roundtrip_bitexact_and_attributes(void **state)
     image_rgb img, back;
     dp_error err;
     fill(&img, 3, 2, special);
-    image_meta meta = {"optical path length in scene units (c = 1)", 1, 2.5, 3.75, 1, 4, "path_tracer"};
+    image_meta meta = {"optical path length in scene units (c = 1)", 1, 2.5, 3.75, 1, 4, "path_tracer", "{\"x\":1}"};
     assert_int_equal(exr_write(path, &img, &meta, &err), 0);
     assert_int_equal(exr_read(path, &back, &err), 0);
     assert_int_equal(back.width, 3);
@@ -160,6 +160,8 @@ static void test_exr_roundtrip_bitexact_and_attributes(void **state)
     assert_int_equal(iv, 1);
     assert_int_equal(exr_attr_get_int(ctx, 0, "dartspp.frame", &iv), EXR_ERR_SUCCESS);
     assert_int_equal(iv, 4);
+    assert_int_equal(exr_attr_get_string(ctx, 0, "dartspp.plan", &len, &s), EXR_ERR_SUCCESS);
+    assert_string_equal(s, "{\"x\":1}");
     assert_int_equal(exr_get_compression(ctx, 0, &comp), EXR_ERR_SUCCESS);
     assert_int_equal(comp, EXR_COMPRESSION_ZIP);
     const exr_attr_chlist_t *cl = NULL;
@@ -181,7 +183,7 @@ static void test_exr_steady_state_and_null_meta(void **state)
     image_rgb img;
     dp_error err;
     fill(&img, 3, 2, special);
-    image_meta meta = {"t", 0, 9.0, 10.0, 0, -1, NULL};
+    image_meta meta = {"t", 0, 9.0, 10.0, 0, -1, NULL, NULL};
     assert_int_equal(exr_write(a, &img, &meta, &err), 0);
     assert_int_equal(exr_write(b, &img, NULL, &err), 0);
     exr_context_t ctx = NULL;

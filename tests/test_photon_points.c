@@ -309,16 +309,41 @@ static void assert_photon_identical(const photon *a, const photon *b)
     assert_memory_equal(&a->time, &b->time, sizeof a->time);
 }
 
+/* One photon pass of the scene's plan without EDA tables, its DARTS surface tests widened for gathers of
+ * radius surface_radius. */
+static int run_photon_pass(const scene *s, uint64_t seed, long iteration, double surface_radius, photon_set *out,
+                           dp_error *err)
+{
+    render_plan p;
+    if (plan_resolve(s, &p, err)) return -1;
+    photon_pass_input in;
+    photon_pass_input_init(&in, s, &p, NULL, seed, iteration, NULL);
+    in.surface_slack = p.include_surfaces ? p.darts.eta_ub * surface_radius : 0.0;
+    int rc = photon_pass(s, &in, out, err);
+    plan_free(&p);
+    return rc;
+}
+
+/* The DARTS guide of the scene's plan. */
+static void scene_guide(const scene *s, darts_guide *g)
+{
+    render_plan p;
+    dp_error err;
+    if (plan_resolve(s, &p, &err)) fail_msg("%s", err.msg);
+    darts_guide_init(&p, s->cam.pos, g);
+    plan_free(&p);
+}
+
 /* photon_pass with 1, 2 and 3 OpenMP threads: the same photons in the same order. Returns the 1-thread set. */
 static void photon_pass_thread_check(const scene *s, photon_set *p1)
 {
     dp_error err;
     omp_set_num_threads(1);
-    if (photon_pass(s, NULL, 9, 1, 0.0, NULL, p1, &err)) fail_msg("%s", err.msg);
+    if (run_photon_pass(s, 9, 1, 0.0, p1, &err)) fail_msg("%s", err.msg);
     for (int threads = 2; threads <= 3; threads++) {
         photon_set p2;
         omp_set_num_threads(threads);
-        if (photon_pass(s, NULL, 9, 1, 0.0, NULL, &p2, &err)) fail_msg("%s", err.msg);
+        if (run_photon_pass(s, 9, 1, 0.0, &p2, &err)) fail_msg("%s", err.msg);
         assert_int_equal(p1->paths, p2.paths);
         assert_int_equal(p1->n_vol, p2.n_vol);
         assert_int_equal(p1->n_surf, p2.n_surf);
@@ -432,7 +457,7 @@ static void test_surface_photons_after_volume_budget_full(void **state)
     for (int i = 0; i < ITERS; i++) {
         dp_error err;
         photon_set a, b;
-        if (photon_pass(&sa, NULL, 21, i, 0.05, NULL, &a, &err) || photon_pass(&sb, NULL, 21, i, 0.05, NULL, &b, &err))
+        if (run_photon_pass(&sa, 21, i, 0.05, &a, &err) || run_photon_pass(&sb, 21, i, 0.05, &b, &err))
             fail_msg("%s", err.msg);
         assert_int_equal(a.vol_paths, a.paths); /* A never fills its volume budget */
         assert_true(b.vol_paths < 8192);        /* B fills it in the first batch */
@@ -1086,7 +1111,7 @@ static void test_darts_refractive_index(void **state)
     scene s;
     load_scene(t.path, NULL, 0, &s);
     darts_guide g;
-    darts_guide_init(&s, &g);
+    scene_guide(&s, &g);
     assert_true(g.active && !g.control_vertices);
     assert_float_equal(g.eta_lb, 1.0, 0.0);
     assert_float_equal(g.eta_ub, 4.0 / 3.0, 1e-15);
@@ -1101,7 +1126,7 @@ static void test_darts_refractive_index(void **state)
     eta_box_scene_text(darts, sizeof darts, 0.75, DARTS_KEYS);
     tmp_scene_write(&t, darts);
     load_scene(t.path, NULL, 0, &s);
-    darts_guide_init(&s, &g);
+    scene_guide(&s, &g);
     assert_true(g.active && g.control_vertices);
     scene_free(&s);
     snprintf(cmd, sizeof cmd, DARTSPP_BIN " render %s --spp 1 --quiet --output %s/out.exr", t.path, t.dir);
