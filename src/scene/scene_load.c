@@ -106,7 +106,7 @@ static int parse_eda_keys(json_ctx *c, const cJSON *pv, const char *where, mediu
     char w[256];
     snprintf(w, sizeof w, "%s.phase_function", where);
     const char *path = "";
-    if (jget_string(c, pv, w, "table_path", &path) < 0 || jget_number_range(c, pv, w, "alpha", -1.0, -1.0, 0, &m->eda_alpha) ||
+    if (jget_string(c, pv, w, "table_path", &path) < 0 || jget_number_range(c, pv, w, "alpha", -1.0, -1.0, -1.0, &m->eda_alpha) ||
         jget_number_range(c, pv, w, "dT_start", 0.2, 0.0, 1.0, &m->eda_r_lo) ||
         jget_number_range(c, pv, w, "dT_end", 0.999, 0.0, 1.0, &m->eda_r_hi) ||
         jget_number_range(c, pv, w, "max_T", 0.0, 0.0, 0, &m->eda_s_max))
