@@ -230,7 +230,7 @@ static void test_combined_sampler_unbiased(void **state)
     assert_int_equal(fails, 0);
 }
 
-/* 5. extreme media and anisotropy (issue: numerical stability): tables for σs from 1e-4 to 1e3 per unit
+/* 5. extreme media and anisotropy (numerical stability): tables for σs from 1e-4 to 1e3 per unit
  * length (S range 10, so 1e-3 to 1e4 mean free paths), albedo 0.01, g from −0.99 to 0.99. Every cell a finite
  * CDF; the combined sampler's weights finite and >= 0 and unbiased against closed forms that hold for any
  * g: ∫ f dω = 1 and ∫ f·(ω·a) dω = g·(ω_in·a) (the mean cosine of Henyey–Greenstein is g).

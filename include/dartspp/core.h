@@ -60,6 +60,8 @@ static inline double v3_avg(vec3 a) { return (a.x + a.y + a.z) / 3.0; }
 static inline double v3_comp(vec3 a, int i) { return i == 0 ? a.x : (i == 1 ? a.y : a.z); }
 static inline int v3_is_finite(vec3 a) { return isfinite(a.x) && isfinite(a.y) && isfinite(a.z); }
 static inline int v3_is_zero(vec3 a) { return a.x == 0.0 && a.y == 0.0 && a.z == 0.0; }
+/* Mirror reflection of d about the plane of unit normal n (either side). */
+static inline vec3 v3_reflect(vec3 d, vec3 n) { return v3_sub(d, v3_scale(n, 2.0 * v3_dot(d, n))); }
 
 /* Orthonormal basis around unit n (Duff et al. 2017, "Building an orthonormal basis, revisited"). */
 void v3_basis(vec3 n, vec3 *s, vec3 *t);
@@ -79,5 +81,7 @@ double rng_uniform(dp_rng *r);
 /* ---- sampling helpers (pdfs in solid angle) ---- */
 vec3 sample_uniform_sphere(double u1, double u2);
 vec3 sample_cosine_hemisphere(double u1, double u2); /* local frame, +z up */
+/* Cosine-weighted direction about the unit normal n, in world space (pdf cosθ/π). */
+vec3 sample_cosine_about(vec3 n, double u1, double u2);
 
 #endif

@@ -35,4 +35,30 @@ void film_drop_pass(film *f);
 /* Gate image (k < 0) or frame k, as the mean over passes. */
 int film_image(const film *f, int k, image_rgb *img, dp_error *err);
 
+/* ---- the pixels of one pass ----
+ * Every integrator takes one camera sample per pixel per pass the same way: rows in parallel (dynamic
+ * schedule), pixel p of pass i drawing from rng_stream(seed, i, p) — first the jitter of its primary ray,
+ * then whatever the integrator needs — so images do not depend on the thread count. */
+typedef struct {
+    film *f;
+    size_t px;        /* pixel index */
+    double rays;      /* rays the sample traced */
+    long nonfinite;   /* contributions dropped for being non-finite */
+} film_pixel;
+
+/* Adds a contribution arriving at path time t to the pixel (frame: as film_splat), counting a non-finite one. */
+static inline void film_pixel_splat(film_pixel *p, double t, vec3 c, int frame)
+{
+    if (v3_is_zero(c)) return;
+    if (!film_splat(p->f, p->px, t, c, frame)) p->nonfinite++;
+}
+
+/* One camera sample: dir is the jittered primary ray, rng the pixel's stream after the jitter. */
+typedef void (*film_sample_fn)(void *ctx, film_pixel *pixel, vec3 dir, dp_rng *rng);
+
+/* One sample of every pixel into the pass layer; rows not started once stop is set are skipped (the pass is
+ * then incomplete). Returns the rays traced; the non-finite contributions are added to f->nonfinite. */
+double film_sample_pixels(film *f, const camera *cam, uint64_t seed, long pass, const dp_stop_flag *stop,
+                          film_sample_fn sample, void *ctx);
+
 #endif

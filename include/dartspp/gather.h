@@ -23,7 +23,7 @@ typedef struct {
 
 /* Adds one camera sample per pixel to f's pass layer (pixel p of iteration i uses rng_stream(seed, i, p));
  * once g->stop is set the remaining rows are skipped and the pass is incomplete (the caller drops it).
- * Returns the rays traced; non-finite contributions are dropped and counted in *nonfinite. */
-double sensor_pass(const scene *s, const gather_input *g, film *f, uint64_t seed, long iteration, long *nonfinite);
+ * Returns the rays traced; non-finite contributions are dropped and counted in f->nonfinite. */
+double sensor_pass(const scene *s, const gather_input *g, film *f, uint64_t seed, long iteration);
 
 #endif

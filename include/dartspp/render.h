@@ -55,7 +55,7 @@ int render_scene(const scene *s, const render_options *opt, film *f, render_stat
  * Deterministic: the samples of pixel p in pass i come from rng_stream(seed, i, p). Once stop is set the
  * remaining rows are skipped (the caller drops the pass). */
 double path_tracer_pass(const scene *s, const render_plan *p, film *f, uint64_t seed, long pass,
-                        const dp_stop_flag *stop, long *nonfinite);
+                        const dp_stop_flag *stop);
 
 /* One iteration of photon points: photon pass, maps, sensor pass into f's pass layer. Returns 0 or -1
  * with err. Once stop is set it returns early with the pass incomplete (the caller drops it). */
@@ -63,7 +63,7 @@ struct eda_set;
 int photon_points_pass(const scene *s, const render_plan *p, const struct eda_set *eda, film *f, uint64_t seed,
                        long iteration, const dp_stop_flag *stop, render_stats *st, dp_error *err);
 
-/* ---- error log (issue: error against run time) ----
+/* ---- error log: error against run time ----
  * CSV rows "seconds,iterations,photon_paths,stored_photons,r_vol,r_surf,mse,rel_mse,mse_q99,nonfinite_pixels"
  * of the running image against a reference image (EXR/PFM, same size), at most one every `every` seconds
  * of render time (0: every pass). In frame mode, reference frames "<ref stem>_NNNN<ext>" that exist are

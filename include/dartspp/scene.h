@@ -111,7 +111,7 @@ typedef struct {
     time_window window;
     double vacuum_eta;              /* 1 / vaccum_speed_of_light */
     int enable_rr;                  /* path tracer: Russian roulette on throughput */
-    /* photon points (issue 3 onwards) */
+    /* photon points */
     double photon_count, volume_photon_count;
     int gather_photon_count;
     double gather_radius, volume_gather_radius, alpha, volume_alpha;

@@ -24,3 +24,10 @@ vec3 sample_cosine_hemisphere(double u1, double u2)
     double phi = 2.0 * M_PI * u2;
     return v3(r * cos(phi), r * sin(phi), sqrt(fmax(0.0, 1.0 - u1)));
 }
+
+vec3 sample_cosine_about(vec3 n, double u1, double u2)
+{
+    vec3 l = sample_cosine_hemisphere(u1, u2), t1, t2;
+    v3_basis(n, &t1, &t2);
+    return v3_norm(v3_add(v3_add(v3_scale(t1, l.x), v3_scale(t2, l.y)), v3_scale(n, l.z)));
+}

@@ -103,3 +103,24 @@ int film_image(const film *f, int k, image_rgb *img, dp_error *err)
     }
     return 0;
 }
+
+double film_sample_pixels(film *f, const camera *cam, uint64_t seed, long pass, const dp_stop_flag *stop,
+                          film_sample_fn sample, void *ctx)
+{
+    double rays = 0.0;
+    long bad = 0;
+#pragma omp parallel for schedule(dynamic, 1) reduction(+ : rays, bad)
+    for (int y = 0; y < cam->height; y++) {
+        if (dp_stopped(stop)) continue; /* interrupted: the pass is dropped, finish fast */
+        for (int x = 0; x < cam->width; x++) {
+            film_pixel pixel = {.f = f, .px = (size_t)y * cam->width + x};
+            dp_rng rng = rng_stream(seed, (uint64_t)pass, pixel.px);
+            double jx = rng_uniform(&rng), jy = rng_uniform(&rng);
+            sample(ctx, &pixel, camera_ray_dir(cam, x + jx, y + jy), &rng);
+            rays += pixel.rays;
+            bad += pixel.nonfinite;
+        }
+    }
+    f->nonfinite += bad;
+    return rays;
+}

@@ -6,10 +6,7 @@
 typedef struct {
     const scene *s;
     const gather_input *g;
-    film *f;
-    size_t px;
-    long nonfinite;
-    double rays;
+    film_pixel *pix;
 } pixel_ctx;
 
 typedef struct {
@@ -20,12 +17,6 @@ typedef struct {
     double t_cam;    /* camera time up to the segment origin */
     int b_cam;       /* camera segments including this one */
 } beam_ctx;
-
-static void splat(pixel_ctx *c, double t, vec3 contrib, int frame)
-{
-    if (v3_is_zero(contrib)) return;
-    if (!film_splat(c->f, c->px, t, contrib, frame)) c->nonfinite++;
-}
 
 static vec3 photon_vec(const float *v) { return v3(v[0], v[1], v[2]); }
 
@@ -43,7 +34,7 @@ static void visit_volume_photon(void *ctx, const photon *p, double t, double d2)
     double time = b->t_cam + p->time + b->m->eta * leg;
     double f = K * phase_eval(&b->m->phase, photon_vec(p->dir), v3_neg(b->d));
     vec3 tr = v3_exp_neg(v3_scale(b->m->sigma_t, t));
-    splat(b->c, time, v3_scale(v3_mul(v3_mul(b->thr, tr), photon_vec(p->power)), f), p->frame);
+    film_pixel_splat(b->c->pix, time, v3_scale(v3_mul(v3_mul(b->thr, tr), photon_vec(p->power)), f), p->frame);
 }
 
 /* Surface estimate at a Lambertian hit: k nearest within R, box kernel over the disc of the k-th. */
@@ -63,7 +54,7 @@ static void gather_surface(pixel_ctx *c, vec3 x, vec3 n_in, const bsdf *b, vec3 
         const photon *p = &g->surf_photons[idx[i]];
         if (v3_dot(photon_vec(p->dir), n_in) >= 0.0) continue; /* arrived on the other side */
         if (!bounces_count(&g->bounces, p->bounce + b_cam)) continue;
-        splat(c, t_cam + p->time, v3_mul(v3_mul(thr, f), photon_vec(p->power)), p->frame);
+        film_pixel_splat(c->pix, t_cam + p->time, v3_mul(v3_mul(thr, f), photon_vec(p->power)), p->frame);
     }
 }
 
@@ -75,7 +66,7 @@ static void trace_sensor_path(pixel_ctx *c, vec3 d)
     double t_cam = 0.0;
     for (int guard = 0; guard < 10000 && b_cam <= c->g->bounces.max; guard++) {
         hit_record h;
-        c->rays += 1;
+        c->pix->rays += 1;
         int hit = scene_intersect(s, o, d, INFINITY, &h);
         double len = hit ? h.t : INFINITY;
         if (med != MEDIUM_VACUUM) {
@@ -98,7 +89,7 @@ static void trace_sensor_path(pixel_ctx *c, vec3 d)
             gather_surface(c, h.p, n_in, bs, thr, t_cam, b_cam);
             return;
         }
-        d = v3_sub(d, v3_scale(h.ng, 2.0 * v3_dot(d, h.ng)));
+        d = v3_reflect(d, h.ng);
         thr = v3_mul(thr, bs->albedo);
         med = surface_next_medium(sf, med, d, h.ng);
         o = offset_ray_origin(s, h.p, n_in);
@@ -106,24 +97,21 @@ static void trace_sensor_path(pixel_ctx *c, vec3 d)
     }
 }
 
-double sensor_pass(const scene *s, const gather_input *g, film *f, uint64_t seed, long iteration, long *nonfinite)
+typedef struct {
+    const scene *s;
+    const gather_input *g;
+} pass_ctx;
+
+static void sample_pixel(void *ctx, film_pixel *pix, vec3 dir, dp_rng *rng)
 {
-    const camera *cam = &s->cam;
-    double rays = 0.0;
-    long bad = 0;
-#pragma omp parallel for schedule(dynamic, 1) reduction(+ : rays, bad)
-    for (int y = 0; y < cam->height; y++) {
-        if (dp_stopped(g->stop)) continue; /* interrupted: the pass is dropped, finish fast */
-        for (int x = 0; x < cam->width; x++) {
-            size_t px = (size_t)y * cam->width + x;
-            dp_rng rng = rng_stream(seed, (uint64_t)iteration, px);
-            pixel_ctx c = {.s = s, .g = g, .f = f, .px = px};
-            double jx = rng_uniform(&rng), jy = rng_uniform(&rng);
-            trace_sensor_path(&c, camera_ray_dir(cam, x + jx, y + jy));
-            rays += c.rays;
-            bad += c.nonfinite;
-        }
-    }
-    *nonfinite += bad;
-    return rays;
+    (void)rng; /* the gather draws nothing after the jitter */
+    const pass_ctx *p = ctx;
+    pixel_ctx c = {.s = p->s, .g = p->g, .pix = pix};
+    trace_sensor_path(&c, dir);
+}
+
+double sensor_pass(const scene *s, const gather_input *g, film *f, uint64_t seed, long iteration)
+{
+    pass_ctx p = {s, g};
+    return film_sample_pixels(f, &s->cam, seed, iteration, g->stop, sample_pixel, &p);
 }

@@ -180,14 +180,12 @@ static int surface_event(light_path *lp, const hit_record *h)
     }
     lp->bounce++;
     lp->medium_events = 0;
-    if (b->type == BSDF_MIRROR) lp->d = v3_sub(lp->d, v3_scale(h->ng, 2.0 * v3_dot(lp->d, h->ng)));
+    if (b->type == BSDF_MIRROR) lp->d = v3_reflect(lp->d, h->ng);
     else {
         if (lp->in->include_surfaces && surface_time_ok(lp, h->p))
             store(lp, &lp->tb->surf, &lp->pc->n_surf, h->p, lp->d, lp->beta, lp->bounce, lp->time);
         double u1 = rng_uniform(lp->rng), u2 = rng_uniform(lp->rng);
-        vec3 l = sample_cosine_hemisphere(u1, u2), t1, t2;
-        v3_basis(n_in, &t1, &t2);
-        lp->d = v3_norm(v3_add(v3_add(v3_scale(t1, l.x), v3_scale(t2, l.y)), v3_scale(n_in, l.z)));
+        lp->d = sample_cosine_about(n_in, u1, u2);
     }
     lp->beta = v3_mul(lp->beta, b->albedo);
     lp->med = surface_next_medium(sf, lp->med, lp->d, h->ng);

@@ -19,18 +19,9 @@ typedef struct {
 typedef struct {
     const scene *s;
     const render_plan *p;
-    film *f;
-    size_t px;
+    film_pixel *pix;
     dp_rng *rng;
-    long nonfinite;
-    double rays;
 } pixel_ctx;
-
-static void splat(pixel_ctx *c, double t, vec3 contrib)
-{
-    if (v3_is_zero(contrib)) return;
-    if (!film_splat(c->f, c->px, t, contrib, -1)) c->nonfinite++;
-}
 
 /* NEE to every point light from x; f_eval(w_to_light) is the phase function or BSDF·cos. */
 typedef double (*scatter_eval)(const void *ctx, vec3 w);
@@ -48,9 +39,9 @@ static void connect_lights(pixel_ctx *c, const path_state *ps, vec3 x, scatter_e
         if (f <= 0.0) continue;
         vec3 tr;
         double t = ps->time;
-        c->rays += 1;
+        c->pix->rays += 1;
         if (!scene_transmittance(s, x, ps->medium, L->pos, &tr, &t)) continue;
-        splat(c, t, v3_scale(v3_mul(v3_mul(ps->beta, tr), L->intensity), f / d2));
+        film_pixel_splat(c->pix, t, v3_scale(v3_mul(v3_mul(ps->beta, tr), L->intensity), f / d2), -1);
     }
 }
 
@@ -107,7 +98,7 @@ static int scatter_surface(pixel_ctx *c, path_state *ps, const hit_record *h, in
     ps->depth++;
     *medium_events = 0;
     if (b->type == BSDF_MIRROR) {
-        ps->d = v3_sub(ps->d, v3_scale(h->ng, 2.0 * v3_dot(ps->d, h->ng)));
+        ps->d = v3_reflect(ps->d, h->ng);
     } else {
         lambert_ctx lc = {n_in};
         path_state at = *ps;
@@ -115,9 +106,7 @@ static int scatter_surface(pixel_ctx *c, path_state *ps, const hit_record *h, in
         if (bounces_count(&c->p->bounces, ps->depth + 1))
             connect_lights(c, &at, offset_ray_origin(c->s, h->p, n_in), eval_lambert_cos, &lc);
         double u1 = rng_uniform(c->rng), u2 = rng_uniform(c->rng);
-        vec3 l = sample_cosine_hemisphere(u1, u2), t1, t2;
-        v3_basis(n_in, &t1, &t2);
-        ps->d = v3_norm(v3_add(v3_add(v3_scale(t1, l.x), v3_scale(t2, l.y)), v3_scale(n_in, l.z)));
+        ps->d = sample_cosine_about(n_in, u1, u2);
     }
     ps->beta = v3_mul(ps->beta, b->albedo);
     ps->medium = surface_next_medium(sf, ps->medium, ps->d, h->ng);
@@ -147,7 +136,7 @@ static void trace_camera_path(pixel_ctx *c, vec3 d)
     for (int guard = 0; guard < 100000; guard++) {
         if (ps.depth >= c->p->bounces.max - 1) return; /* no later path can count */
         hit_record h;
-        c->rays += 1;
+        c->pix->rays += 1;
         int hit = scene_intersect(s, ps.o, ps.d, INFINITY, &h);
         double tmax = hit ? h.t : INFINITY;
         if (ps.medium != MEDIUM_VACUUM) {
@@ -162,25 +151,21 @@ static void trace_camera_path(pixel_ctx *c, vec3 d)
     }
 }
 
-double path_tracer_pass(const scene *s, const render_plan *p, film *f, uint64_t seed, long pass,
-                        const dp_stop_flag *stop, long *nonfinite)
+typedef struct {
+    const scene *s;
+    const render_plan *p;
+} pass_ctx;
+
+static void sample_pixel(void *ctx, film_pixel *pix, vec3 dir, dp_rng *rng)
 {
-    const camera *cam = &s->cam;
-    double rays = 0.0;
-    long bad = 0;
-#pragma omp parallel for schedule(dynamic, 1) reduction(+ : rays, bad)
-    for (int y = 0; y < cam->height; y++) {
-        if (dp_stopped(stop)) continue; /* interrupted: the pass is dropped, finish fast */
-        for (int x = 0; x < cam->width; x++) {
-            size_t px = (size_t)y * cam->width + x;
-            dp_rng rng = rng_stream(seed, (uint64_t)pass, px);
-            pixel_ctx c = {.s = s, .p = p, .f = f, .px = px, .rng = &rng};
-            double jx = rng_uniform(&rng), jy = rng_uniform(&rng);
-            trace_camera_path(&c, camera_ray_dir(cam, x + jx, y + jy));
-            rays += c.rays;
-            bad += c.nonfinite;
-        }
-    }
-    *nonfinite += bad;
-    return rays;
+    const pass_ctx *pass = ctx;
+    pixel_ctx c = {.s = pass->s, .p = pass->p, .pix = pix, .rng = rng};
+    trace_camera_path(&c, dir);
+}
+
+double path_tracer_pass(const scene *s, const render_plan *p, film *f, uint64_t seed, long pass,
+                        const dp_stop_flag *stop)
+{
+    pass_ctx ctx = {s, p};
+    return film_sample_pixels(f, &s->cam, seed, pass, stop, sample_pixel, &ctx);
 }

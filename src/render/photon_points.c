@@ -29,7 +29,7 @@ int photon_points_pass(const scene *s, const render_plan *p, const struct eda_se
         g.vol = vm;
         g.surf = sm;
         g.surf_photons = ps.surf;
-        st->rays += sensor_pass(s, &g, f, seed, iteration, &f->nonfinite);
+        st->rays += sensor_pass(s, &g, f, seed, iteration);
         st->photon_paths += (double)ps.paths;
         st->early_exits += (double)ps.early_exits;
         st->aimed_paths += (double)ps.aimed_paths;

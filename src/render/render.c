@@ -55,7 +55,7 @@ static int render_pass(const scene *s, const render_plan *p, const eda_set *eda,
                        render_stats *st, dp_error *err)
 {
     if (p->type == INTEGRATOR_PATH_TRACER) {
-        st->rays += path_tracer_pass(s, p, f, opt->seed, st->passes, opt->stop, &f->nonfinite);
+        st->rays += path_tracer_pass(s, p, f, opt->seed, st->passes, opt->stop);
         return 0;
     }
     return photon_points_pass(s, p, eda, f, opt->seed, st->passes, opt->stop, st, err);
