@@ -17,7 +17,7 @@
 
 /* ---------------------------------------------------------------- helpers */
 
-/* Gauss–Legendre nodes/weights on [-1, 1] by Newton iteration on P_n. */
+/* Gauss–Legendre rule of order GL_N (test_util.h), computed once. */
 #define GL_N 16
 static double gl_x[GL_N], gl_w[GL_N];
 static int gl_ready;
@@ -25,23 +25,7 @@ static int gl_ready;
 static void gl_init(void)
 {
     if (gl_ready) return;
-    for (int i = 0; i < GL_N; i++) {
-        double x = cos(M_PI * (i + 0.75) / (GL_N + 0.5)), dp = 1.0;
-        for (int it = 0; it < 100; it++) {
-            double p0 = 1.0, p1 = x;
-            for (int k = 2; k <= GL_N; k++) {
-                double p2 = ((2.0 * k - 1.0) * x * p1 - (k - 1.0) * p0) / k;
-                p0 = p1;
-                p1 = p2;
-            }
-            dp = GL_N * (x * p1 - p0) / (x * x - 1.0);
-            double dx = p1 / dp;
-            x -= dx;
-            if (fabs(dx) < 1e-16) break;
-        }
-        gl_x[i] = x;
-        gl_w[i] = 2.0 / ((1.0 - x * x) * dp * dp);
-    }
+    gauss_legendre(GL_N, gl_x, gl_w);
     gl_ready = 1;
 }
 

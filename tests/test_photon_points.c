@@ -544,28 +544,6 @@ static void test_darts_surface_band_edges(void **state)
 /* ---------------------------------------------------------------------------------------------------- */
 /* 3. single scattering against quadrature                                                               */
 
-/* Gauss–Legendre nodes and weights on [-1, 1] by Newton's method on P_n. */
-static void gauss_legendre(int n, double *x, double *w)
-{
-    for (int i = 0; i < n; i++) {
-        double z = cos(M_PI * (i + 0.75) / (n + 0.5)), dp = 1;
-        for (int it = 0; it < 100; it++) {
-            double p0 = 1, p1 = z;
-            for (int k = 2; k <= n; k++) {
-                double p2 = ((2 * k - 1) * z * p1 - (k - 1) * p0) / k;
-                p0 = p1;
-                p1 = p2;
-            }
-            dp = n * (z * p1 - p0) / (z * z - 1);
-            double dz = p1 / dp;
-            z -= dz;
-            if (fabs(dz) < 1e-16) break;
-        }
-        x[i] = z;
-        w[i] = 2 / ((1 - z * z) * dp * dp);
-    }
-}
-
 typedef struct {
     const camera *cam;
     vec3 light, I, ss, st;

@@ -15,22 +15,6 @@
 
 #define CBOX_FOV 39.3077
 
-#define ASSERT_NEAR(a, b, tol)                                                                                   \
-    do {                                                                                                         \
-        double a_ = (a), b_ = (b), t_ = (tol);                                                                   \
-        if (!(fabs(a_ - b_) <= t_))                                                                              \
-            fail_msg("%s:%d: %s = %.17g, expected %.17g (tolerance %g)", __FILE__, __LINE__, #a, a_, b_, t_);    \
-    } while (0)
-
-#define ASSERT_VEC(v, ex, ey, ez, tol)                                                                           \
-    do {                                                                                                         \
-        vec3 v_ = (v);                                                                                           \
-        double t_ = (tol);                                                                                       \
-        if (!(fabs(v_.x - (ex)) <= t_ && fabs(v_.y - (ey)) <= t_ && fabs(v_.z - (ez)) <= t_))                    \
-            fail_msg("%s:%d: %s = (%.9g, %.9g, %.9g), expected (%.9g, %.9g, %.9g)", __FILE__, __LINE__, #v,      \
-                     v_.x, v_.y, v_.z, (double)(ex), (double)(ey), (double)(ez));                                \
-    } while (0)
-
 #define ASSERT_CONTAINS(hay, needle)                                                                             \
     do {                                                                                                         \
         const char *h_ = (hay), *n_ = (needle);                                                                  \

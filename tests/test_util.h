@@ -8,6 +8,7 @@
 #include <stdint.h>
 #include <cmocka.h>
 
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -95,6 +96,45 @@ static inline int test_run(const char *cmd, char *out, size_t out_len)
     }
     int st = pclose(p);
     return (st >= 0 && WIFEXITED(st)) ? WEXITSTATUS(st) : -1;
+}
+
+#define ASSERT_NEAR(a, b, tol)                                                                                   \
+    do {                                                                                                         \
+        double a_ = (a), b_ = (b), t_ = (tol);                                                                   \
+        if (!(fabs(a_ - b_) <= t_))                                                                              \
+            fail_msg("%s:%d: %s = %.17g, expected %.17g (tolerance %g)", __FILE__, __LINE__, #a, a_, b_, t_);    \
+    } while (0)
+
+#define ASSERT_VEC(v, ex, ey, ez, tol)                                                                           \
+    do {                                                                                                         \
+        vec3 v_ = (v);                                                                                           \
+        double t_ = (tol);                                                                                       \
+        if (!(fabs(v_.x - (ex)) <= t_ && fabs(v_.y - (ey)) <= t_ && fabs(v_.z - (ez)) <= t_))                    \
+            fail_msg("%s:%d: %s = (%.9g, %.9g, %.9g), expected (%.9g, %.9g, %.9g)", __FILE__, __LINE__, #v,      \
+                     v_.x, v_.y, v_.z, (double)(ex), (double)(ey), (double)(ez));                                \
+    } while (0)
+
+/* Gauss–Legendre nodes x and weights w of order n on [-1, 1], by Newton iteration on P_n (exact for
+ * polynomials of degree 2n - 1). */
+static inline void gauss_legendre(int n, double *x, double *w)
+{
+    for (int i = 0; i < n; i++) {
+        double z = cos(M_PI * (i + 0.75) / (n + 0.5)), dp = 1.0;
+        for (int it = 0; it < 100; it++) {
+            double p0 = 1.0, p1 = z;
+            for (int k = 2; k <= n; k++) {
+                double p2 = ((2.0 * k - 1.0) * z * p1 - (k - 1.0) * p0) / k;
+                p0 = p1;
+                p1 = p2;
+            }
+            dp = n * (z * p1 - p0) / (z * z - 1.0);
+            double dz = p1 / dp;
+            z -= dz;
+            if (fabs(dz) < 1e-16) break;
+        }
+        x[i] = z;
+        w[i] = 2.0 / ((1.0 - z * z) * dp * dp);
+    }
 }
 
 #endif
