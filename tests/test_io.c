@@ -810,13 +810,13 @@ static void test_atomic_missing_folder_and_make_parent_dirs(void **state)
         assert_non_null(strstr(err.msg, "No such file or directory"));
     }
     join(path, sizeof path, dir, names[1]);
-    assert_int_equal(make_parent_dirs(path, &err), 0);
-    assert_int_equal(make_parent_dirs(path, &err), 0); /* already there */
+    assert_int_equal(io_make_parent_dirs(path, &err), 0);
+    assert_int_equal(io_make_parent_dirs(path, &err), 0); /* already there */
     assert_int_equal(pfm_write(path, &img, &err), 0);
     assert_int_equal(count_temp_files(dir), 0);
     /* a file where a folder should be */
     join(path, sizeof path, dir, "x/y/z/a.pfm/b/c.exr");
-    assert_int_not_equal(make_parent_dirs(path, &err), 0);
+    assert_int_not_equal(io_make_parent_dirs(path, &err), 0);
     assert_non_null(strstr(err.msg, path));
     image_free(&img);
     remove_tree(dir);

@@ -1,5 +1,11 @@
 /* dartspp core: vectors, errors, counter-based RNG, sampling helpers.
- * Everything here is small and inline-friendly; no module state. */
+ * Everything here is small and inline-friendly; no module state.
+ *
+ * Naming rule for public symbols (every header in include/dartspp): a function or type is named for the
+ * object or module it belongs to, as its first word, then what it does (scene_load, film_splat,
+ * photon_map_query_beam, eda_table_build, plan_resolve, io_make_parent_dirs). The core's vocabulary is the
+ * one exception, kept short because it is everywhere: vec3 with v3_*, dp_rng with rng_*, the samplers
+ * sample_*; the process-wide utilities (errors, clock, the stop flag) carry dp_. */
 #ifndef DARTSPP_CORE_H
 #define DARTSPP_CORE_H
 

@@ -98,6 +98,6 @@ int image_mean_of(const image_rgb *imgs, int k, image_rgb *mean, double *var_of_
 int frames_csv_write(const char *path, int frame_count, double start, double width, dp_error *err);
 
 /* Create the parent folders of a file path (mkdir -p of dirname); 0 on success. */
-int make_parent_dirs(const char *path, dp_error *err);
+int io_make_parent_dirs(const char *path, dp_error *err);
 
 #endif

@@ -100,7 +100,7 @@ const memory_item *memory_largest(const memory_estimate *m);
  * unknown. */
 double memory_available(void);
 /* "12.3 MiB" */
-void format_bytes(double bytes, char *out, size_t n);
+void memory_format_bytes(double bytes, char *out, size_t n);
 
 /* ---- outputs ----
  * Writes the gate image to `path` (.exr or .pfm), a PNG preview `<stem>.png`, and in frame mode one image

@@ -186,7 +186,7 @@ typedef struct {
 int scene_intersect(const scene *s, vec3 o, vec3 d, double tmax, hit_record *h);
 /* Origin for a ray leaving surface point p on the side of n (Wächter & Binder, Ray Tracing Gems ch. 6), with
  * their near-origin constants scaled by the scene's size so that a scene scaled by any factor is offset alike. */
-vec3 offset_ray_origin(const scene *s, vec3 p, vec3 n);
+vec3 scene_offset_ray_origin(const scene *s, vec3 p, vec3 n);
 
 /* Transmittance and time from p (in medium `med`) to the point q, crossing only null/forward surfaces;
  * returns 0 (and tr = 0) when an opaque surface is in the way. time accumulates eta * length. */

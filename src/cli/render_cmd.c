@@ -170,8 +170,8 @@ static int after_pass(void *ctx, const film *f, const render_stats *st, dp_error
     return 0;
 }
 
-/* Mirrors break two assumptions, and the user should hear which one applies (README, "Strict time mode on
- * a mirror"): the path tracer cannot reach a point light through a mirror, so light that hits a mirror
+/* Mirrors break two assumptions, and the user should hear which one applies (src/darts/README.md, mirrors):
+ * the path tracer cannot reach a point light through a mirror, so light that hits a mirror
  * before any diffuse or medium vertex is missing; DARTS's time bounds and control vertices assume a
  * straight camera leg, so what the camera sees through a mirror is biased. */
 static void warn_mixed_eta(const scene *s, const render_plan *p);
@@ -296,12 +296,12 @@ static int check_memory(render_job *j, const render_args *a)
     if (!(limit > 0) || m->total <= limit) return 0;
     const memory_item *big = memory_largest(m);
     char need[32], have[32], item[32];
-    format_bytes(m->total, need, sizeof need);
-    format_bytes(limit, have, sizeof have);
+    memory_format_bytes(m->total, need, sizeof need);
+    memory_format_bytes(limit, have, sizeof have);
     fprintf(stderr, "dartspp render: %s: the render needs about %s of memory, more than the %s %s", j->s.path, need,
             have, a->max_memory > 0 ? "allowed by --max-memory" : "available");
     if (big) {
-        format_bytes(big->bytes, item, sizeof item);
+        memory_format_bytes(big->bytes, item, sizeof item);
         fprintf(stderr, "; %s drives it (%s: %s)", big->key, big->what, item);
     }
     fprintf(stderr, "\n");
@@ -312,8 +312,8 @@ static void print_memory(const memory_estimate *m)
 {
     struct rusage ru;
     char est[32], peak[32] = "unknown";
-    format_bytes(m->total, est, sizeof est);
-    if (getrusage(RUSAGE_SELF, &ru) == 0) format_bytes(ru.ru_maxrss * 1024.0, peak, sizeof peak);
+    memory_format_bytes(m->total, est, sizeof est);
+    if (getrusage(RUSAGE_SELF, &ru) == 0) memory_format_bytes(ru.ru_maxrss * 1024.0, peak, sizeof peak);
     printf("memory: estimated %s before the render, peak resident %s\n", est, peak);
 }
 

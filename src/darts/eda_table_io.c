@@ -72,7 +72,7 @@ int eda_table_save(const eda_table *t, const char *path, dp_error *err)
     put(&p, d, sizeof d);
     put(&p, &h, sizeof h);
     char tmp[4200];
-    if (make_parent_dirs(path, err)) return -1;
+    if (io_make_parent_dirs(path, err)) return -1;
     int fd = atomic_open(path, tmp, sizeof tmp, err);
     if (fd < 0) return -1;
     if (write_all(fd, head, sizeof head) || write_all(fd, t->cdf, table_values(t) * sizeof(float))) {

@@ -82,7 +82,7 @@ static void trace_sensor_path(pixel_ctx *c, vec3 d)
         vec3 n_in = v3_dot(d, h.ng) < 0.0 ? h.ng : v3_neg(h.ng);
         if (bsdf_is_passthrough(bs)) {
             med = surface_next_medium(sf, med, d, h.ng);
-            o = offset_ray_origin(s, h.p, v3_neg(n_in));
+            o = scene_offset_ray_origin(s, h.p, v3_neg(n_in));
             continue;
         }
         if (bs->type != BSDF_MIRROR) {
@@ -92,7 +92,7 @@ static void trace_sensor_path(pixel_ctx *c, vec3 d)
         d = v3_reflect(d, h.ng);
         thr = v3_mul(thr, bs->albedo);
         med = surface_next_medium(sf, med, d, h.ng);
-        o = offset_ray_origin(s, h.p, n_in);
+        o = scene_offset_ray_origin(s, h.p, n_in);
         b_cam++;
     }
 }

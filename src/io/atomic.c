@@ -120,7 +120,7 @@ static int mkdir_one(const char *dir, const char *path, dp_error *err)
     return dp_fail(err, "%s: cannot create folder %s: %s", path, dir, strerror(e));
 }
 
-int make_parent_dirs(const char *path, dp_error *err)
+int io_make_parent_dirs(const char *path, dp_error *err)
 {
     const char *slash = strrchr(path, '/');
     if (!slash || slash == path) return 0;

@@ -174,7 +174,7 @@ static int surface_event(light_path *lp, const hit_record *h)
     vec3 n_in = v3_dot(lp->d, h->ng) < 0.0 ? h->ng : v3_neg(h->ng);
     if (bsdf_is_passthrough(b)) {
         lp->med = surface_next_medium(sf, lp->med, lp->d, h->ng);
-        lp->o = offset_ray_origin(lp->s, h->p, v3_neg(n_in));
+        lp->o = scene_offset_ray_origin(lp->s, h->p, v3_neg(n_in));
         new_vertex(lp);
         return 1;
     }
@@ -189,7 +189,7 @@ static int surface_event(light_path *lp, const hit_record *h)
     }
     lp->beta = v3_mul(lp->beta, b->albedo);
     lp->med = surface_next_medium(sf, lp->med, lp->d, h->ng);
-    lp->o = offset_ray_origin(lp->s, h->p, n_in);
+    lp->o = scene_offset_ray_origin(lp->s, h->p, n_in);
     new_vertex(lp);
     return 1;
 }

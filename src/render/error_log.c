@@ -41,7 +41,7 @@ void error_log_close(error_log *l)
 
 static FILE *open_csv(const char *path, const char *header, dp_error *err)
 {
-    if (make_parent_dirs(path, err)) return NULL;
+    if (io_make_parent_dirs(path, err)) return NULL;
     FILE *f = fopen(path, "w");
     if (!f) {
         dp_fail(err, "%s: cannot write the error log", path);

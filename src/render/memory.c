@@ -114,7 +114,7 @@ double memory_available(void)
     return avail;
 }
 
-void format_bytes(double bytes, char *out, size_t n)
+void memory_format_bytes(double bytes, char *out, size_t n)
 {
     static const char *unit[] = {"B", "KiB", "MiB", "GiB", "TiB", "PiB", "EiB"};
     int u = 0;

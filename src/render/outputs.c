@@ -69,7 +69,7 @@ int render_write_outputs(const film *f, const char *path, const char *integrator
 {
     char stem[OUTPUT_PATH_MAX];
     const char *dot;
-    if (split_output_path(path, stem, sizeof stem, &dot, err) || make_parent_dirs(path, err)) return -1;
+    if (split_output_path(path, stem, sizeof stem, &dot, err) || io_make_parent_dirs(path, err)) return -1;
     const time_window *tw = &f->window;
     image_meta meta = {.time_unit = TIME_UNIT, .gated = tw->gated, .gate_start = tw->start,
                        .gate_end = time_window_end(tw), .camera_warped = 1, .frame_index = -1,
@@ -102,7 +102,7 @@ int render_outputs_check(const char *path, int width, int height, int frame_coun
     struct stat st;
     if (split_output_path(path, stem, sizeof stem, &ext, err)) return -1;
     if (stat(path, &st) == 0 && S_ISDIR(st.st_mode)) return dp_fail(err, "%s: output is a folder", path);
-    if (make_parent_dirs(path, err)) return -1;
+    if (io_make_parent_dirs(path, err)) return -1;
     parent_dir(path, dir, sizeof dir);
     /* writability: create and remove a probe file where the outputs will go */
     snprintf(probe, sizeof probe, "%s/.dartspp-probe-XXXXXX", dir);
@@ -117,8 +117,8 @@ int render_outputs_check(const char *path, int width, int height, int frame_coun
     if (statvfs(dir, &vfs) == 0) {
         double room = (double)vfs.f_bavail * vfs.f_frsize;
         char need[32], have[32];
-        format_bytes(bytes, need, sizeof need);
-        format_bytes(room, have, sizeof have);
+        memory_format_bytes(bytes, need, sizeof need);
+        memory_format_bytes(room, have, sizeof have);
         if (bytes > room)
             return dp_fail(err, "%s: the outputs (%.0f files%s) need up to %s, the folder %s has %s free", path, files,
                            frame_count > 0 ? ", integrator.frame_num" : "", need, dir, have);

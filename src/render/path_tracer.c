@@ -92,7 +92,7 @@ static int scatter_surface(pixel_ctx *c, path_state *ps, const hit_record *h, in
     vec3 n_in = v3_dot(ps->d, h->ng) < 0.0 ? h->ng : v3_neg(h->ng); /* facing the arriving path */
     if (bsdf_is_passthrough(b)) {
         ps->medium = surface_next_medium(sf, ps->medium, ps->d, h->ng);
-        ps->o = offset_ray_origin(c->s, h->p, v3_neg(n_in));
+        ps->o = scene_offset_ray_origin(c->s, h->p, v3_neg(n_in));
         return 1;
     }
     ps->depth++;
@@ -104,13 +104,13 @@ static int scatter_surface(pixel_ctx *c, path_state *ps, const hit_record *h, in
         path_state at = *ps;
         at.beta = v3_mul(ps->beta, b->albedo);
         if (bounces_count(&c->p->bounces, ps->depth + 1))
-            connect_lights(c, &at, offset_ray_origin(c->s, h->p, n_in), eval_lambert_cos, &lc);
+            connect_lights(c, &at, scene_offset_ray_origin(c->s, h->p, n_in), eval_lambert_cos, &lc);
         double u1 = rng_uniform(c->rng), u2 = rng_uniform(c->rng);
         ps->d = sample_cosine_about(n_in, u1, u2);
     }
     ps->beta = v3_mul(ps->beta, b->albedo);
     ps->medium = surface_next_medium(sf, ps->medium, ps->d, h->ng);
-    ps->o = offset_ray_origin(c->s, h->p, n_in);
+    ps->o = scene_offset_ray_origin(c->s, h->p, n_in);
     return 1;
 }
 

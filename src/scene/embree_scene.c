@@ -120,7 +120,7 @@ static float offset_component(float p, double n, float scale)
     return r;
 }
 
-vec3 offset_ray_origin(const scene *s, vec3 p, vec3 n)
+vec3 scene_offset_ray_origin(const scene *s, vec3 p, vec3 n)
 {
     float k = s->ray_offset_scale > 0.0f ? s->ray_offset_scale : 1.0f;
     return v3(offset_component((float)p.x, n.x, k), offset_component((float)p.y, n.y, k),
@@ -144,7 +144,7 @@ int scene_transmittance(const scene *s, vec3 p, int med, vec3 q, vec3 *tr, doubl
         const surface *sf = &s->surfaces[h.surface];
         if (!bsdf_is_passthrough(&s->bsdfs[sf->bsdf])) break;
         med = surface_next_medium(sf, med, d, h.ng);
-        p = offset_ray_origin(s, h.p, v3_dot(d, h.ng) > 0 ? h.ng : v3_neg(h.ng));
+        p = scene_offset_ray_origin(s, h.p, v3_dot(d, h.ng) > 0 ? h.ng : v3_neg(h.ng));
     }
     *tr = v3s(0.0);
     return 0;
