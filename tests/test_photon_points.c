@@ -170,6 +170,10 @@ static void render_totals(const scene *s, uint64_t seed0, int seeds, long passes
     for (int k = 0; k < seeds; k++) free(render_probe(s, 2, seed0 + k, passes, &pr));
 }
 
+/* Photon-pass keys: the DARTS samplers (as the paper's scenes turn them on) or none. */
+static const char *const DARTS_KEYS = "\"enable_guiding\": true, \"enable_elliptical\": true, \"strict_time_width\": true";
+static const char *const BASELINE_KEYS = "\"enable_guiding\": false, \"enable_elliptical\": false";
+
 /* A fog box open towards the camera: Lambertian floor, ceiling, back and side walls (2 × 2 × 2), fog
  * everywhere, the camera in the fog outside the box looking in, a point light inside the box. The light sits
  * in a small clear pocket (a 0.3 cube of index-matched boundary with vacuum inside): with a point light in
@@ -670,7 +674,8 @@ static ss_expectation ss_expected(const ss_case *a, int q)
 #define SS_ITERS 24
 #define SS_R0 0.08
 
-static void ss_scene_text(char *text, size_t len)
+/* `keys`: further integrator keys (the DARTS switches), "" for baseline photon points. */
+static void ss_scene_text(char *text, size_t len, const char *keys)
 {
     snprintf(text, len,
              "{ \"media\": [ { \"name\": \"fog\", \"type\": \"homogeneous\", \"sigma_s\": [0.4, 0.3, 0.5],"
@@ -683,42 +688,33 @@ static void ss_scene_text(char *text, size_t len)
              "  \"integrator\": { \"type\": \"progressive_transient_photon_map\", \"volume_photon_type\": \"points\","
              "    \"photon_count\": %d, \"volume_photon_count\": 1e6, \"volume_gather_radius\": %.17g,"
              "    \"volume_alpha\": 0.7, \"min_bounces\": 1, \"max_bounces\": 2,"
-             "    \"transient_time_center\": 3.5, \"transient_time_width\": 1.0 },"
+             "    \"transient_time_center\": 3.5, \"transient_time_width\": 1.0%s%s },"
              "  \"renderer\": { \"spp\": 1 } }",
-             SS_PATHS, SS_R0);
+             SS_PATHS, SS_R0, keys[0] ? ", " : "", keys);
 }
 
-/* Point light in an infinite fog (HG g = 0.3, coloured σs and σa, η = 1.25), camera in the fog, gate
- * [3, 4), max_bounces 2 with min_bounces 1: exactly single scattering (path tracer's counting, DESIGN §4:
- * light -> scattering vertex -> camera is 2 segments). The light is in the field of view, but the gate
- * starts after the direct camera-light time η|l| = 2.33, so no gated scattering point is closer to the light
- * than (3/η - |l|)/2 = 0.27 and the image is bounded and smooth.
- *
- * Checked: the photon-points image total (sum over pixels, per channel, 8 seeds × 24 iterations of 20000
- * light paths) against the quadrature total. A per-pixel comparison would be dominated by the kernel blur of
- * the image features; the total is insensitive to it to first order, because the kernel of each photon is
- * normalised over the plane across the camera rays. What remains of the kernel bias, derived in a comment
- * below and computed by the same quadrature, gives the explicit bias allowance. */
-static void test_single_scatter_total(void **state)
+/* The quadrature of the single-scattering scene s: the expected image total and the kernel-bias terms per
+ * unit r² (computed once, it takes seconds under ASan; every caller's scene differs only in photon-pass keys,
+ * which the assertions on the loaded scene confirm). */
+static const ss_expectation *ss_reference(const scene *s)
 {
-    (void)state;
-    char text[4096];
-    tmp_scene t;
-    ss_scene_text(text, sizeof text);
-    tmp_scene_write(&t, text);
-    scene s;
-    load_scene(t.path, NULL, 0, &s);
-    ss_case a = {.cam = &s.cam, .light = s.lights[0].pos, .I = s.lights[0].intensity, .ss = s.media[0].sigma_s,
-                 .st = s.media[0].sigma_t, .g = 0.3, .eta = 1.0 / 0.8, .g0 = 3.0, .g1 = 4.0, .nodes = 8, .panels = 8};
+    static ss_expectation e;
+    static int done;
+    ss_case a = {.cam = &s->cam, .light = s->lights[0].pos, .I = s->lights[0].intensity, .ss = s->media[0].sigma_s,
+                 .st = s->media[0].sigma_t, .g = 0.3, .eta = 1.0 / 0.8, .g0 = 3.0, .g1 = 4.0, .nodes = 8, .panels = 8};
     /* the scene as loaded is the one the quadrature assumes */
-    assert_float_equal(s.media[0].eta, a.eta, 1e-15);
-    assert_true(s.integrator.window.gated);
-    assert_float_equal(s.integrator.window.start, a.g0, 1e-12);
-    assert_float_equal(s.integrator.window.width, a.g1 - a.g0, 1e-12);
-    assert_float_equal(s.cam.pos.x, 0, 0);
-    assert_float_equal(v3_len(s.cam.pos), 0, 0);
+    assert_int_equal(s->light_count, 1);
+    assert_float_equal(v3_len(v3_sub(s->lights[0].pos, v3(0.4, 0.25, 1.8))), 0, 1e-15);
+    assert_float_equal(s->media[0].eta, a.eta, 1e-15);
+    assert_float_equal(s->media[0].phase.g, a.g, 1e-15);
+    assert_true(s->integrator.window.gated);
+    assert_float_equal(s->integrator.window.start, a.g0, 1e-12);
+    assert_float_equal(s->integrator.window.width, a.g1 - a.g0, 1e-12);
+    assert_float_equal(s->cam.pos.x, 0, 0);
+    assert_float_equal(v3_len(s->cam.pos), 0, 0);
+    if (done) return &e;
     gauss_legendre(a.nodes, a.x, a.w);
-    ss_expectation e = ss_expected(&a, 4);
+    e = ss_expected(&a, 4);
     /* the quadrature is converged: a finer rule agrees to 1e-7 (measured: 10 digits) */
     ss_case fine = a;
     fine.nodes = 12;
@@ -727,17 +723,36 @@ static void test_single_scatter_total(void **state)
     ss_expectation ef = ss_expected(&fine, 6);
     for (int ch = 0; ch < 3; ch++)
         assert_float_equal(v3_comp(e.total, ch), v3_comp(ef.total, ch), 1e-7 * v3_comp(e.total, ch));
+    done = 1;
+    return &e;
+}
 
-    vec3 A[SS_SEEDS];
-    size_t npx = (size_t)s.cam.width * s.cam.height;
-    for (int k = 0; k < SS_SEEDS; k++) {
-        double *m = render_mean(&s, 2, 500 + k, SS_ITERS);
-        double c[3] = {0, 0, 0};
-        for (size_t p = 0; p < npx; p++)
-            for (int ch = 0; ch < 3; ch++) c[ch] += m[3 * p + ch];
-        A[k] = v3(c[0], c[1], c[2]);
-        free(m);
-    }
+/* Point light in an infinite fog (HG g = 0.3, coloured σs and σa, η = 1.25), camera in the fog, gate
+ * [3, 4), max_bounces 2 with min_bounces 1: exactly single scattering (path tracer's counting, DESIGN §4:
+ * light -> scattering vertex -> camera is 2 segments). The light is in the field of view, but the gate
+ * starts after the direct camera-light time η|l| = 2.33, so no gated scattering point is closer to the light
+ * than (3/η - |l|)/2 = 0.27 and the image is bounded and smooth.
+ *
+ * Checked: the photon-points image total (sum over pixels, per channel, `seeds` × 24 iterations of 20000
+ * light paths, photon pass keys `keys`) against the quadrature total. A per-pixel comparison would be
+ * dominated by the kernel blur of the image features; the total is insensitive to it to first order,
+ * because the kernel of each photon is normalised over the plane across the camera rays. What remains of the
+ * kernel bias, derived in a comment below and computed by the same quadrature, gives the explicit bias
+ * allowance. It is the same for every unbiased photon pass: the kernel estimate's expectation depends only
+ * on the expected photon distribution, which DARTS's samplers leave unchanged. The standard error comes
+ * from the per-pass totals (seeds × 24 of them, several per degree of freedom of a normal: z = 4 has a
+ * two-sided false-alarm rate of 6.3e-5 per check, under 6e-4 for the 9 checks of the two tests). */
+static void ss_total_check(const char *label, const char *keys, int seeds)
+{
+    char text[4096];
+    tmp_scene t;
+    ss_scene_text(text, sizeof text, keys);
+    tmp_scene_write(&t, text);
+    scene s;
+    load_scene(t.path, NULL, 0, &s);
+    const ss_expectation *e = ss_reference(&s);
+    pass_totals pt;
+    render_totals(&s, 500, seeds, SS_ITERS, &pt);
     /* Kernel bias of the total. The biweight kernel 3/(πr²)(1 - u²/r²)² has E[u²] = r²/4, i.e. r²/8 per axis.
      * (1) Image border: a photon at depth s is spread over the image with a per-axis variance
      *     σ_n² = (r²/8) J_n / s² pixels² (J_n = squared pixel Jacobian across the ray). Blurring a smooth
@@ -757,24 +772,66 @@ static void test_single_scatter_total(void **state)
      * (4.3 %, 17 %), so the model has the right size. */
     double r2 = 0;
     for (long i = 0; i < SS_ITERS; i++) r2 += pow(radius_closed_form(SS_R0, 0.7, i, 2), 2) / SS_ITERS;
+    print_message("  %s, %d seeds × %d iterations:\n", label, seeds, SS_ITERS);
     for (int ch = 0; ch < 3; ch++) {
-        double mean = 0, var = 0;
-        for (int k = 0; k < SS_SEEDS; k++) mean += v3_comp(A[k], ch) / SS_SEEDS;
-        for (int k = 0; k < SS_SEEDS; k++) var += pow(v3_comp(A[k], ch) - mean, 2) / (SS_SEEDS - 1);
-        double q = v3_comp(e.total, ch), se = sqrt(var / SS_SEEDS);
-        double edge = r2 * v3_comp(e.edge, ch), interior = r2 * v3_comp(e.interior, ch);
+        double mean, se;
+        pass_totals_mean_se(&pt, 0, ch, &mean, &se);
+        double q = v3_comp(e->total, ch);
+        double edge = r2 * v3_comp(e->edge, ch), interior = r2 * v3_comp(e->interior, ch);
         double allowance = 2 * fabs(edge) + interior;
         print_message("  channel %d: quadrature %.6g, photon points %.6g (se %.2g = %.2f %%), diff %+.3f %% = %+.2f se;"
                       " bias allowance %.3f %% (border %+.3f %%, interior <= %.3f %%)\n",
                       ch, q, mean, se, 100 * se / q, 100 * (mean - q) / q, (mean - q) / se, 100 * allowance / q,
                       100 * edge / q, 100 * interior / q);
         assert_true(se > 0);
-        /* the test only means something if the bias allowance is small */
+        /* the test only means something if the bias allowance and the noise are small */
         assert_true(allowance < 0.01 * q);
-        /* mean of 8 seeds: t with 7 dof, P(|t| > 4) = 0.5 % */
+        assert_true(se < 0.005 * q);
         assert_true(fabs(mean - q) < 4 * se + allowance);
     }
+    pass_totals_free(&pt);
     scene_free(&s);
+    tmp_scene_remove(&t);
+}
+
+static void test_single_scatter_total(void **state)
+{
+    (void)state;
+    ss_total_check("baseline photon points", "", SS_SEEDS);
+}
+
+/* The same for the DARTS photon pass: (1) DA distance sampling, elliptical control vertices and strict time
+ * mode (the stored photons are the control vertices: the uniform η of this scene puts them on the right
+ * equal-time surface); (2) DA distance sampling alone, strict off: free-flight photons at the DA-sampled
+ * vertices, which is what the photon pass falls back to when the scene's η is not uniform. Strict on or
+ * off makes no difference here, as strict mode only filters surface photons and this scene has none: the
+ * photon sets of the two are asserted identical, which the renders would only repeat. Fewer seeds than
+ * the baseline: the control vertices have a third of its per-pass spread. */
+static void test_darts_single_scatter_total(void **state)
+{
+    (void)state;
+    ss_total_check("DARTS: DA distance sampling, control vertices, strict", DARTS_KEYS, 4);
+    ss_total_check("DA distance sampling only, strict off", "\"enable_guiding\": true", 4);
+    char text[4096];
+    tmp_scene t;
+    ss_scene_text(text, sizeof text, DARTS_KEYS);
+    tmp_scene_write(&t, text);
+    const char *off[] = {"strict_time_width=false"};
+    scene s_on, s_off;
+    load_scene(t.path, NULL, 0, &s_on);
+    load_scene(t.path, off, 1, &s_off);
+    photon_set a, b;
+    dp_error err;
+    if (photon_pass(&s_on, NULL, 3, 5, 0.0, &a, &err) || photon_pass(&s_off, NULL, 3, 5, 0.0, &b, &err))
+        fail_msg("%s", err.msg);
+    assert_true(a.n_vol > 1000);
+    assert_int_equal(a.n_vol, b.n_vol);
+    assert_int_equal(a.n_surf + b.n_surf, 0);
+    for (size_t i = 0; i < a.n_vol; i++) assert_photon_identical(&a.vol[i], &b.vol[i]);
+    photon_set_free(&a);
+    photon_set_free(&b);
+    scene_free(&s_on);
+    scene_free(&s_off);
     tmp_scene_remove(&t);
 }
 
@@ -959,8 +1016,6 @@ static void test_eda_consistency_anisotropic(void **state)
 /* ---------------------------------------------------------------------------------------------------- */
 /* 5. refractive index: DARTS against baseline photon points                                             */
 
-static const char *const DARTS_KEYS = "\"enable_guiding\": true, \"enable_elliptical\": true, \"strict_time_width\": true";
-static const char *const BASELINE_KEYS = "\"enable_guiding\": false, \"enable_elliptical\": false";
 
 /* A fog box as box_scene_text_g but with one medium everywhere: refractive index 1/speed in the fog, the
  * camera and the light in it (no clear pocket: no path tracer renders this scene), surfaces only (no volume
@@ -1119,6 +1174,7 @@ int main(void)
         cmocka_unit_test(test_surface_photons_after_volume_budget_full),
         cmocka_unit_test(test_darts_surface_band_edges),
         cmocka_unit_test(test_single_scatter_total),
+        cmocka_unit_test(test_darts_single_scatter_total),
         cmocka_unit_test(test_consistency_vs_path_tracer),
         cmocka_unit_test(test_eda_consistency_anisotropic),
         cmocka_unit_test(test_darts_refractive_index),
