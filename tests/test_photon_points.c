@@ -1,8 +1,10 @@
 /* Progressive photon points (volume_photon_type "points"): the radius schedule against its closed form,
  * thread-count independence of the image, the total of a single-scattering image against an independent
- * quadrature, and consistency against the reference path tracer on a small fog box. Every tolerance below
- * is derived from a noise estimate measured in the same test (spread over independent seeds) plus a stated
- * bias budget; no expected value comes from an earlier run of this code. */
+ * quadrature (baseline and DARTS photon passes), consistency against the reference path tracer on a small
+ * fog box (per-pixel error and per-channel image totals), DARTS against baseline photon points at
+ * refractive index 4/3, and DARTS frame mode against the path tracer's frames. Every tolerance below is
+ * derived from a noise estimate measured in the same test (spread over independent seeds or passes) plus a
+ * stated bias budget; no expected value comes from an earlier run of this code. */
 #include "test_util.h"
 
 #include <omp.h>
@@ -810,10 +812,12 @@ static void test_single_scatter_total(void **state)
 /* The same for the DARTS photon pass: (1) DA distance sampling, elliptical control vertices and strict time
  * mode (the stored photons are the control vertices: the uniform η of this scene puts them on the right
  * equal-time surface); (2) DA distance sampling alone, strict off: free-flight photons at the DA-sampled
- * vertices, which is what the photon pass falls back to when the scene's η is not uniform. Strict on or
- * off makes no difference here, as strict mode only filters surface photons and this scene has none: the
- * photon sets of the two are asserted identical, which the renders would only repeat. Fewer seeds than
- * the baseline: the control vertices have a third of its per-pass spread. */
+ * vertices, which is what the photon pass falls back to when the scene's η is not uniform. Strict on or off
+ * makes no difference here, as strict mode only filters surface photons and this scene has none: the photon
+ * sets of the two are asserted identical, which the renders would only repeat. Fewer seeds than the
+ * baseline: the control vertices have a third of its per-pass spread. Checked against broken variants:
+ * every contribution scaled by 1.02: DARTS +1.88 % = 15 se (bound 0.75 %), the baseline +1.81 % = 7.1 se
+ * (bound 1.27 %); the DA weight scaled by 1.02: DA only +2.34 % = 11 se (bound 1.1 %). */
 static void test_darts_single_scatter_total(void **state)
 {
     (void)state;
@@ -994,7 +998,8 @@ static void consistency_check(co_method method, double g, const co_reference *re
      * irradiance at the mean R of 0.06, and the irradiance is not uniform. Offline, with the radii held
      * fixed: R = 0.2 instead of 0.1 raised the total by 1.2 %, r = 0.03 instead of 0.06 by 0.2 %; at the
      * schedule used here all methods came out 0.25 % below the path tracer (16 seeds). The check must see a
-     * 2 % bias: z·se + b < 2 % is asserted. */
+     * 2 % bias: z·se + b < 2 % is asserted. With every photon-points contribution scaled by 1.02 (0.98), the
+     * baseline's channel 0 came out +1.66 % (-2.33 %) against a bound of 1.50 %. */
     for (int c = 0; c < 3; c++) {
         double m, se, mr, ser;
         pass_totals_mean_se(&tpp, 0, c, &m, &se);
@@ -1341,8 +1346,9 @@ static void add_mean_covariance(const pass_totals *t, double *C)
  *     correlated, so Σ z² over channels would not follow χ²). Q is at most the χ² statistic of the true
  *     bias, χ² with 24 degrees of freedom; C is estimated from 768 DARTS passes, which inflates Q's mean by
  *     (n - 1)/(n - p - 2) = 3.4 %, corrected for. Required: χ² survival of Q above 1e-3.
- * Without the frame check of the film (a frame-k photon gathered in frame k + 1, or DARTS's per-frame
- * powers not divided by the frame probability 1/8) both fail by far: see the report in the commit. */
+ * Checked against broken variants: DARTS's frame-k contributions written to frame k + 1: all 24 checks fail
+ * (frame 0 -100 %, frames 1-6 +13 to +22 %, frame 7 +117 %), Q = 1.2e5; photon powers not divided by the
+ * frame probability (1/8 here): -87.5 % in every frame, Q = 4.5e5. */
 static void test_darts_frames_vs_path_tracer(void **state)
 {
     (void)state;
