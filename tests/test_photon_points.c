@@ -1,8 +1,10 @@
 /* Progressive photon points (volume_photon_type "points"): the radius schedule against its closed form,
  * thread-count independence of the image, the total of a single-scattering image against an independent
- * quadrature, and consistency against the reference path tracer on a small fog box. Every tolerance below
- * is derived from a noise estimate measured in the same test (spread over independent seeds) plus a stated
- * bias budget; no expected value comes from an earlier run of this code. */
+ * quadrature (baseline and DARTS photon passes), consistency against the reference path tracer on a small
+ * fog box (per-pixel error and per-channel image totals), DARTS against baseline photon points at
+ * refractive index 4/3, and DARTS frame mode against the path tracer's frames. Every tolerance below is
+ * derived from a noise estimate measured in the same test (spread over independent seeds or passes) plus a
+ * stated bias budget; no expected value comes from an earlier run of this code. */
 #include "test_util.h"
 
 #include <omp.h>
@@ -170,14 +172,24 @@ static void render_totals(const scene *s, uint64_t seed0, int seeds, long passes
     for (int k = 0; k < seeds; k++) free(render_probe(s, 2, seed0 + k, passes, &pr));
 }
 
+/* Photon-pass keys: the DARTS samplers (as the paper's scenes turn them on) or none. */
+static const char *const DARTS_KEYS = "\"enable_guiding\": true, \"enable_elliptical\": true, \"strict_time_width\": true";
+static const char *const BASELINE_KEYS = "\"enable_guiding\": false, \"enable_elliptical\": false";
+
 /* A fog box open towards the camera: Lambertian floor, ceiling, back and side walls (2 × 2 × 2), fog
  * everywhere, the camera in the fog outside the box looking in, a point light inside the box. The light sits
  * in a small clear pocket (a 0.3 cube of index-matched boundary with vacuum inside): with a point light in
  * the fog itself, next-event estimation from a phase-sampled medium vertex has infinite variance (the
  * second moment of 1/d^2 over the volume near the light diverges), which would make the path tracer's
- * noise estimates below meaningless. */
-static void box_scene_text_g(char *text, size_t len, int res, const char *integrator, double g)
+ * noise estimates below meaningless. With camera_in_fog 0 the fog fills only an index-matched cube of side
+ * 2.1 around the box and the camera is in vacuum 1.95 in front of it: no volume photon comes near the
+ * camera. (With the camera in the fog, a volume photon at distance s from it adds ∝ 1/s² to the image, and
+ * the image total of a pass has a heavy right tail: kurtosis 91 over 2048 passes here, against 3.4 with the
+ * camera outside.) */
+static void box_scene_text_cam(char *text, size_t len, int res, const char *integrator, double g, int camera_in_fog)
 {
+    const char *fog_cube = "    { \"type\": \"cube\", \"bsdf\": { \"type\": \"forward\" }, \"int_medium\": \"fog\","
+                           "      \"transform\": { \"position\": [0, 1, 0], \"scale\": [2.1, 2.1, 2.1] } },";
     snprintf(text, len,
              "{ \"media\": [ { \"name\": \"fog\", \"type\": \"homogeneous\", \"sigma_s\": [0.45, 0.4, 0.5],"
              "    \"sigma_a\": [0.05, 0.08, 0.03], \"phase_function\": { \"type\": \"henyey_greenstein\", \"g\": %g } } ],"
@@ -196,18 +208,19 @@ static void box_scene_text_g(char *text, size_t len, int res, const char *integr
              "      \"rotation\": [0, 0, 90] } },"
              "    { \"type\": \"cube\", \"bsdf\": { \"type\": \"forward\" }, \"ext_medium\": \"fog\","
              "      \"transform\": { \"position\": [0.3, 1.5, 0.2], \"scale\": [0.3, 0.3, 0.3] } },"
+             "%s"
              "    { \"type\": \"point\", \"emission\": [4, 4, 4],"
              "      \"transform\": { \"position\": [0.3, 1.5, 0.2] } } ],"
-             "  \"camera\": { \"type\": \"pinhole\", \"resolution\": [%d, %d], \"fov\": 45, \"medium\": \"fog\","
+             "  \"camera\": { \"type\": \"pinhole\", \"resolution\": [%d, %d], \"fov\": 45%s,"
              "    \"transform\": { \"position\": [0, 1, -3], \"look_at\": [0, 1, 0], \"up\": [0, 1, 0] } },"
              "  \"integrator\": { %s },"
              "  \"renderer\": { \"spp\": 1 } }",
-             g, res, res, integrator);
+             g, camera_in_fog ? "" : fog_cube, res, res, camera_in_fog ? ", \"medium\": \"fog\"" : "", integrator);
 }
 
 static void box_scene_text(char *text, size_t len, int res, const char *integrator)
 {
-    box_scene_text_g(text, len, res, integrator, 0.3);
+    box_scene_text_cam(text, len, res, integrator, 0.3, 1);
 }
 
 /* ---------------------------------------------------------------------------------------------------- */
@@ -673,7 +686,8 @@ static ss_expectation ss_expected(const ss_case *a, int q)
 #define SS_ITERS 24
 #define SS_R0 0.08
 
-static void ss_scene_text(char *text, size_t len)
+/* `keys`: further integrator keys (the DARTS switches), "" for baseline photon points. */
+static void ss_scene_text(char *text, size_t len, const char *keys)
 {
     snprintf(text, len,
              "{ \"media\": [ { \"name\": \"fog\", \"type\": \"homogeneous\", \"sigma_s\": [0.4, 0.3, 0.5],"
@@ -686,42 +700,33 @@ static void ss_scene_text(char *text, size_t len)
              "  \"integrator\": { \"type\": \"progressive_transient_photon_map\", \"volume_photon_type\": \"points\","
              "    \"photon_count\": %d, \"volume_photon_count\": 1e6, \"volume_gather_radius\": %.17g,"
              "    \"volume_alpha\": 0.7, \"min_bounces\": 1, \"max_bounces\": 2,"
-             "    \"transient_time_center\": 3.5, \"transient_time_width\": 1.0 },"
+             "    \"transient_time_center\": 3.5, \"transient_time_width\": 1.0%s%s },"
              "  \"renderer\": { \"spp\": 1 } }",
-             SS_PATHS, SS_R0);
+             SS_PATHS, SS_R0, keys[0] ? ", " : "", keys);
 }
 
-/* Point light in an infinite fog (HG g = 0.3, coloured σs and σa, η = 1.25), camera in the fog, gate
- * [3, 4), max_bounces 2 with min_bounces 1: exactly single scattering (path tracer's counting, DESIGN §4:
- * light -> scattering vertex -> camera is 2 segments). The light is in the field of view, but the gate
- * starts after the direct camera-light time η|l| = 2.33, so no gated scattering point is closer to the light
- * than (3/η - |l|)/2 = 0.27 and the image is bounded and smooth.
- *
- * Checked: the photon-points image total (sum over pixels, per channel, 8 seeds × 24 iterations of 20000
- * light paths) against the quadrature total. A per-pixel comparison would be dominated by the kernel blur of
- * the image features; the total is insensitive to it to first order, because the kernel of each photon is
- * normalised over the plane across the camera rays. What remains of the kernel bias, derived in a comment
- * below and computed by the same quadrature, gives the explicit bias allowance. */
-static void test_single_scatter_total(void **state)
+/* The quadrature of the single-scattering scene s: the expected image total and the kernel-bias terms per
+ * unit r² (computed once, it takes seconds under ASan; every caller's scene differs only in photon-pass keys,
+ * which the assertions on the loaded scene confirm). */
+static const ss_expectation *ss_reference(const scene *s)
 {
-    (void)state;
-    char text[4096];
-    tmp_scene t;
-    ss_scene_text(text, sizeof text);
-    tmp_scene_write(&t, text);
-    scene s;
-    load_scene(t.path, NULL, 0, &s);
-    ss_case a = {.cam = &s.cam, .light = s.lights[0].pos, .I = s.lights[0].intensity, .ss = s.media[0].sigma_s,
-                 .st = s.media[0].sigma_t, .g = 0.3, .eta = 1.0 / 0.8, .g0 = 3.0, .g1 = 4.0, .nodes = 8, .panels = 8};
+    static ss_expectation e;
+    static int done;
+    ss_case a = {.cam = &s->cam, .light = s->lights[0].pos, .I = s->lights[0].intensity, .ss = s->media[0].sigma_s,
+                 .st = s->media[0].sigma_t, .g = 0.3, .eta = 1.0 / 0.8, .g0 = 3.0, .g1 = 4.0, .nodes = 8, .panels = 8};
     /* the scene as loaded is the one the quadrature assumes */
-    assert_float_equal(s.media[0].eta, a.eta, 1e-15);
-    assert_true(s.integrator.window.gated);
-    assert_float_equal(s.integrator.window.start, a.g0, 1e-12);
-    assert_float_equal(s.integrator.window.width, a.g1 - a.g0, 1e-12);
-    assert_float_equal(s.cam.pos.x, 0, 0);
-    assert_float_equal(v3_len(s.cam.pos), 0, 0);
+    assert_int_equal(s->light_count, 1);
+    assert_float_equal(v3_len(v3_sub(s->lights[0].pos, v3(0.4, 0.25, 1.8))), 0, 1e-15);
+    assert_float_equal(s->media[0].eta, a.eta, 1e-15);
+    assert_float_equal(s->media[0].phase.g, a.g, 1e-15);
+    assert_true(s->integrator.window.gated);
+    assert_float_equal(s->integrator.window.start, a.g0, 1e-12);
+    assert_float_equal(s->integrator.window.width, a.g1 - a.g0, 1e-12);
+    assert_float_equal(s->cam.pos.x, 0, 0);
+    assert_float_equal(v3_len(s->cam.pos), 0, 0);
+    if (done) return &e;
     gauss_legendre(a.nodes, a.x, a.w);
-    ss_expectation e = ss_expected(&a, 4);
+    e = ss_expected(&a, 4);
     /* the quadrature is converged: a finer rule agrees to 1e-7 (measured: 10 digits) */
     ss_case fine = a;
     fine.nodes = 12;
@@ -730,17 +735,36 @@ static void test_single_scatter_total(void **state)
     ss_expectation ef = ss_expected(&fine, 6);
     for (int ch = 0; ch < 3; ch++)
         assert_float_equal(v3_comp(e.total, ch), v3_comp(ef.total, ch), 1e-7 * v3_comp(e.total, ch));
+    done = 1;
+    return &e;
+}
 
-    vec3 A[SS_SEEDS];
-    size_t npx = (size_t)s.cam.width * s.cam.height;
-    for (int k = 0; k < SS_SEEDS; k++) {
-        double *m = render_mean(&s, 2, 500 + k, SS_ITERS);
-        double c[3] = {0, 0, 0};
-        for (size_t p = 0; p < npx; p++)
-            for (int ch = 0; ch < 3; ch++) c[ch] += m[3 * p + ch];
-        A[k] = v3(c[0], c[1], c[2]);
-        free(m);
-    }
+/* Point light in an infinite fog (HG g = 0.3, coloured σs and σa, η = 1.25), camera in the fog, gate
+ * [3, 4), max_bounces 2 with min_bounces 1: exactly single scattering (path tracer's counting, DESIGN §4:
+ * light -> scattering vertex -> camera is 2 segments). The light is in the field of view, but the gate
+ * starts after the direct camera-light time η|l| = 2.33, so no gated scattering point is closer to the light
+ * than (3/η - |l|)/2 = 0.27 and the image is bounded and smooth.
+ *
+ * Checked: the photon-points image total (sum over pixels, per channel, `seeds` × 24 iterations of 20000
+ * light paths, photon pass keys `keys`) against the quadrature total. A per-pixel comparison would be
+ * dominated by the kernel blur of the image features; the total is insensitive to it to first order,
+ * because the kernel of each photon is normalised over the plane across the camera rays. What remains of the
+ * kernel bias, derived in a comment below and computed by the same quadrature, gives the explicit bias
+ * allowance. It is the same for every unbiased photon pass: the kernel estimate's expectation depends only
+ * on the expected photon distribution, which DARTS's samplers leave unchanged. The standard error comes
+ * from the per-pass totals (seeds × 24 of them, several per degree of freedom of a normal: z = 4 has a
+ * two-sided false-alarm rate of 6.3e-5 per check, under 6e-4 for the 9 checks of the two tests). */
+static void ss_total_check(const char *label, const char *keys, int seeds)
+{
+    char text[4096];
+    tmp_scene t;
+    ss_scene_text(text, sizeof text, keys);
+    tmp_scene_write(&t, text);
+    scene s;
+    load_scene(t.path, NULL, 0, &s);
+    const ss_expectation *e = ss_reference(&s);
+    pass_totals pt;
+    render_totals(&s, 500, seeds, SS_ITERS, &pt);
     /* Kernel bias of the total. The biweight kernel 3/(πr²)(1 - u²/r²)² has E[u²] = r²/4, i.e. r²/8 per axis.
      * (1) Image border: a photon at depth s is spread over the image with a per-axis variance
      *     σ_n² = (r²/8) J_n / s² pixels² (J_n = squared pixel Jacobian across the ray). Blurring a smooth
@@ -760,24 +784,68 @@ static void test_single_scatter_total(void **state)
      * (4.3 %, 17 %), so the model has the right size. */
     double r2 = 0;
     for (long i = 0; i < SS_ITERS; i++) r2 += pow(radius_closed_form(SS_R0, 0.7, i, 2), 2) / SS_ITERS;
+    print_message("  %s, %d seeds × %d iterations:\n", label, seeds, SS_ITERS);
     for (int ch = 0; ch < 3; ch++) {
-        double mean = 0, var = 0;
-        for (int k = 0; k < SS_SEEDS; k++) mean += v3_comp(A[k], ch) / SS_SEEDS;
-        for (int k = 0; k < SS_SEEDS; k++) var += pow(v3_comp(A[k], ch) - mean, 2) / (SS_SEEDS - 1);
-        double q = v3_comp(e.total, ch), se = sqrt(var / SS_SEEDS);
-        double edge = r2 * v3_comp(e.edge, ch), interior = r2 * v3_comp(e.interior, ch);
+        double mean, se;
+        pass_totals_mean_se(&pt, 0, ch, &mean, &se);
+        double q = v3_comp(e->total, ch);
+        double edge = r2 * v3_comp(e->edge, ch), interior = r2 * v3_comp(e->interior, ch);
         double allowance = 2 * fabs(edge) + interior;
         print_message("  channel %d: quadrature %.6g, photon points %.6g (se %.2g = %.2f %%), diff %+.3f %% = %+.2f se;"
                       " bias allowance %.3f %% (border %+.3f %%, interior <= %.3f %%)\n",
                       ch, q, mean, se, 100 * se / q, 100 * (mean - q) / q, (mean - q) / se, 100 * allowance / q,
                       100 * edge / q, 100 * interior / q);
         assert_true(se > 0);
-        /* the test only means something if the bias allowance is small */
+        /* the test only means something if the bias allowance and the noise are small */
         assert_true(allowance < 0.01 * q);
-        /* mean of 8 seeds: t with 7 dof, P(|t| > 4) = 0.5 % */
+        assert_true(se < 0.005 * q);
         assert_true(fabs(mean - q) < 4 * se + allowance);
     }
+    pass_totals_free(&pt);
     scene_free(&s);
+    tmp_scene_remove(&t);
+}
+
+static void test_single_scatter_total(void **state)
+{
+    (void)state;
+    ss_total_check("baseline photon points", "", SS_SEEDS);
+}
+
+/* The same for the DARTS photon pass: (1) DA distance sampling, elliptical control vertices and strict time
+ * mode (the stored photons are the control vertices: the uniform η of this scene puts them on the right
+ * equal-time surface); (2) DA distance sampling alone, strict off: free-flight photons at the DA-sampled
+ * vertices, which is what the photon pass falls back to when the scene's η is not uniform. Strict on or off
+ * makes no difference here, as strict mode only filters surface photons and this scene has none: the photon
+ * sets of the two are asserted identical, which the renders would only repeat. Fewer seeds than the
+ * baseline: the control vertices have a third of its per-pass spread. Checked against broken variants:
+ * every contribution scaled by 1.02: DARTS +1.88 % = 15 se (bound 0.75 %), the baseline +1.81 % = 7.1 se
+ * (bound 1.27 %); the DA weight scaled by 1.02: DA only +2.34 % = 11 se (bound 1.1 %). */
+static void test_darts_single_scatter_total(void **state)
+{
+    (void)state;
+    ss_total_check("DARTS: DA distance sampling, control vertices, strict", DARTS_KEYS, 4);
+    ss_total_check("DA distance sampling only, strict off", "\"enable_guiding\": true", 4);
+    char text[4096];
+    tmp_scene t;
+    ss_scene_text(text, sizeof text, DARTS_KEYS);
+    tmp_scene_write(&t, text);
+    const char *off[] = {"strict_time_width=false"};
+    scene s_on, s_off;
+    load_scene(t.path, NULL, 0, &s_on);
+    load_scene(t.path, off, 1, &s_off);
+    photon_set a, b;
+    dp_error err;
+    if (run_photon_pass(&s_on, 3, 5, 0.0, &a, &err) || run_photon_pass(&s_off, 3, 5, 0.0, &b, &err))
+        fail_msg("%s", err.msg);
+    assert_true(a.n_vol > 1000);
+    assert_int_equal(a.n_vol, b.n_vol);
+    assert_int_equal(a.n_surf + b.n_surf, 0);
+    for (size_t i = 0; i < a.n_vol; i++) assert_photon_identical(&a.vol[i], &b.vol[i]);
+    photon_set_free(&a);
+    photon_set_free(&b);
+    scene_free(&s_on);
+    scene_free(&s_off);
     tmp_scene_remove(&t);
 }
 
@@ -785,7 +853,7 @@ static void test_single_scatter_total(void **state)
 /* 4. consistency against the path tracer                                                                */
 
 #define CO_RES 24
-#define CO_PP_SEEDS 3
+#define CO_PP_SEEDS 6
 #define CO_PT_CHUNKS 8
 #define CO_PT_PASSES 1024 /* per chunk */
 
@@ -810,77 +878,89 @@ static void co_integrator(char *out, size_t len, co_method m)
                  common, darts);
 }
 
-/* Per-pixel mean over `runs` renders (seeds seed0, seed0+1, ...) and the variance of that mean estimated
- * from their spread; returns the image total of every run in tot (may be NULL). */
-static void co_mean_var(const scene *s, int runs, uint64_t seed0, long passes, double *mean, double *var, double *tot)
+/* Per-pixel means over `runs` renders (seeds seed0, seed0 + 1, ...) of `passes` passes and the variances of
+ * those means from their spread: after all passes (mean, var) and after the first snap_pass passes of the
+ * same renders (snap_mean, snap_var; NULL: none). The per-pass image totals go to t (initialised here). */
+static void co_mean_var(const scene *s, int runs, uint64_t seed0, long passes, long snap_pass, double *mean, double *var,
+                        double *snap_mean, double *snap_var, pass_totals *t)
 {
     size_t n = (size_t)s->cam.width * s->cam.height * 3;
-    double *sq = calloc(n, sizeof(double));
-    assert_non_null(sq);
-    memset(mean, 0, n * sizeof(double));
+    double *sq = calloc(2 * n, sizeof(double)), *snap = malloc(n * sizeof(double));
+    assert_true(sq && snap);
+    double *means[2] = {mean, snap_mean}, *vars[2] = {var, snap_var};
+    for (int j = 0; j < 2; j++)
+        if (means[j]) memset(means[j], 0, n * sizeof(double));
+    pass_totals_init(t, s->integrator.window.frame_count);
+    pass_probe pr = {.t = t, .snap_pass = snap_pass, .snap = snap_mean ? snap : NULL};
     for (int k = 0; k < runs; k++) {
-        double *m = render_mean(s, 2, seed0 + k, passes), t = 0;
-        for (size_t i = 0; i < n; i++) {
-            mean[i] += m[i] / runs;
-            sq[i] += m[i] * m[i];
-            t += m[i];
-        }
-        if (tot) tot[k] = t;
+        double *m = render_probe(s, 2, seed0 + k, passes, &pr), *img[2] = {m, snap};
+        for (int j = 0; j < 2; j++)
+            for (size_t i = 0; means[j] && i < n; i++) {
+                means[j][i] += img[j][i] / runs;
+                sq[j * n + i] += img[j][i] * img[j][i];
+            }
         free(m);
     }
-    for (size_t i = 0; i < n; i++) var[i] = fmax(0.0, (sq[i] - runs * mean[i] * mean[i]) / (runs - 1)) / runs;
+    for (int j = 0; j < 2; j++)
+        for (size_t i = 0; means[j] && i < n; i++)
+            vars[j][i] = fmax(0.0, (sq[j * n + i] - runs * means[j][i] * means[j][i]) / (runs - 1)) / runs;
     free(sq);
+    free(snap);
 }
 
-/* A small gated fog box (24 × 24 pixels, volume and surface transport, up to 3 scattering events) rendered
- * by photon points (baseline, DARTS, DARTS with EDA) after 4 and after 64 iterations (3 seeds each), against
- * the path tracer (8 × 1024 passes, rendered here). Error: normalised MSE, Σ(x - ref)² / Σ ref² over all pixels and channels. Its
- * expectation is B² + V_pp + V_ref (squared bias, variance of the photon-points mean, variance of the
- * reference), the variances being measured from the spread over seeds and over reference chunks. */
+/* A small gated fog box (24 × 24 pixels, volume and surface transport, up to 3 scattering events; the camera
+ * outside the fog) rendered by photon points (baseline, DARTS, DARTS with EDA) after 4 and after 64
+ * iterations (the first 4 passes of the same renders; 6 seeds), against the path tracer (8 × 1024 passes,
+ * rendered here). Error: normalised MSE, Σ(x - ref)² / Σ ref² over all pixels and channels. Its expectation
+ * is B² + V_pp + V_ref (squared bias, variance of the photon-points mean, variance of the reference), the
+ * variances being measured from the spread over seeds and over reference chunks. And the image totals per
+ * channel, with standard errors from the per-pass totals of both methods. */
 /* The consistency box scene rendered by one method, in a temporary folder. */
 static void co_scene(co_method method, double g, tmp_scene *t, scene *s)
 {
     char integ[2048], text[8192];
     co_integrator(integ, sizeof integ, method);
-    box_scene_text_g(text, sizeof text, CO_RES, integ, g);
+    box_scene_text_cam(text, sizeof text, CO_RES, integ, g, 0);
     tmp_scene_write(t, text);
     load_scene(t->path, NULL, 0, s);
 }
 
-static void consistency_check(co_method method, double g, const double *ref, double ref2, double Vref, double tr,
-                              double tr_se)
+/* The path tracer's image of the consistency box: per-pixel mean and its summed variance, and the per-pass
+ * totals. */
+typedef struct {
+    double *img, ref2, Vref;
+    pass_totals t;
+} co_reference;
+
+static void consistency_check(co_method method, double g, const co_reference *ref)
 {
     tmp_scene tq;
     scene sq;
     co_scene(method, g, &tq, &sq);
     size_t n = (size_t)CO_RES * CO_RES * 3;
-    double *pp = malloc(n * sizeof(double)), *vpp = malloc(n * sizeof(double));
-    double tpp[CO_PP_SEEDS];
-    assert_true(pp && vpp);
+    double *pp[2], *vpp[2];
+    for (int c = 0; c < 2; c++) {
+        pp[c] = malloc(n * sizeof(double));
+        vpp[c] = malloc(n * sizeof(double));
+        assert_true(pp[c] && vpp[c]);
+    }
     print_message("  %s photon points, HG g = %g\n",
                   method == CO_DARTS_EDA ? "DARTS with EDA" : method == CO_DARTS ? "DARTS" : "baseline", g);
     const long iters[2] = {4, 64};
-    double nmse[2], Vpp[2], total[2], se_total[2];
+    pass_totals tpp;
+    co_mean_var(&sq, CO_PP_SEEDS, 300, iters[1], iters[0], pp[1], vpp[1], pp[0], vpp[0], &tpp);
+    double nmse[2], Vpp[2], Vref = ref->Vref;
     for (int c = 0; c < 2; c++) {
-        co_mean_var(&sq, CO_PP_SEEDS, 300, iters[c], pp, vpp, tpp);
         double err = 0, v = 0;
         for (size_t i = 0; i < n; i++) {
-            err += (pp[i] - ref[i]) * (pp[i] - ref[i]);
-            v += vpp[i];
+            err += (pp[c][i] - ref->img[i]) * (pp[c][i] - ref->img[i]);
+            v += vpp[c][i];
         }
-        nmse[c] = err / ref2;
-        Vpp[c] = v / ref2;
-        double tm = 0, tv = 0;
-        for (int k = 0; k < CO_PP_SEEDS; k++) tm += tpp[k] / CO_PP_SEEDS;
-        for (int k = 0; k < CO_PP_SEEDS; k++) tv += pow(tpp[k] - tm, 2) / (CO_PP_SEEDS - 1) / CO_PP_SEEDS;
-        total[c] = tm;
-        se_total[c] = sqrt(tv);
+        nmse[c] = err / ref->ref2;
+        Vpp[c] = v / ref->ref2;
+        print_message("  %2ld iterations: NMSE %.3g = noise %.3g (photon points %.3g + reference %.3g) %+.3g\n", iters[c],
+                      nmse[c], Vpp[c] + Vref, Vpp[c], Vref, nmse[c] - Vpp[c] - Vref);
     }
-    for (int c = 0; c < 2; c++)
-        print_message("  %2ld iterations: NMSE %.3g = noise %.3g (photon points %.3g + reference %.3g) %+.3g;"
-                      " image total %.5g (se %.2g) vs path tracer %.5g (se %.2g)\n",
-                      iters[c], nmse[c], Vpp[c] + Vref, Vpp[c], Vref, nmse[c] - Vpp[c] - Vref, total[c], se_total[c], tr,
-                      tr_se);
 
     /* The error falls. The photon-points part of it, E(n) = NMSE(n) - V_ref, is V_pp(n) + B(n)². With both
      * kernels 2D, one iteration's variance grows at most like 1/r_i² (the photons in a kernel ∝ r_i²), so
@@ -903,12 +983,43 @@ static void consistency_check(co_method method, double g, const double *ref, dou
      * i.e. a squared-bias budget equal to the measured noise. A priori the bias is well below that: the
      * volume kernel (r <= 0.06, about half a pixel at the box) and the surface disc (R <= 0.1, 0.7 pixel on
      * the back wall) blur image features a few pixels wide by ~1 % (B² ~ 1e-4), against V_pp + V_ref
-     * ~ 1e-3 for these sample counts. The sums run over 1728 values with 2 and 7 degrees of freedom each, so
+     * ~ 1e-3 for these sample counts. The sums run over 1728 values with 5 and 7 degrees of freedom each, so
      * the estimated noise is good to a few percent. */
     assert_true(nmse[1] < 2 * (Vpp[1] + Vref));
 
-    free(pp);
-    free(vpp);
+    /* The image totals at 64 iterations, per channel: |T_pp - T_pt| < z·sqrt(se_pp² + se_pt²) + b.
+     * Standard errors from the per-pass totals (384 and 8192 passes: normal; with the camera outside the fog
+     * the per-pass totals have a kurtosis of about 3). z = 4: two-sided 6.3e-5 per check, under 1e-3 for the
+     * 15 checks of the consistency tests. Bias allowance b = 1 % of the path tracer's total: the kernel bias
+     * of a total cannot be bounded below that here. The volume part can (the single-scattering analysis of
+     * test_single_scatter_total with s >= 2, σt <= 0.55, r <= 0.06 bounds the interior terms by 0.1 %, and
+     * volume photons within r·sin 31° of the fog's front face lose part of their kernel: below 0.2 %), but the
+     * surface disc has terms of first order in R at the box's inner edges: a gather point within R of an
+     * edge loses the part of its disc beyond the edge (-(2/3)R³ per unit edge length, against the πR²
+     * normalisation) and gathers the photons of the other wall inside its sphere (+(π/3)R³): net +0.12·R
+     * times the irradiance per unit edge length on each side, about +1.2 % of the surface image for uniform
+     * irradiance at the mean R of 0.06, and the irradiance is not uniform. Offline, with the radii held
+     * fixed: R = 0.2 instead of 0.1 raised the total by 1.2 %, r = 0.03 instead of 0.06 by 0.2 %; at the
+     * schedule used here all methods came out 0.25 % below the path tracer (16 seeds). The check must see a
+     * 2 % bias: z·se + b < 2 % is asserted. With every photon-points contribution scaled by 1.02 (0.98), the
+     * baseline's channel 0 came out +1.66 % (-2.33 %) against a bound of 1.50 %. */
+    for (int c = 0; c < 3; c++) {
+        double m, se, mr, ser;
+        pass_totals_mean_se(&tpp, 0, c, &m, &se);
+        pass_totals_mean_se(&ref->t, 0, c, &mr, &ser);
+        double sd = sqrt(se * se + ser * ser), b = 0.01 * mr;
+        print_message("  channel %d: image total %.5g (se %.2g), path tracer %.5g (se %.2g): %+.2f %%, bound %.2f %%"
+                      " (4 se %.2f %% + bias 1 %%)\n", c, m, se, mr, ser, 100 * (m - mr) / mr, 100 * (4 * sd + b) / mr,
+                      100 * 4 * sd / mr);
+        assert_true(4 * sd + b < 0.02 * mr);
+        assert_true(fabs(m - mr) < 4 * sd + b);
+    }
+
+    for (int c = 0; c < 2; c++) {
+        free(pp[c]);
+        free(vpp[c]);
+    }
+    pass_totals_free(&tpp);
     scene_free(&sq);
     tmp_scene_remove(&tq);
 }
@@ -919,28 +1030,24 @@ static void consistency_suite(double g, co_method first, co_method last)
     scene sp;
     co_scene(CO_PATH_TRACER, g, &tp, &sp);
     size_t n = (size_t)CO_RES * CO_RES * 3;
-    double *ref = malloc(n * sizeof(double)), *vref = malloc(n * sizeof(double));
-    double tref[CO_PT_CHUNKS];
-    assert_true(ref && vref);
-    co_mean_var(&sp, CO_PT_CHUNKS, 101, CO_PT_PASSES, ref, vref, tref);
-    double ref2 = 0, Vref = 0;
+    co_reference ref = {.img = malloc(n * sizeof(double))};
+    double *vref = malloc(n * sizeof(double));
+    assert_true(ref.img && vref);
+    co_mean_var(&sp, CO_PT_CHUNKS, 101, CO_PT_PASSES, 0, ref.img, vref, NULL, NULL, &ref.t);
     for (size_t i = 0; i < n; i++) {
-        ref2 += ref[i] * ref[i];
-        Vref += vref[i];
+        ref.ref2 += ref.img[i] * ref.img[i];
+        ref.Vref += vref[i];
     }
-    Vref /= ref2;
-    assert_true(ref2 > 0);
-    double tr = 0, trv = 0;
-    for (int k = 0; k < CO_PT_CHUNKS; k++) tr += tref[k] / CO_PT_CHUNKS;
-    for (int k = 0; k < CO_PT_CHUNKS; k++) trv += pow(tref[k] - tr, 2) / (CO_PT_CHUNKS - 1) / CO_PT_CHUNKS;
+    ref.Vref /= ref.ref2;
+    assert_true(ref.ref2 > 0);
     /* baseline photon points, DARTS photon points (bin sampling, DA distance sampling, elliptical control
      * vertices, strict time mode), and DARTS with EDA direction sampling (HG g = 0.3 here): all must
      * converge to the path tracer's image */
     snprintf(co_table_dir, sizeof co_table_dir, "%s/tables", tp.dir);
-    for (co_method method = first; method <= last; method++)
-        consistency_check(method, g, ref, ref2, Vref, tr, sqrt(trv));
-    free(ref);
+    for (co_method method = first; method <= last; method++) consistency_check(method, g, &ref);
+    free(ref.img);
     free(vref);
+    pass_totals_free(&ref.t);
     scene_free(&sp);
     tmp_scene_remove(&tp);
 }
@@ -962,10 +1069,8 @@ static void test_eda_consistency_anisotropic(void **state)
 /* ---------------------------------------------------------------------------------------------------- */
 /* 5. refractive index: DARTS against baseline photon points                                             */
 
-static const char *const DARTS_KEYS = "\"enable_guiding\": true, \"enable_elliptical\": true, \"strict_time_width\": true";
-static const char *const BASELINE_KEYS = "\"enable_guiding\": false, \"enable_elliptical\": false";
 
-/* A fog box as box_scene_text_g but with one medium everywhere: refractive index 1/speed in the fog, the
+/* A fog box as box_scene_text_cam but with one medium everywhere: refractive index 1/speed in the fog, the
  * camera and the light in it (no clear pocket: no path tracer renders this scene), surfaces only (no volume
  * photons: with the camera in the fog, the volume photons next to the camera give the image total a
  * heavy-tailed distribution, and strict mode acts on surface photons only). */
@@ -1113,6 +1218,198 @@ static void test_darts_refractive_index(void **state)
     tmp_scene_remove(&t);
 }
 
+/* ---------------------------------------------------------------------------------------------------- */
+/* 6. DARTS frame mode against the path tracer's frames                                                  */
+
+/* Upper regularized incomplete gamma Q(a, x) (Numerical Recipes §6.2: series below a + 1, Lentz's continued
+ * fraction above): the survival function of χ² with k degrees of freedom at q is Q(k/2, q/2). */
+static double gamma_q(double a, double x)
+{
+    if (x <= 0) return 1.0;
+    double gln = lgamma(a);
+    if (x < a + 1) {
+        double ap = a, sum = 1.0 / a, del = sum;
+        for (int n = 0; n < 1000 && fabs(del) > fabs(sum) * 1e-15; n++) sum += del *= x / ++ap;
+        return 1.0 - sum * exp(-x + a * log(x) - gln);
+    }
+    double b = x + 1 - a, c = 1e300, d = 1 / b, h = d;
+    for (int i = 1; i < 1000; i++) {
+        double an = -i * (i - a);
+        b += 2;
+        d = an * d + b;
+        d = fabs(d) < 1e-300 ? 1e-300 : d;
+        c = b + an / c;
+        c = fabs(c) < 1e-300 ? 1e-300 : c;
+        d = 1 / d;
+        double del = d * c;
+        h *= del;
+        if (fabs(del - 1) < 1e-15) break;
+    }
+    return exp(-x + a * log(x) - gln) * h;
+}
+
+/* In place: A (n × n, symmetric positive definite) -> A⁻¹, by Cholesky. Returns 0 if A is not positive
+ * definite. */
+static int spd_inverse(double *A, int n)
+{
+    double *L = calloc((size_t)n * n, sizeof(double)), *y = malloc((size_t)n * sizeof(double));
+    assert_true(L && y);
+    int ok = 1;
+    for (int i = 0; i < n && ok; i++)
+        for (int j = 0; j <= i; j++) {
+            double v = A[i * n + j];
+            for (int k = 0; k < j; k++) v -= L[i * n + k] * L[j * n + k];
+            if (i == j) {
+                if (!(v > 0)) ok = 0;
+                else L[i * n + i] = sqrt(v);
+            } else L[i * n + j] = v / L[j * n + j];
+        }
+    for (int col = 0; col < n && ok; col++) { /* solve L Lᵀ x = e_col */
+        for (int i = 0; i < n; i++) {
+            double v = i == col;
+            for (int k = 0; k < i; k++) v -= L[i * n + k] * y[k];
+            y[i] = v / L[i * n + i];
+        }
+        for (int i = n - 1; i >= 0; i--) {
+            double v = y[i];
+            for (int k = i + 1; k < n; k++) v -= L[k * n + i] * A[k * n + col];
+            A[i * n + col] = v / L[i * n + i];
+        }
+    }
+    free(L);
+    free(y);
+    return ok;
+}
+
+/* min over |β_i| <= b_i of (d - β)ᵀ A (d - β), A symmetric positive definite: the squared Mahalanobis
+ * distance from d to the box of admissible biases (coordinate descent, exact for this convex quadratic). */
+static double box_mahalanobis(const double *A, const double *d, const double *b, int n)
+{
+    double *beta = calloc((size_t)n, sizeof(double)), *r = malloc((size_t)n * sizeof(double));
+    assert_true(beta && r);
+    for (int sweep = 0; sweep < 500; sweep++) {
+        double change = 0;
+        for (int i = 0; i < n; i++) {
+            double g = 0; /* (A r)_i with r = d - β */
+            for (int j = 0; j < n; j++) g += A[i * n + j] * (d[j] - beta[j]);
+            double nb = fmin(b[i], fmax(-b[i], beta[i] + g / A[i * n + i]));
+            change = fmax(change, fabs(nb - beta[i]) / (b[i] + 1e-300));
+            beta[i] = nb;
+        }
+        if (change < 1e-12) break;
+    }
+    double q = 0;
+    for (int i = 0; i < n; i++) r[i] = d[i] - beta[i];
+    for (int i = 0; i < n; i++)
+        for (int j = 0; j < n; j++) q += r[i] * A[i * n + j] * r[j];
+    free(beta);
+    free(r);
+    return q;
+}
+
+/* Sample covariance of the mean of the frame totals (images 1..F, 3 channels each: p = 3F values per pass),
+ * added into C (p × p). */
+static void add_mean_covariance(const pass_totals *t, double *C)
+{
+    int p = 3 * (t->images - 1);
+    double *mean = calloc((size_t)p, sizeof(double));
+    assert_non_null(mean);
+    for (long i = 0; i < t->n; i++)
+        for (int a = 0; a < p; a++) mean[a] += t->x[(size_t)i * t->images * 3 + 3 + a] / t->n;
+    for (long i = 0; i < t->n; i++) {
+        const double *x = &t->x[(size_t)i * t->images * 3 + 3];
+        for (int a = 0; a < p; a++)
+            for (int b = 0; b < p; b++) C[a * p + b] += (x[a] - mean[a]) * (x[b] - mean[b]) / ((t->n - 1.0) * t->n);
+    }
+    free(mean);
+}
+
+#define FR_FRAMES 8
+#define FR_PP_SEEDS 12
+#define FR_PT_CHUNKS 8
+
+/* Frame mode: the fog slab (slab_scene_text) in 8 frames of 0.3 from 3.5 (the fog in view lights up at 2.6,
+ * so every frame holds light that has spread into the fog), rendered by DARTS photon points (DA distance
+ * sampling, control vertices, strict; each path aims at one frame: its photons are divided by that frame's
+ * probability and gathered only there; 12 seeds × 64 iterations) and by the path tracer (8 × 1024 passes).
+ * Compared: the per-frame image totals, per channel, with standard errors and covariances from the per-pass
+ * totals (768 and 8192 passes).
+ * Bias allowance b = 1 % of each frame's total (the path tracer's): volume photons carry their own path time,
+ * so the kernel blurs space, not time, and each frame total has the kernel bias of a total: interior terms
+ * (test_single_scatter_total) below (10 + σt s)·r²/(8s²) = 0.12 % at the nearest fog (s = 1.5) for the mean
+ * r² of the schedule; the image border cuts through fog where the radiance changes over several pixels (a
+ * second-order flux, ~0.1 %); photons within r·sin 21° of the front or back face lose part of their kernel
+ * (first order in r, a few tenths of a percent while the light in a frame is spread through the slab: in
+ * frames nearer the onset it is concentrated at the front face, -2.5 % at 0.3 after the onset, offline).
+ * Offline with 32 seeds all 8 frames agreed with the path tracer within 1.8 standard errors (at most 1.8 %).
+ * Checks:
+ * (1) every frame and channel: |T_darts - T_pt| < 4·se + b (24 checks at two-sided 6.3e-5: 1.5e-3);
+ * (2) jointly: Q = min over biases β within ±b of (d - β)ᵀ C⁻¹ (d - β), d the 24 differences, C the
+ *     covariance of d (sum of the two methods' covariances of the mean: the channels of a frame are strongly
+ *     correlated, so Σ z² over channels would not follow χ²). Q is at most the χ² statistic of the true
+ *     bias, χ² with 24 degrees of freedom; C is estimated from 768 DARTS passes, which inflates Q's mean by
+ *     (n - 1)/(n - p - 2) = 3.4 %, corrected for. Required: χ² survival of Q above 1e-3.
+ * Checked against broken variants: DARTS's frame-k contributions written to frame k + 1: all 24 checks fail
+ * (frame 0 -100 %, frames 1-6 +13 to +22 %, frame 7 +117 %), Q = 1.2e5; photon powers not divided by the
+ * frame probability (1/8 here): -87.5 % in every frame, Q = 4.5e5. */
+static void test_darts_frames_vs_path_tracer(void **state)
+{
+    (void)state;
+    char text[8192], time[256];
+    snprintf(time, sizeof time, "\"frame_num\": %d, \"start_time\": 3.5, \"transient_time_width\": 0.3", FR_FRAMES);
+    pass_totals t[2];
+    const int runs[2] = {FR_PP_SEEDS, FR_PT_CHUNKS};
+    const long passes[2] = {64, 1024};
+    for (int m = 0; m < 2; m++) {
+        slab_scene_text(text, sizeof text, 1.0, m ? "path_tracer" : "progressive_transient_photon_map", time,
+                        m ? "" : DARTS_KEYS);
+        tmp_scene ts;
+        tmp_scene_write(&ts, text);
+        scene s;
+        load_scene(ts.path, NULL, 0, &s);
+        assert_int_equal(s.integrator.window.frame_count, FR_FRAMES);
+        if (!m) {
+            darts_guide g;
+            scene_guide(&s, &g);
+            assert_true(g.active && g.control_vertices && g.frames == FR_FRAMES);
+        }
+        render_totals(&s, m ? 900 : 800, runs[m], passes[m], &t[m]);
+        scene_free(&s);
+        tmp_scene_remove(&ts);
+    }
+    enum { P = 3 * FR_FRAMES };
+    double d[P], b[P], *C = calloc(P * P, sizeof(double));
+    assert_non_null(C);
+    int failed = 0;
+    for (int k = 0; k < FR_FRAMES; k++)
+        for (int c = 0; c < 3; c++) {
+            double m, se, mr, ser;
+            pass_totals_mean_se(&t[0], 1 + k, c, &m, &se);
+            pass_totals_mean_se(&t[1], 1 + k, c, &mr, &ser);
+            double sd = sqrt(se * se + ser * ser);
+            d[3 * k + c] = m - mr;
+            b[3 * k + c] = 0.01 * mr;
+            int bad = !(fabs(m - mr) < 4 * sd + b[3 * k + c]);
+            failed += bad;
+            if (c == 0 || bad)
+                print_message("  frame %d channel %d: DARTS %.5g (se %.2g), path tracer %.5g (se %.2g): %+.2f %%,"
+                              " bound %.2f %%%s\n", k, c, m, se, mr, ser, 100 * (m - mr) / mr,
+                              100 * (4 * sd + b[3 * k + c]) / mr, bad ? "  FAIL" : "");
+            assert_true(mr > 0 && ser > 0);
+        }
+    add_mean_covariance(&t[0], C);
+    add_mean_covariance(&t[1], C);
+    assert_true(spd_inverse(C, P));
+    double Q = box_mahalanobis(C, d, b, P) * (t[0].n - P - 2.0) / (t[0].n - 1.0);
+    double pval = gamma_q(P / 2.0, Q / 2.0);
+    print_message("  joint: Q = %.2f for %d degrees of freedom, chi-square survival %.3g (required > 1e-3)\n", Q, P, pval);
+    assert_int_equal(failed, 0);
+    assert_true(pval > 1e-3);
+    free(C);
+    pass_totals_free(&t[0]);
+    pass_totals_free(&t[1]);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -1122,9 +1419,11 @@ int main(void)
         cmocka_unit_test(test_surface_photons_after_volume_budget_full),
         cmocka_unit_test(test_darts_surface_band_edges),
         cmocka_unit_test(test_single_scatter_total),
+        cmocka_unit_test(test_darts_single_scatter_total),
         cmocka_unit_test(test_consistency_vs_path_tracer),
         cmocka_unit_test(test_eda_consistency_anisotropic),
         cmocka_unit_test(test_darts_refractive_index),
+        cmocka_unit_test(test_darts_frames_vs_path_tracer),
     };
     /* DARTSPP_TEST_FILTER=name (cmocka wildcards) runs only the matching tests */
     if (getenv("DARTSPP_TEST_FILTER")) cmocka_set_test_filter(getenv("DARTSPP_TEST_FILTER"));

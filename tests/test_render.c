@@ -111,37 +111,6 @@ static void test_frames_sum_to_union_gate(void **state)
     assert_true(max_rel1 < 1e-5);
 }
 
-/* DARTS in frame mode (one target frame per path): the union-window image is still exactly the mean of the
- * frames, and every frame receives light. */
-static void test_darts_frames_sum_to_union(void **state)
-{
-    (void)state;
-    const char *frames[] = {"frame_num=4", "start_time=6", "transient_time_width=0.25", "photon_count=20000",
-                            "volume_photon_count=4000"};
-    scene s;
-    load("scenes/fogbox/fogbox.json", frames, 5, &s);
-    s.cam.width = s.cam.height = 24;
-    film f;
-    render(&s, 2, 5, 3, &f);
-    dp_error err;
-    image_rgb u, fr[4];
-    assert_int_equal(film_image(&f, -1, &u, &err), 0);
-    double frame_total[4] = {0};
-    for (int k = 0; k < 4; k++) assert_int_equal(film_image(&f, k, &fr[k], &err), 0);
-    for (size_t i = 0; i < 24 * 24 * 3; i++) {
-        double sum = 0;
-        for (int k = 0; k < 4; k++) sum += fr[k].rgb[i], frame_total[k] += fr[k].rgb[i];
-        assert_true(fabs(sum / 4 - u.rgb[i]) <= 1e-5 * fabs(u.rgb[i]) + 1e-30);
-    }
-    for (int k = 0; k < 4; k++) {
-        assert_true(frame_total[k] > 0);
-        image_free(&fr[k]);
-    }
-    image_free(&u);
-    film_free(&f);
-    scene_free(&s);
-}
-
 /* Reads into the fixture's last image slot (freed by the teardown if an assertion fails). */
 static void assert_all_finite(const char *path)
 {
@@ -198,7 +167,6 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test_teardown(test_threads_bit_identical, teardown_fx),
         cmocka_unit_test_teardown(test_frames_sum_to_union_gate, teardown_fx),
-        cmocka_unit_test(test_darts_frames_sum_to_union),
         cmocka_unit_test_teardown(test_cli_outputs_finite, teardown_fx),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
