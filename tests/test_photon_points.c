@@ -186,6 +186,22 @@ static const char *const BASELINE_KEYS = "\"enable_guiding\": false, \"enable_el
  * camera. (With the camera in the fog, a volume photon at distance s from it adds ∝ 1/s² to the image, and
  * the image total of a pass has a heavy right tail: kurtosis 91 over 2048 passes here, against 3.4 with the
  * camera outside.) */
+/* The box's materials and its five Lambertian walls (2 × 2 × 2, open towards -z), opening the primitives list. */
+#define BOX_WALLS                                                                                                  \
+    "  \"bsdfs\": [ { \"name\": \"white\", \"type\": \"lambert\", \"albedo\": 0.7 },"                                  \
+    "               { \"name\": \"red\", \"type\": \"lambert\", \"albedo\": [0.7, 0.15, 0.1] },"                       \
+    "               { \"name\": \"green\", \"type\": \"lambert\", \"albedo\": [0.15, 0.6, 0.2] } ],"                   \
+    "  \"primitives\": ["                                                                                           \
+    "    { \"type\": \"quad\", \"bsdf\": \"white\", \"transform\": { \"position\": [0, 0, 0], \"scale\": [2, 1, 2] } }," \
+    "    { \"type\": \"quad\", \"bsdf\": \"white\", \"transform\": { \"position\": [0, 2, 0], \"scale\": [2, 1, 2],"      \
+    "      \"rotation\": [180, 0, 0] } },"                                                                         \
+    "    { \"type\": \"quad\", \"bsdf\": \"white\", \"transform\": { \"position\": [0, 1, 1], \"scale\": [2, 1, 2],"      \
+    "      \"rotation\": [-90, 0, 0] } },"                                                                         \
+    "    { \"type\": \"quad\", \"bsdf\": \"green\", \"transform\": { \"position\": [-1, 1, 0], \"scale\": [2, 1, 2],"     \
+    "      \"rotation\": [0, 0, -90] } },"                                                                         \
+    "    { \"type\": \"quad\", \"bsdf\": \"red\", \"transform\": { \"position\": [1, 1, 0], \"scale\": [2, 1, 2],"        \
+    "      \"rotation\": [0, 0, 90] } },"
+
 static void box_scene_text_cam(char *text, size_t len, int res, const char *integrator, double g, int camera_in_fog)
 {
     const char *fog_cube = "    { \"type\": \"cube\", \"bsdf\": { \"type\": \"forward\" }, \"int_medium\": \"fog\","
@@ -193,19 +209,7 @@ static void box_scene_text_cam(char *text, size_t len, int res, const char *inte
     snprintf(text, len,
              "{ \"media\": [ { \"name\": \"fog\", \"type\": \"homogeneous\", \"sigma_s\": [0.45, 0.4, 0.5],"
              "    \"sigma_a\": [0.05, 0.08, 0.03], \"phase_function\": { \"type\": \"henyey_greenstein\", \"g\": %g } } ],"
-             "  \"bsdfs\": [ { \"name\": \"white\", \"type\": \"lambert\", \"albedo\": 0.7 },"
-             "               { \"name\": \"red\", \"type\": \"lambert\", \"albedo\": [0.7, 0.15, 0.1] },"
-             "               { \"name\": \"green\", \"type\": \"lambert\", \"albedo\": [0.15, 0.6, 0.2] } ],"
-             "  \"primitives\": ["
-             "    { \"type\": \"quad\", \"bsdf\": \"white\", \"transform\": { \"position\": [0, 0, 0], \"scale\": [2, 1, 2] } },"
-             "    { \"type\": \"quad\", \"bsdf\": \"white\", \"transform\": { \"position\": [0, 2, 0], \"scale\": [2, 1, 2],"
-             "      \"rotation\": [180, 0, 0] } },"
-             "    { \"type\": \"quad\", \"bsdf\": \"white\", \"transform\": { \"position\": [0, 1, 1], \"scale\": [2, 1, 2],"
-             "      \"rotation\": [-90, 0, 0] } },"
-             "    { \"type\": \"quad\", \"bsdf\": \"green\", \"transform\": { \"position\": [-1, 1, 0], \"scale\": [2, 1, 2],"
-             "      \"rotation\": [0, 0, -90] } },"
-             "    { \"type\": \"quad\", \"bsdf\": \"red\", \"transform\": { \"position\": [1, 1, 0], \"scale\": [2, 1, 2],"
-             "      \"rotation\": [0, 0, 90] } },"
+             BOX_WALLS
              "    { \"type\": \"cube\", \"bsdf\": { \"type\": \"forward\" }, \"ext_medium\": \"fog\","
              "      \"transform\": { \"position\": [0.3, 1.5, 0.2], \"scale\": [0.3, 0.3, 0.3] } },"
              "%s"
@@ -1080,19 +1084,7 @@ static void eta_box_scene_text(char *text, size_t len, double speed, const char 
              "{ \"media\": [ { \"name\": \"fog\", \"type\": \"homogeneous\", \"sigma_s\": [0.45, 0.4, 0.5],"
              "    \"sigma_a\": [0.05, 0.08, 0.03], \"speed_of_light\": %.17g,"
              "    \"phase_function\": { \"type\": \"henyey_greenstein\", \"g\": 0.3 } } ],"
-             "  \"bsdfs\": [ { \"name\": \"white\", \"type\": \"lambert\", \"albedo\": 0.7 },"
-             "               { \"name\": \"red\", \"type\": \"lambert\", \"albedo\": [0.7, 0.15, 0.1] },"
-             "               { \"name\": \"green\", \"type\": \"lambert\", \"albedo\": [0.15, 0.6, 0.2] } ],"
-             "  \"primitives\": ["
-             "    { \"type\": \"quad\", \"bsdf\": \"white\", \"transform\": { \"position\": [0, 0, 0], \"scale\": [2, 1, 2] } },"
-             "    { \"type\": \"quad\", \"bsdf\": \"white\", \"transform\": { \"position\": [0, 2, 0], \"scale\": [2, 1, 2],"
-             "      \"rotation\": [180, 0, 0] } },"
-             "    { \"type\": \"quad\", \"bsdf\": \"white\", \"transform\": { \"position\": [0, 1, 1], \"scale\": [2, 1, 2],"
-             "      \"rotation\": [-90, 0, 0] } },"
-             "    { \"type\": \"quad\", \"bsdf\": \"green\", \"transform\": { \"position\": [-1, 1, 0], \"scale\": [2, 1, 2],"
-             "      \"rotation\": [0, 0, -90] } },"
-             "    { \"type\": \"quad\", \"bsdf\": \"red\", \"transform\": { \"position\": [1, 1, 0], \"scale\": [2, 1, 2],"
-             "      \"rotation\": [0, 0, 90] } },"
+             BOX_WALLS
              "    { \"type\": \"point\", \"emission\": [4, 4, 4], \"ext_medium\": \"fog\","
              "      \"transform\": { \"position\": [0.3, 1.5, 0.2] } } ],"
              "  \"camera\": { \"type\": \"pinhole\", \"resolution\": [24, 24], \"fov\": 45, \"medium\": \"fog\","

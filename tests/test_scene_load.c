@@ -826,23 +826,6 @@ static size_t json_tokens(const char *t, size_t n, size_t *start, size_t *end, i
     return k;
 }
 
-static void put_u64(unsigned char *b, uint64_t v)
-{
-    for (int i = 0; i < 8; i++) b[i] = (unsigned char)(v >> (8 * i));
-}
-
-static void put_u32(unsigned char *b, uint32_t v)
-{
-    for (int i = 0; i < 4; i++) b[i] = (unsigned char)(v >> (8 * i));
-}
-
-static void put_f32(unsigned char *b, float f)
-{
-    uint32_t u;
-    memcpy(&u, &f, 4);
-    put_u32(b, u);
-}
-
 /* A Cornell-box floor as a `.wo3` mesh (scene-format.md §1), the size of the paper's cbox_floor.001.wo3:
  * 4 vertices (position, normal +y, uv) at offset 8, triangle count at 136, 2 triangles at 144; 176 bytes. */
 #define FLOOR_WO3_SIZE 176

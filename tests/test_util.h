@@ -137,4 +137,22 @@ static inline void gauss_legendre(int n, double *x, double *w)
     }
 }
 
+/* Little-endian writers for hand-made binary files (.wo3 meshes). */
+static inline void put_u64(unsigned char *b, uint64_t v)
+{
+    for (int i = 0; i < 8; i++) b[i] = (unsigned char)(v >> (8 * i));
+}
+
+static inline void put_u32(unsigned char *b, uint32_t v)
+{
+    for (int i = 0; i < 4; i++) b[i] = (unsigned char)(v >> (8 * i));
+}
+
+static inline void put_f32(unsigned char *b, float f)
+{
+    uint32_t u;
+    memcpy(&u, &f, 4);
+    put_u32(b, u);
+}
+
 #endif
