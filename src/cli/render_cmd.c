@@ -174,11 +174,8 @@ static int after_pass(void *ctx, const film *f, const render_stats *st, dp_error
  * the path tracer cannot reach a point light through a mirror, so light that hits a mirror
  * before any diffuse or medium vertex is missing; DARTS's time bounds and control vertices assume a
  * straight camera leg, so what the camera sees through a mirror is biased. */
-static void warn_mixed_eta(const scene *s, const render_plan *p);
-
 static void warn_mirrors(const scene *s, const render_plan *p)
 {
-    warn_mixed_eta(s, p);
     const char *mirror = NULL;
     for (int i = 0; i < s->surface_count && !mirror; i++)
         if (s->surfaces[i].tri_count > 0 && s->bsdfs[s->surfaces[i].bsdf].type == BSDF_MIRROR)
@@ -196,7 +193,7 @@ static void warn_mirrors(const scene *s, const render_plan *p)
 
 /* Elliptical control vertices assume one refractive index along the camera leg; when the media and vacuum
  * present in the scene differ in η, the photon pass turns them off (darts_guide.control_vertices) and the
- * user should hear why and how to get them back. Called by warn_mirrors. */
+ * user should hear why and how to get them back. */
 static void warn_mixed_eta(const scene *s, const render_plan *p)
 {
     if (!p->darts.active || !p->darts.elliptical_asked || p->darts.control_vertices) return;
@@ -388,6 +385,7 @@ int cli_render(int argc, char **argv)
     if (j.s.notes) fputs(j.s.notes, stderr);
     if (a.verbose) fprintf(stderr, "plan: %s\n", j.plan_json);
     warn_mirrors(&j.s, &j.p);
+    warn_mixed_eta(&j.s, &j.p);
     a.ro.plan = &j.p;
     a.ro.progress = !a.quiet;
     a.ro.stop = &stop_requested;

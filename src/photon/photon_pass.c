@@ -9,7 +9,6 @@
 #include "dartspp/photon.h"
 #include "dartspp/scene.h"
 
-#define BATCH PHOTON_PASS_BATCH
 
 typedef struct {
     photon *p;
@@ -119,7 +118,7 @@ static int medium_segment(light_path *lp, double tmax)
     const medium *m = &lp->s->media[lp->med];
     /* nothing to aim where nothing scatters, or once no volume photon can be stored */
     int darts = aims_at_volume(lp) && medium_scatters(m);
-    if (darts && lp->g->control_vertices) {
+    if (darts && g->control_vertices) {
         double t, pdf;
         double sigma = v3_avg(m->sigma_t), u1 = rng_uniform(lp->rng), u2 = rng_uniform(lp->rng);
         int made = g->control_vertex_mis
@@ -149,7 +148,7 @@ static int medium_segment(light_path *lp, double tmax)
     if (++lp->medium_events > m->max_bounces) return -1;
     /* classic photons (no control vertices); low_order_scattering off: none at the first vertex after a
      * light or surface */
-    if (lp->volume_open && !(darts && lp->g->control_vertices) && (in->low_order_scattering || lp->medium_events > 1))
+    if (lp->volume_open && !(darts && g->control_vertices) && (in->low_order_scattering || lp->medium_events > 1))
         store(lp, &lp->tb->vol, &lp->pc->n_vol, lp->o, lp->d, lp->beta, lp->bounce, lp->time);
     new_vertex(lp);
     const eda_table *et = darts && in->eda ? in->eda->table[lp->med] : NULL;
@@ -286,12 +285,12 @@ int photon_pass(const scene *s, const photon_pass_input *in, photon_set *out, dp
     long early = 0, aimed = 0;
     int nt = omp_get_max_threads();
     thread_bufs *tb = calloc((size_t)nt, sizeof(thread_bufs));
-    path_count *pc = malloc(BATCH * sizeof(path_count));
+    path_count *pc = malloc(PHOTON_PASS_BATCH * sizeof(path_count));
     int rc = (!tb || !pc) ? -1 : 0;
     long next = 0;
     while (!rc && next < max_paths && !(bv.full && bsf.full)) {
         if ((out->interrupted = dp_stopped(in->stop))) break; /* read once per batch */
-        long nb = max_paths - next < BATCH ? max_paths - next : BATCH;
+        long nb = max_paths - next < PHOTON_PASS_BATCH ? max_paths - next : PHOTON_PASS_BATCH;
         aimed += guide->active && !bv.full ? nb : 0;
 #pragma omp parallel num_threads(nt)
         {
