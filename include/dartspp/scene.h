@@ -4,16 +4,15 @@
 #ifndef DARTSPP_SCENE_H
 #define DARTSPP_SCENE_H
 
+#include "dartspp/bsdf.h"
 #include "dartspp/core.h"
 
-/* ---- materials ---- */
-typedef enum { BSDF_LAMBERT, BSDF_MIRROR, BSDF_NULL, BSDF_FORWARD } bsdf_type;
+/* ---- materials: include/dartspp/bsdf.h; albedo textures ---- */
 typedef struct {
-    bsdf_type type;
-    vec3 albedo;
-} bsdf;
-/* null and forward surfaces are crossed as if absent (index-matched boundaries, invisible lights) */
-static inline int bsdf_is_passthrough(const bsdf *b) { return b->type == BSDF_NULL || b->type == BSDF_FORWARD; }
+    char path[1024];  /* as resolved from the scene file */
+    int width, height;
+    float *rgb;       /* linear RGB, 3 floats per texel, row 0 = the image's top row */
+} texture;
 
 /* ---- media ---- */
 typedef enum { PHASE_ISOTROPIC, PHASE_HENYEY_GREENSTEIN, PHASE_IDA } phase_type;
@@ -128,6 +127,11 @@ typedef struct {
     int early_exit;                 /* early_exit: DARTS paths end once their bin is out of reach (default true) */
     int control_vertex_mis;         /* control_vertex_mis: MIS of the elliptical and exponential techniques (default true) */
     int ellipse_residual;           /* ellipse_residual: 0 "uniform" (reference), 1 "exponential" (paper eq. 21-22) */
+    int two_sided_shading;          /* enable_two_sided_shading: opaque surfaces shade both sides (default true) */
+    int consistency_checks;         /* enable_consistency_checks: a direction on different sides of the shading and
+                                     * geometric normals is refused (default false) */
+    double glossy_gather_alpha;     /* glossy_gather_alpha: photon points gather on glossy lobes at least this rough
+                                     * (microfacet α) and continue camera paths through smoother ones (default 0.1) */
 } integrator_settings;
 
 
@@ -147,6 +151,8 @@ struct scene {
     char dir[1024];          /* its folder: meshes are relative to it */
     bsdf *bsdfs;
     int bsdf_count;
+    texture *textures;       /* albedo bitmaps referenced by bsdfs[].texture */
+    int texture_count;
     medium *media;
     int medium_count;
     surface *surfaces;
@@ -179,6 +185,10 @@ typedef struct {
     double t;
     vec3 p;      /* hit point from barycentrics */
     vec3 ng;     /* unit geometric normal (p1-p0)x(p2-p0) */
+    vec3 ns;     /* unit shading normal: interpolated vertex normals of a `smooth` mesh, flipped to ng's
+                  * side; ng otherwise */
+    double uv[2];/* texture coordinates interpolated from the mesh's vertex UVs (0 without UVs) */
+    uint32_t tri;/* global triangle index */
     int surface;
 } hit_record;
 
@@ -187,6 +197,9 @@ int scene_intersect(const scene *s, vec3 o, vec3 d, double tmax, hit_record *h);
 /* Origin for a ray leaving surface point p on the side of n (Wächter & Binder, Ray Tracing Gems ch. 6), with
  * their near-origin constants scaled by the scene's size so that a scene scaled by any factor is offset alike. */
 vec3 scene_offset_ray_origin(const scene *s, vec3 p, vec3 n);
+
+/* Albedo of bsdf b at hit h: its texture sampled bilinearly at h->uv (wrapping), else b->albedo. */
+vec3 scene_albedo(const scene *s, const bsdf *b, const hit_record *h);
 
 /* Transmittance and time from p (in medium `med`) to the point q, crossing only null/forward surfaces;
  * returns 0 (and tr = 0) when an opaque surface is in the way. time accumulates eta * length. */

@@ -1,0 +1,115 @@
+/* dartspp bsdf: surface scattering models, one file per model in src/bsdf/, each with eval, sample and pdf.
+ *
+ * Conventions (every function below):
+ * - Directions are unit vectors in the local shading frame (+z = shading normal) and both point AWAY from
+ *   the surface: wi towards the previous vertex of the path being traced (the camera side for camera paths,
+ *   the light side for light paths), wo the other direction (sampled, or towards the light/photon).
+ * - f(wi, wo) is returned WITHOUT the cosine. Sampling weights are f·|cos θo| / pdf (lobe choice included).
+ * - The models are symmetric, f(wi, wo) = f(wo, wi): refraction carries no η² radiance scale (as the
+ *   reference renderer, a Tungsten fork), so camera and light paths use the same functions.
+ * - z < 0 is the surface's back (inside of a dielectric). Opaque models return 0 unless wi.z > 0 and
+ *   wo.z > 0; the caller flips the frame for two-sided shading (bsdf_frame_init).
+ * - `albedo` is the BSDF's albedo at the hit point (its texture applied, else bsdf.albedo).
+ * - `lobes` selects lobes (BSDF_LOBE_* bits): eval and pdf cover the selected lobes only; sample picks among
+ *   the selected lobes only, with pdf and weight of that restricted technique. BSDF_LOBES_ALL: the full BSDF. */
+#ifndef DARTSPP_BSDF_H
+#define DARTSPP_BSDF_H
+
+#include "dartspp/core.h"
+
+typedef enum {
+    BSDF_LAMBERT,
+    BSDF_MIRROR,
+    BSDF_NULL,
+    BSDF_FORWARD,
+    BSDF_CONDUCTOR,
+    BSDF_ROUGH_CONDUCTOR,
+    BSDF_PLASTIC,
+    BSDF_ROUGH_PLASTIC,
+    BSDF_PBRT_PLASTIC,
+    BSDF_DIELECTRIC,
+    BSDF_ROUGH_DIELECTRIC,
+    BSDF_TYPE_COUNT
+} bsdf_type;
+
+typedef enum { MICROFACET_GGX, MICROFACET_PBRT_GGX, MICROFACET_BECKMANN } microfacet_distribution;
+
+/* lobes */
+#define BSDF_LOBE_DIFFUSE 1u   /* Lambertian-like, never near-specular */
+#define BSDF_LOBE_GLOSSY 2u    /* microfacet lobe (reflection, and transmission for rough_dielectric) */
+#define BSDF_LOBE_SPECULAR 4u  /* delta lobes: mirror reflection, smooth refraction */
+#define BSDF_LOBES_ALL 7u
+
+typedef struct {
+    bsdf_type type;
+    char name[64];
+    vec3 albedo;               /* constant albedo; the fallback when a texture file is missing */
+    int texture;               /* albedo texture: index into scene.textures, -1 none */
+    /* microfacet models (rough_*, pbrt_plastic) */
+    microfacet_distribution distribution;
+    double roughness;          /* as written in the scene */
+    double alpha;              /* distribution parameter, from roughness by bsdf_prepare */
+    /* conductors: complex index n + ik relative to the outside, per RGB channel */
+    vec3 eta, k;
+    /* dielectrics and plastics */
+    double ior;                /* interior / exterior */
+    int enable_refraction;     /* dielectrics: 0 = the transmitted share is absorbed */
+    double thickness;          /* plastics: coat thickness (with sigma_a) */
+    vec3 sigma_a;              /* plastics: coat absorption per unit thickness */
+    double ks;                 /* pbrt_plastic: specular scale `Ks`; plastics: 1 unless given */
+    /* derived by bsdf_prepare */
+    double diffuse_fresnel;    /* plastics: hemispherical average of the coat's internal Fresnel */
+    double fresnel_avg_out;    /* plastics: 1 − average external Fresnel reflectance, if used */
+} bsdf;
+
+/* A bsdf with the defaults of its type (the reference's defaults, documented in src/bsdf/README.md). */
+void bsdf_defaults(bsdf *b, bsdf_type type);
+/* Derives alpha and the cached terms from the parameters; checks ranges. 0, or -1 + err naming b->name. */
+int bsdf_prepare(bsdf *b, dp_error *err);
+/* Type from the scene-file name ("rough_conductor", ...); -1 if unknown. */
+int bsdf_type_from_name(const char *name);
+const char *bsdf_type_name(bsdf_type t);
+/* Complex index of a named metal (Ag, Au, Al, Cu, Cr, Li, VN, ...); 0 if unknown. Table: src/bsdf/complex_ior.c. */
+int bsdf_conductor_preset(const char *material, vec3 *eta, vec3 *k);
+
+/* Which lobes the model has (a subset of BSDF_LOBES_ALL); 0 for null and forward. */
+unsigned bsdf_lobes(const bsdf *b);
+/* Whether the model transmits light to the back side (dielectrics with refraction, rough_dielectric). */
+int bsdf_transmits(const bsdf *b);
+/* null and forward surfaces are crossed as if absent (index-matched boundaries, invisible lights) */
+static inline int bsdf_is_passthrough(const bsdf *b) { return b->type == BSDF_NULL || b->type == BSDF_FORWARD; }
+
+vec3 bsdf_eval(const bsdf *b, vec3 albedo, vec3 wi, vec3 wo, unsigned lobes);
+double bsdf_pdf(const bsdf *b, vec3 albedo, vec3 wi, vec3 wo, unsigned lobes);
+
+typedef struct {
+    vec3 wo;        /* local, unit */
+    vec3 weight;    /* f·|cos θo| / pdf, lobe choice included (delta lobes: the lobe's weight) */
+    double pdf;     /* solid-angle pdf (non-delta), or the discrete probability of the delta outcome */
+    unsigned lobe;  /* the single BSDF_LOBE_* bit sampled */
+} bsdf_sample;
+
+/* Samples wo given wi with three uniforms in [0,1). Returns 0 when nothing can be sampled (below the
+ * surface, no selected lobe, a failed microfacet sample): the path ends. */
+int bsdf_sample_wo(const bsdf *b, vec3 albedo, vec3 wi, const double u[3], unsigned lobes, bsdf_sample *s);
+
+/* ---- the shading frame at a hit (world ↔ local) ---- */
+typedef struct {
+    vec3 s, t, n;   /* n: shading normal, flipped to the arriving side for two-sided shading */
+    vec3 ng;        /* geometric normal, flipped with n */
+} bsdf_frame;
+
+/* Frame at a hit with geometric normal ng and shading normal ns (both unit, ns on ng's side), for a path
+ * arriving along direction d (propagation). With two_sided and an opaque model, n and ng are flipped to
+ * face the arriving path. */
+void bsdf_frame_init(bsdf_frame *f, const bsdf *b, vec3 ng, vec3 ns, vec3 d, int two_sided);
+static inline vec3 bsdf_to_local(const bsdf_frame *f, vec3 w)
+{
+    return v3(v3_dot(w, f->s), v3_dot(w, f->t), v3_dot(w, f->n));
+}
+static inline vec3 bsdf_to_world(const bsdf_frame *f, vec3 l)
+{
+    return v3_add(v3_add(v3_scale(f->s, l.x), v3_scale(f->t, l.y)), v3_scale(f->n, l.z));
+}
+
+#endif
