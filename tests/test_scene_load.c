@@ -475,8 +475,8 @@ static void test_cli_bad_input(void **state)
     static const bad_case cases[] = {
         {"unknown primitive type", "\"type\": \"quad\"", "\"type\": \"sphere\"", NULL,
          {"primitives[0]", "sphere", "supported: mesh, quad, cube, point"}},
-        {"unknown BSDF type", "\"type\": \"lambert\"", "\"type\": \"rough_plastic\"", NULL,
-         {"bsdfs[0]", "rough_plastic", "supported: lambert"}},
+        {"unknown BSDF type", "\"type\": \"lambert\"", "\"type\": \"oren_nayar\"", NULL,
+         {"bsdfs[0]", "unsupported BSDF 'oren_nayar'", "supported: lambert"}},
         {"missing mesh file", "\"type\": \"quad\"", "\"type\": \"mesh\", \"file\": \"meshes/missing_floor.wo3\"", NULL,
          {"primitives[0]", "file", "missing_floor.wo3"}},
         {"negative sigma_s", "\"sigma_s\": 0.1", "\"sigma_s\": -0.1", NULL, {"media[0]", "sigma_s", NULL}},
