@@ -475,8 +475,8 @@ static void test_cli_bad_input(void **state)
     static const bad_case cases[] = {
         {"unknown primitive type", "\"type\": \"quad\"", "\"type\": \"sphere\"", NULL,
          {"primitives[0]", "sphere", "supported: mesh, quad, cube, point"}},
-        {"unknown BSDF type", "\"type\": \"lambert\"", "\"type\": \"rough_plastic\"", NULL,
-         {"bsdfs[0]", "rough_plastic", "supported: lambert"}},
+        {"unknown BSDF type", "\"type\": \"lambert\"", "\"type\": \"oren_nayar\"", NULL,
+         {"bsdfs[0]", "unsupported BSDF 'oren_nayar'", "supported: lambert"}},
         {"missing mesh file", "\"type\": \"quad\"", "\"type\": \"mesh\", \"file\": \"meshes/missing_floor.wo3\"", NULL,
          {"primitives[0]", "file", "missing_floor.wo3"}},
         {"negative sigma_s", "\"sigma_s\": 0.1", "\"sigma_s\": -0.1", NULL, {"media[0]", "sigma_s", NULL}},
@@ -833,6 +833,52 @@ static void test_dragon_scenes_load(void **state)
         ASSERT_NEAR(s->renderer.timeout_seconds, f == 2 ? 0.0 : 14.5834 * 60.0, 1e-9);
         fx_drop(s);
     }
+}
+
+/* Every BSDF key reaches its field (values as written in the scene text); a conductor's material wins over
+ * eta and k (Tungsten's ConductorBsdf reads material last). */
+static void test_bsdf_keys_read(void **state)
+{
+    (void)state;
+    static const char from[] = "{\"name\": \"white\", \"type\": \"lambert\", \"albedo\": 0.5}";
+    char *text = replace1(BASE_SCENE, from,
+                          "{\"name\": \"white\", \"type\": \"lambert\", \"albedo\": [0.2, 0.3, 0.4]},"
+                          "{\"name\": \"rc\", \"type\": \"rough_conductor\", \"distribution\": \"beckmann\", \"roughness\": 0.3,"
+                          " \"eta\": [0.5, 0.6, 0.7], \"k\": [2.5, 2.6, 2.7]},"
+                          "{\"name\": \"ag\", \"type\": \"conductor\", \"eta\": 9, \"k\": 9, \"material\": \"Ag\"},"
+                          "{\"name\": \"gl\", \"type\": \"dielectric\", \"ior\": 1.33, \"enable_refraction\": false},"
+                          "{\"name\": \"pl\", \"type\": \"rough_plastic\", \"distribution\": \"ggx\", \"roughness\": 0.2,"
+                          " \"thickness\": 0.5, \"sigma_a\": [0.1, 0.2, 0.3]},"
+                          "{\"name\": \"pp\", \"type\": \"pbrt_plastic\", \"distribution\": \"pbrt-ggx\", \"Ks\": 0.4}");
+    dp_error err;
+    scene *s = fx_load_text("keys.json", text, NULL, &err);
+    free(text);
+    if (!s) fail_msg("%s", err.msg);
+    assert_int_equal(s->bsdf_count, 6);
+    ASSERT_VEC(s->bsdfs[0].albedo, 0.2, 0.3, 0.4, 0.0);
+    assert_int_equal(s->bsdfs[0].texture, -1);
+    assert_int_equal(s->bsdfs[1].type, BSDF_ROUGH_CONDUCTOR);
+    assert_int_equal(s->bsdfs[1].distribution, MICROFACET_BECKMANN);
+    ASSERT_NEAR(s->bsdfs[1].roughness, 0.3, 0.0);
+    ASSERT_VEC(s->bsdfs[1].eta, 0.5, 0.6, 0.7, 0.0);
+    ASSERT_VEC(s->bsdfs[1].k, 2.5, 2.6, 2.7, 0.0);
+    vec3 eta, k;
+    assert_true(bsdf_conductor_preset("Ag", &eta, &k));
+    assert_int_equal(s->bsdfs[2].type, BSDF_CONDUCTOR);
+    ASSERT_VEC(s->bsdfs[2].eta, eta.x, eta.y, eta.z, 0.0);
+    ASSERT_VEC(s->bsdfs[2].k, k.x, k.y, k.z, 0.0);
+    assert_int_equal(s->bsdfs[3].type, BSDF_DIELECTRIC);
+    ASSERT_NEAR(s->bsdfs[3].ior, 1.33, 0.0);
+    assert_int_equal(s->bsdfs[3].enable_refraction, 0);
+    assert_int_equal(s->bsdfs[4].type, BSDF_ROUGH_PLASTIC);
+    assert_int_equal(s->bsdfs[4].distribution, MICROFACET_GGX);
+    ASSERT_NEAR(s->bsdfs[4].roughness, 0.2, 0.0);
+    ASSERT_NEAR(s->bsdfs[4].thickness, 0.5, 0.0);
+    ASSERT_VEC(s->bsdfs[4].sigma_a, 0.1, 0.2, 0.3, 0.0);
+    assert_int_equal(s->bsdfs[5].type, BSDF_PBRT_PLASTIC);
+    assert_int_equal(s->bsdfs[5].distribution, MICROFACET_PBRT_GGX);
+    ASSERT_NEAR(s->bsdfs[5].ks, 0.4, 0.0);
+    assert_string_equal(s->bsdfs[1].name, "rc");
 }
 
 /* BSDF keys with bad values: the message names the file and the key. */
@@ -1225,6 +1271,7 @@ int main(void)
         T(test_unknown_keys_notes),
         T(test_texture_albedo_missing),
         T(test_dragon_scenes_load),
+        T(test_bsdf_keys_read),
         T(test_bsdf_key_errors),
         T(test_shading_keys_and_timeout),
         T(test_fuzz_scene_json),

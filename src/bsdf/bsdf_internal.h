@@ -1,0 +1,82 @@
+/* Private to src/bsdf: the per-model entry points the dispatch in bsdf.c calls, and the Fresnel and
+ * microfacet helpers the models share. Conventions are those of include/dartspp/bsdf.h (local frame,
+ * +z = shading normal, wi and wo pointing away from the surface, f without the cosine). */
+#ifndef DARTSPP_BSDF_INTERNAL_H
+#define DARTSPP_BSDF_INTERNAL_H
+
+#include "dartspp/bsdf.h"
+
+/* ---- one set of entry points per model ----
+ * eval: f(wi, wo) over the selected lobes; pdf: the solid-angle density sample draws from (0 for the
+ * delta lobes); sample: 1 and *s filled, or 0 when nothing can be sampled. */
+#define BSDF_MODEL_DECLARE(model)                                                                        \
+    vec3 bsdf_##model##_eval(const bsdf *b, vec3 albedo, vec3 wi, vec3 wo, unsigned lobes);              \
+    double bsdf_##model##_pdf(const bsdf *b, vec3 albedo, vec3 wi, vec3 wo, unsigned lobes);             \
+    int bsdf_##model##_sample(const bsdf *b, vec3 albedo, vec3 wi, const double u[3], unsigned lobes,    \
+                              bsdf_sample *s)
+
+BSDF_MODEL_DECLARE(lambert);
+BSDF_MODEL_DECLARE(mirror);
+BSDF_MODEL_DECLARE(conductor);
+BSDF_MODEL_DECLARE(rough_conductor);
+BSDF_MODEL_DECLARE(plastic);
+BSDF_MODEL_DECLARE(rough_plastic);
+BSDF_MODEL_DECLARE(pbrt_plastic);
+BSDF_MODEL_DECLARE(dielectric);
+BSDF_MODEL_DECLARE(rough_dielectric);
+
+/* ---- Fresnel (fresnel.c) ---- */
+/* Unpolarised reflectance of a smooth boundary between two dielectrics. eta = η(back) / η(front), the
+ * index behind the boundary (z < 0) over the index in front; cos_i = cos θ of the incident direction
+ * against +z, either sign (cos_i < 0: arriving from the back, the ratio is inverted). Writes |cos θt|
+ * (0 under total internal reflection, where 1 is returned) when cos_t is not NULL. */
+double bsdf_fresnel_dielectric(double eta, double cos_i, double *cos_t);
+/* Reflectance of a conductor of complex index eta + i k (relative to the outside), for |cos_i|. */
+double bsdf_fresnel_conductor(double eta, double k, double cos_i);
+vec3 bsdf_fresnel_conductor3(vec3 eta, vec3 k, double cos_i);
+/* Cosine-weighted hemispherical average 2∫ F(μ) μ dμ of bsdf_fresnel_dielectric(eta, μ) over μ in (0, 1]. */
+double bsdf_fresnel_average(double eta);
+
+/* ---- microfacet distributions (microfacet.c) ----
+ * Isotropic, about +z, parameter alpha (bsdf.alpha). Normals are sampled from D(m)·cos θm (the full
+ * distribution, as the reference); bsdf_mf_pdf is that density of m. */
+double bsdf_mf_alpha(microfacet_distribution d, double roughness);
+double bsdf_mf_D(microfacet_distribution d, double alpha, vec3 m);
+/* Smith masking of direction v for microfacet normal m (0 when v is on the wrong side of m or of +z). */
+double bsdf_mf_G1(microfacet_distribution d, double alpha, vec3 v, vec3 m);
+/* Shadowing-masking for the pair: the separable product G1·G1 (ggx, beckmann) or the height-correlated
+ * 1 / (1 + Λ(wi) + Λ(wo)) (pbrt-ggx). */
+double bsdf_mf_G(microfacet_distribution d, double alpha, vec3 wi, vec3 wo, vec3 m);
+vec3 bsdf_mf_sample(microfacet_distribution d, double alpha, double u1, double u2);
+double bsdf_mf_pdf(microfacet_distribution d, double alpha, vec3 m);
+
+/* ---- the dielectric microfacet boundary shared by rough_dielectric and the rough coats (rough_dielectric.c) ----
+ * A rough boundary of relative index ior (inside / outside) with parameter alpha; sample_alpha is the
+ * alpha normals are drawn with (the reference widens it for rough_dielectric and rough_plastic).
+ * `reflect` / `transmit` select the two events; with both, the event is picked with probability F / 1−F.
+ * `fresnel_eta`: the ratio the Fresnel term is computed with (ior, or 1/ior for pbrt_plastic's inverted
+ * index). Values without albedo. */
+typedef struct {
+    microfacet_distribution dist;
+    double alpha, sample_alpha;
+    double ior;          /* geometry of refraction: inside / outside */
+    double fresnel_eta;  /* the ratio given to bsdf_fresnel_dielectric */
+    int reflect, transmit;
+} bsdf_rough_boundary;
+
+double bsdf_rough_boundary_eval(const bsdf_rough_boundary *rb, vec3 wi, vec3 wo);
+double bsdf_rough_boundary_pdf(const bsdf_rough_boundary *rb, vec3 wi, vec3 wo);
+/* Samples wo; *value = f(wi, wo) and *pdf its density. 0 when the sample fails. */
+int bsdf_rough_boundary_sample(const bsdf_rough_boundary *rb, vec3 wi, const double u[3], vec3 *wo, double *value,
+                               double *pdf);
+/* The alpha normals are sampled with for wi of cos θi: the roughness widened as Walter et al. 2007 §5.3,
+ * (1.2 − 0.2·√|cos θi|)·roughness, then mapped to alpha. */
+double bsdf_widened_alpha(const bsdf *b, double cos_i);
+
+/* ---- small helpers ---- */
+static inline vec3 bsdf_reflect_z(vec3 w) { return v3(-w.x, -w.y, w.z); }
+/* A value safe to return: finite and non-negative, else 0. */
+static inline double bsdf_clean(double x) { return (isfinite(x) && x > 0.0) ? x : 0.0; }
+static inline vec3 bsdf_clean3(vec3 v) { return v3(bsdf_clean(v.x), bsdf_clean(v.y), bsdf_clean(v.z)); }
+
+#endif
