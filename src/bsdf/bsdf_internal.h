@@ -73,6 +73,10 @@ int bsdf_rough_boundary_sample(const bsdf_rough_boundary *rb, vec3 wi, const dou
  * (1.2 − 0.2·√|cos θi|)·roughness, then mapped to alpha. */
 double bsdf_widened_alpha(const bsdf *b, double cos_i);
 
+/* ---- the coated-diffuse base shared by plastic and rough_plastic (plastic.c) ---- */
+/* f of the diffuse lobe under a smooth coat (README.md, plastic), 0 unless wi.z > 0 and wo.z > 0. */
+vec3 bsdf_plastic_substrate(const bsdf *b, vec3 albedo, vec3 wi, vec3 wo);
+
 /* ---- small helpers ---- */
 static inline vec3 bsdf_reflect_z(vec3 w) { return v3(-w.x, -w.y, w.z); }
 /* A value safe to return: finite and non-negative, else 0. */
