@@ -44,7 +44,8 @@ typedef struct {
 } surface_sample;
 
 /* Samples the selected lobes with three uniforms. adjoint: the path carries flux from a light (photon pass),
- * so the weight takes Veach's shading-normal correction |n_s·wi||n_g·wo| / (|n_g·wi||n_s·wo|).
+ * so the weight takes the adjoint of refraction (bsdf_adjoint_scale) and Veach's shading-normal correction
+ * |n_s·wi||n_g·wo| / (|n_g·wi||n_s·wo|).
  * Returns 0 when nothing is sampled. */
 int surface_sample_bsdf(const surface_site *ss, const double u[3], unsigned lobes, int adjoint, surface_sample *out);
 
