@@ -12,6 +12,8 @@ int surface_site_init(surface_site *ss, const scene *s, const surface_shading *s
 {
     const bsdf *b = &s->bsdfs[s->surfaces[h->surface].bsdf];
     ss->b = b;
+    ss->sf = &s->surfaces[h->surface];
+    ss->ng_hit = h->ng;
     ss->p = h->p;
     ss->albedo = scene_albedo(s, b, h);
     ss->consistency_checks = sh->consistency_checks;
