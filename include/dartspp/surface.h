@@ -22,6 +22,8 @@ typedef struct {
     vec3 p;        /* hit point */
     vec3 wi;       /* local direction towards the previous vertex */
     vec3 wi_world; /* the same in world space */
+    const surface *sf;
+    vec3 ng_hit;   /* the hit's geometric normal as the mesh has it (media sides) */
     int consistency_checks;
 } surface_site;
 
@@ -44,13 +46,20 @@ typedef struct {
 } surface_sample;
 
 /* Samples the selected lobes with three uniforms. adjoint: the path carries flux from a light (photon pass),
- * so the weight takes Veach's shading-normal correction |n_s·wi||n_g·wo| / (|n_g·wi||n_s·wo|).
+ * so the weight takes the adjoint of refraction (bsdf_adjoint_scale) and Veach's shading-normal correction
+ * |n_s·wi||n_g·wo| / (|n_g·wi||n_s·wo|).
  * Returns 0 when nothing is sampled. */
 int surface_sample_bsdf(const surface_site *ss, const double u[3], unsigned lobes, int adjoint, surface_sample *out);
 
 /* Power of a photon stored at the site for flux beta arriving: beta·|n_s·wi| / |n_g·wi| (the density of
  * arrivals is per geometric area; the gather evaluates the BSDF against the shading normal). */
 vec3 surface_photon_power(const surface_site *ss, vec3 beta);
+
+/* The region a ray leaving the site along w travels in, for a path that arrived in region `current`. */
+static inline int surface_medium_toward(const surface_site *ss, int current, vec3 w)
+{
+    return surface_next_medium(ss->sf, current, w, ss->ng_hit);
+}
 
 /* Origin of a ray leaving the site along w: offset to w's side of the geometric surface. */
 vec3 surface_spawn(const scene *s, const surface_site *ss, vec3 w);

@@ -10,9 +10,13 @@ double bsdf_fresnel_dielectric(double eta, double cos_i, double *cos_t)
         cos_i = -cos_i;
     }
     cos_i = fmin(cos_i, 1.0);
+    if (eta == 1.0) { /* index-matched: no boundary */
+        if (cos_t) *cos_t = cos_i;
+        return 0.0;
+    }
     /* Snell: sin θt = sin θi / η */
     double sin_t2 = (1.0 - cos_i * cos_i) / (eta * eta);
-    if (sin_t2 >= 1.0) { /* total internal reflection */
+    if (sin_t2 >= 1.0 || cos_i <= 0.0) { /* total internal reflection, or grazing */
         if (cos_t) *cos_t = 0.0;
         return 1.0;
     }

@@ -62,6 +62,31 @@ static void gather_surface(pixel_ctx *c, const surface_site *ss, unsigned lobes,
     }
 }
 
+/* Direct light at a surface the camera path continues through on a non-delta lobe: no photon carries the
+ * unscattered light of a point light, so next-event estimation adds it (light → surface → camera), with the
+ * continued lobes evaluated. Delta lobes cannot see a point light. */
+static void direct_light(pixel_ctx *c, const surface_site *ss, unsigned lobes, int med, vec3 thr, double t_cam,
+                         int b_cam)
+{
+    const scene *s = c->s;
+    if (!bounces_count(&c->g->bounces, b_cam + 1)) return;
+    for (int i = 0; i < s->light_count; i++) {
+        const point_light *L = &s->lights[i];
+        vec3 to = v3_sub(L->pos, ss->p);
+        double d2 = v3_dot(to, to);
+        if (!(d2 > 0.0)) continue;
+        vec3 w = v3_scale(to, 1.0 / sqrt(d2));
+        vec3 f = surface_eval_cos(ss, w, lobes);
+        if (v3_max(f) <= 0.0) continue;
+        vec3 tr;
+        double t = t_cam;
+        c->pix->rays += 1;
+        if (!scene_transmittance(s, surface_spawn(s, ss, w), surface_medium_toward(ss, med, w), L->pos, &tr, &t))
+            continue;
+        film_pixel_splat(c->pix, t, v3_scale(v3_mul(v3_mul(v3_mul(thr, tr), L->intensity), f), 1.0 / d2), -1);
+    }
+}
+
 /* The camera walk: volume gathers along every medium segment; at a surface, the gather over the lobes the
  * photon map carries and a continuation through the others (surface_photon_split), sampled. */
 static void trace_sensor_path(pixel_ctx *c, vec3 d)
@@ -96,12 +121,13 @@ static void trace_sensor_path(pixel_ctx *c, vec3 d)
         photon_split split = surface_photon_split(bs, &c->g->shading);
         if (split.gather) gather_surface(c, &ss, split.gather, thr, t_cam, b_cam);
         if (!split.cont) return;
+        if (split.cont & ~BSDF_LOBE_SPECULAR) direct_light(c, &ss, split.cont, med, thr, t_cam, b_cam);
         double u[3] = {rng_uniform(c->rng), rng_uniform(c->rng), rng_uniform(c->rng)};
         surface_sample smp;
         if (!surface_sample_bsdf(&ss, u, split.cont, 0, &smp)) return;
         thr = v3_mul(thr, smp.weight);
         d = smp.w;
-        med = surface_next_medium(sf, med, d, h.ng);
+        med = surface_medium_toward(&ss, med, d);
         o = surface_spawn(s, &ss, d);
         b_cam++;
     }

@@ -41,7 +41,9 @@ static void connect_lights(pixel_ctx *c, const path_state *ps, vec3 x, const pha
         vec3 tr;
         double t = ps->time;
         c->pix->rays += 1;
-        if (!scene_transmittance(s, ss ? surface_spawn(s, ss, w) : x, ps->medium, L->pos, &tr, &t)) continue;
+        vec3 o = ss ? surface_spawn(s, ss, w) : x;
+        if (!scene_transmittance(s, o, ss ? surface_medium_toward(ss, ps->medium, w) : ps->medium, L->pos, &tr, &t))
+            continue;
         film_pixel_splat(c->pix, t, v3_scale(v3_mul(v3_mul(v3_mul(ps->beta, tr), L->intensity), f), 1.0 / d2), -1);
     }
 }

@@ -12,6 +12,8 @@ int surface_site_init(surface_site *ss, const scene *s, const surface_shading *s
 {
     const bsdf *b = &s->bsdfs[s->surfaces[h->surface].bsdf];
     ss->b = b;
+    ss->sf = &s->surfaces[h->surface];
+    ss->ng_hit = h->ng;
     ss->p = h->p;
     ss->albedo = scene_albedo(s, b, h);
     ss->consistency_checks = sh->consistency_checks;
@@ -47,10 +49,10 @@ int surface_sample_bsdf(const surface_site *ss, const double u[3], unsigned lobe
     out->weight = bs.weight;
     double gi = v3_dot(ss->wi_world, ss->fr.ng);
     out->transmitted = (gi > 0.0) != (gw > 0.0);
-    if (adjoint) { /* Veach 1997 §5.3: adjoint BSDF with shading normals */
+    if (adjoint) { /* Veach 1997 §5.2-5.3: the adjoint of refraction, and of shading normals */
         double num = fabs(ss->wi.z) * fabs(gw), den = fabs(gi) * fabs(bs.wo.z);
         if (!(den > 0.0)) return 0;
-        out->weight = v3_scale(out->weight, num / den);
+        out->weight = v3_scale(out->weight, bsdf_adjoint_scale(ss->b, ss->wi, bs.wo) * num / den);
     }
     return v3_is_finite(out->weight);
 }
