@@ -112,7 +112,7 @@ static void render_tiles(const scene *s, uint64_t seed0, int seeds, long passes,
         dp_error err;
         film f;
         render_stats st;
-        render_options ro = {.threads = 2, .seed = seed0 + (uint64_t)k, .spp = passes, .time_limit = 0,
+        render_options ro = {.threads = 1, .seed = seed0 + (uint64_t)k, .spp = passes, .time_limit = 0,
                              .after_pass = tile_probe_after, .after_pass_ctx = t};
         if (render_scene(s, &ro, &f, &st, &err)) fail_msg("%s", err.msg);
         assert_int_equal(st.passes, passes);
@@ -228,12 +228,14 @@ static const mat_case CASES[] = {
     {"rough_conductor_pbrt_ggx_direct",
      "\"type\": \"rough_conductor\", \"material\": \"Al\", \"distribution\": \"pbrt-ggx\", \"roughness\": 0.35", PANEL_QUAD, 1, 0},
     {"rough_conductor_smooth", "\"type\": \"rough_conductor\", \"material\": \"Ag\", \"distribution\": \"ggx\", \"roughness\": 0.05",
-     PANEL_QUAD, 0, 1},
+     PANEL_QUAD, 0, 0},
     {"conductor", "\"type\": \"conductor\", \"material\": \"Au\"", PANEL_QUAD, 0, 0},
     {"mirror", "\"type\": \"mirror\", \"albedo\": 0.9", PANEL_QUAD, 0, 1},
-    {"plastic", "\"type\": \"plastic\", \"albedo\": [0.6, 0.3, 0.2], \"ior\": 1.5", PANEL_QUAD, 0, 1},
+    {"plastic", "\"type\": \"plastic\", \"albedo\": [0.6, 0.3, 0.2], \"ior\": 1.5", PANEL_QUAD, 0, 0},
     {"rough_plastic", "\"type\": \"rough_plastic\", \"albedo\": [0.6, 0.3, 0.2], \"ior\": 1.5, \"roughness\": 0.2",
      PANEL_QUAD, 0, 0},
+    {"rough_plastic_smooth", "\"type\": \"rough_plastic\", \"albedo\": [0.6, 0.3, 0.2], \"ior\": 1.5, \"roughness\": 0.05",
+     PANEL_QUAD, 0, 1},
     {"pbrt_plastic", "\"type\": \"pbrt_plastic\", \"albedo\": [0.6, 0.3, 0.2], \"ior\": 1.5, \"roughness\": 0.2", PANEL_QUAD, 0, 0},
     {"dielectric_no_refraction", "\"type\": \"dielectric\", \"ior\": 1.5, \"enable_refraction\": false", PANEL_QUAD, 0, 0},
     {"dielectric_glass_cube", "\"type\": \"dielectric\", \"ior\": 1.5", GLASS_CUBE, 0, 1},
