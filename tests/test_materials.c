@@ -1,5 +1,60 @@
-/* Render-level tests of the BSDF models: one small fog scene per material, the path tracer against baseline
- * photon points per image tile. (The comment block on broken variants is filled in below.) */
+/* Render-level tests of the BSDF models: one small fog scene per material, the path tracer (the reference)
+ * against baseline photon points (enable_guiding and enable_elliptical off), per image tile (4 × 4 tiles of a
+ * 16 × 16 image, channel sum) and per channel of the image total, by z-score with a stated kernel-bias budget.
+ *
+ * The scene (mat_scene_text): a fog cube [-1,1]³ (σs 0.3, σa 0.03, HG g 0.2) holding a floor panel of the
+ * material under test (a quad; for the dielectrics with refraction a glass cube on a Lambertian floor), a
+ * Lambertian back wall, and a point light in a small clear pocket (a point light in the fog gives next-event
+ * estimation from phase-sampled vertices infinite variance, see test_photon_points.c). The camera is outside
+ * the fog cube (no volume photon near it: no heavy tail in the per-pass totals) looking down at the floor. A
+ * Lambertian shade just below the light keeps the light from seeing the floor and the cube: light reaches the
+ * material only through the fog or the wall, so every path has a non-delta vertex from which the path tracer
+ * connects to the light, and the path tracer is a complete reference even for the delta materials (mirror,
+ * conductor, smooth plastic's coat, glass). Without the shade a path light → delta lobe → ... has no such
+ * vertex and the path tracer misses it (long baseline photon points would be the only reference there). The
+ * `_direct` variants drop the shade for materials whose lobes are all gathered (Lambert, rough conductors with
+ * α >= glossy_gather_alpha = 0.1): the highlight of the light on the panel, the strongest test of eval against
+ * sampling; and rough_conductor_smooth_direct, a glossy lobe with α < glossy_gather_alpha, continued by the
+ * camera path (surface_photon_split): no photon is stored on it and a camera path cannot hit a point light, so
+ * its direct highlight comes from the sensor pass's next-event estimation at continued glossy lobes (main,
+ * ec6ae0a); before that commit photon points had no estimate of light → near-specular surface → camera.
+ *
+ * Noise: the per-pass tile totals are independent samples (test_photon_points.c, pass_totals); the standard
+ * errors come from their spread (path tracer 4 × 2048 passes, photon points 2 × 128 passes): about 2-3 % per
+ * tile for each method, 0.5 % for the channel totals. Bonferroni: Z_CRIT = 4.65 over the 19 × 18 checks.
+ *
+ * Kernel-bias budget (BIAS_BUDGET, 2 % of the path tracer's tile value). The surface disc (R = 0.06 at pass
+ * 0, 0.03 at pass 127, mean about 0.036 with α = 0.7) and the volume kernel (r = 0.04 → 0.02) blur the image
+ * across edges. Interior terms are second order (R² curvature of the irradiance: < 0.1 %). First-order terms:
+ * (a) the floor/back-wall junction and the glass cube's footprint, where a gather disc loses its part beyond
+ * the edge and picks up the other surface's photons: net about 0.12·R per unit edge length (derivation in
+ * test_photon_points.c), against a tile 0.5-0.9 scene units wide: <= 0.9 % of the surface part of a tile
+ * along the edge; (b) the shade's shadow edge on the back wall and the highlight's flanks move energy across a
+ * tile boundary only within R of it: (1/π)·R·(contrast)/(tile width) <= 0.3·0.036/0.5 ≈ 2 % for a full-contrast
+ * edge lying on a tile boundary. Measured offline: with both radii halved (gather 0.03, volume 0.02; 256
+ * photon-points passes, 4096 path-tracer passes) no tile of the 8 materials run moved by more than 2 standard
+ * errors (about 5 %), and the channel totals moved by < 1 %; in every case of the full matrix the largest
+ * excess over the budget is well below Z_CRIT (see the report lines). The budget is small next to 4.65 se
+ * (about 12 % per tile): what the tiles resolve is ±12 % per tile, the channel totals ±3.5 %.
+ *
+ * Broken variants (scratch copies of the tree, not committed; full-matrix sample counts, the z printed is the
+ * largest |z|, "beyond" its excess over the bias budget):
+ * (1) rough_conductor sampling with α² instead of α (src/bsdf/rough_conductor.c, bsdf_mf_sample only):
+ *     rough_conductor_ggx fails, max |z| 16.7 (tile 13: -37.6 %; 10 checks fail), rough_conductor_ggx_direct
+ *     fails, max |z| 15.3 (tile 13: -17.1 %; channel 0 total z -12.7).
+ * (2) Fresnel left out of rough_conductor's eval only (sampling unchanged): rough_conductor_ggx fails, max |z|
+ *     29.9 (channel 2 total +28.7 %, tiles up to z 8.7), rough_conductor_ggx_direct fails, max |z| 24.9
+ *     (channel 2 +10.0 %, tile 9 z 8.5).
+ * (3) sensor pass gathering all lobes (gather_surface(..., BSDF_LOBES_ALL, ...)) while continuing the continued
+ *     ones: double counting of a continued glossy lobe on a surface that also has a gathered one. Seen only by
+ *     rough_plastic_smooth (a coat of α 0.05 over a diffuse base; with the rough_plastic of branch `bsdf`, as
+ *     main still has a stub): fails with max |z| 6.4 (tile 14: +28.9 %), beyond the budget 6.0. Every other
+ *     material is blind to it: delta lobes evaluate to 0, and on surfaces with no gathered lobe no photon is
+ *     stored. (The real plastic, rough_plastic and pbrt_plastic of branch `bsdf` pass unbroken.)
+ * (4) path tracer's NEE without the BSDF's albedo (f/albedo in connect_lights): lambert fails, max |z| 48.1
+ *     (channel 2 total -29.1 %; 17 of 19 checks fail). The other half of (4), the photon pass without the
+ *     adjoint shading-normal correction, cannot show here: quads and cubes have shading normal = geometric
+ *     normal, where the correction is exactly 1. */
 #include "test_util.h"
 
 #include <time.h>
@@ -229,6 +284,8 @@ static const mat_case CASES[] = {
      "\"type\": \"rough_conductor\", \"material\": \"Al\", \"distribution\": \"pbrt-ggx\", \"roughness\": 0.35", PANEL_QUAD, 1, 0},
     {"rough_conductor_smooth", "\"type\": \"rough_conductor\", \"material\": \"Ag\", \"distribution\": \"ggx\", \"roughness\": 0.05",
      PANEL_QUAD, 0, 0},
+    {"rough_conductor_smooth_direct",
+     "\"type\": \"rough_conductor\", \"material\": \"Ag\", \"distribution\": \"ggx\", \"roughness\": 0.05", PANEL_QUAD, 1, 0},
     {"conductor", "\"type\": \"conductor\", \"material\": \"Au\"", PANEL_QUAD, 0, 0},
     {"mirror", "\"type\": \"mirror\", \"albedo\": 0.9", PANEL_QUAD, 0, 1},
     {"plastic", "\"type\": \"plastic\", \"albedo\": [0.6, 0.3, 0.2], \"ior\": 1.5", PANEL_QUAD, 0, 0},
