@@ -5,9 +5,9 @@ CC       ?= cc
 OPT      ?= -O2
 CFLAGS   += -std=c11 -D_GNU_SOURCE $(OPT) -g -Wall -Wextra -fopenmp -Iinclude \
             -I/usr/include/OpenEXR $(EXTRA_CFLAGS)
-LDLIBS   += -lembree3 -lOpenEXRCore-3_1 -lcjson -lpng -lflann -lm -fopenmp
+LDLIBS   += -lembree3 -lOpenEXRCore-3_1 -lcjson -lpng -lstb -lflann -lm -fopenmp
 
-DEB_PACKAGES = libembree-dev libopenexr-dev libflann-dev libcjson-dev libcmocka-dev libpng-dev pkg-config
+DEB_PACKAGES = libembree-dev libopenexr-dev libflann-dev libcjson-dev libcmocka-dev libpng-dev libstb-dev pkg-config
 DEPS_STAMP   = build/.deps-ok
 
 LIB_SRC  = $(filter-out src/cli/main.c,$(wildcard src/*/*.c))

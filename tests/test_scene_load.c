@@ -475,8 +475,8 @@ static void test_cli_bad_input(void **state)
     static const bad_case cases[] = {
         {"unknown primitive type", "\"type\": \"quad\"", "\"type\": \"sphere\"", NULL,
          {"primitives[0]", "sphere", "supported: mesh, quad, cube, point"}},
-        {"unknown BSDF type", "\"type\": \"lambert\"", "\"type\": \"rough_plastic\"", NULL,
-         {"bsdfs[0]", "rough_plastic", "supported: lambert"}},
+        {"unknown BSDF type", "\"type\": \"lambert\"", "\"type\": \"oren_nayar\"", NULL,
+         {"bsdfs[0]", "unsupported BSDF 'oren_nayar'", "supported: lambert"}},
         {"missing mesh file", "\"type\": \"quad\"", "\"type\": \"mesh\", \"file\": \"meshes/missing_floor.wo3\"", NULL,
          {"primitives[0]", "file", "missing_floor.wo3"}},
         {"negative sigma_s", "\"sigma_s\": 0.1", "\"sigma_s\": -0.1", NULL, {"media[0]", "sigma_s", NULL}},
@@ -759,6 +759,212 @@ static void test_texture_albedo_missing(void **state)
     ASSERT_CONTAINS(s->notes, "no_such_floor.tga");
     assert_int_equal(s->bsdf_count, 1);
     ASSERT_VEC(s->bsdfs[0].albedo, 0.5, 0.5, 0.5, 0.0);
+}
+
+/* ---- 6b. the paper's dragon scene: textures, conductors, smooth mesh; BSDF and shading keys ---- */
+
+#define DRAGON_FILES                                                                                             \
+    "dragon/scene-points-darts-short.json", "dragon/scene-points-short.json", "dragon/path_trace.json",         \
+        "dragon/models/dragon.wo3", "dragon/models/walls.wo3", "dragon/textures/sig.tga",                          \
+        "dragon/textures/camera-man.tga", "dragon/textures/floor.tga", "dragon/textures/walnut.tga"
+
+/* index of the texture whose path ends with `name`, or -1 */
+static int texture_named(const scene *s, const char *name)
+{
+    for (int i = 0; i < s->texture_count; i++) {
+        size_t n = strlen(s->textures[i].path), k = strlen(name);
+        if (n >= k && !strcmp(s->textures[i].path + n - k, name)) return i;
+    }
+    return -1;
+}
+
+/* The three dragon files load unchanged. Expected values from the files: 11 named BSDFs plus the inline
+ * `forward` of the scattering cube; 4 textures (sig, camera-man, floor, walnut; bump2.tga is not used),
+ * their sizes from the TGA headers; 87715 triangles summed over the 13 .wo3 files (dragon.wo3 87141). */
+static void test_dragon_scenes_load(void **state)
+{
+    (void)state;
+    const char *dir = test_need_paper_files(DRAGON_FILES, NULL);
+    static const char *const files[] = {"scene-points-darts-short.json", "scene-points-short.json", "path_trace.json"};
+    for (size_t f = 0; f < sizeof files / sizeof files[0]; f++) {
+        char path[4200];
+        snprintf(path, sizeof path, "%s/dragon/%s", dir, files[f]);
+        scene *s = fx_load(path, NULL);
+        assert_int_equal(s->bsdf_count, 12);
+        assert_int_equal(s->texture_count, 4);
+        assert_int_equal(s->tri_count, 87715);
+        assert_int_equal(s->surface_count, 13);
+        assert_int_equal(s->light_count, 1);
+        if (s->notes && strstr(s->notes, "not found")) fail_msg("%s: a texture was not found:\n%s", path, s->notes);
+        static const struct {
+            const char *name;
+            int w, h;
+        } tex[] = {{"sig.tga", 1177, 1080}, {"camera-man.tga", 648, 648}, {"floor.tga", 473, 315}, {"walnut.tga", 560, 410}};
+        for (size_t i = 0; i < sizeof tex / sizeof tex[0]; i++) {
+            int k = texture_named(s, tex[i].name);
+            if (k < 0) fail_msg("%s: no texture %s", path, tex[i].name);
+            assert_int_equal(s->textures[k].width, tex[i].w);
+            assert_int_equal(s->textures[k].height, tex[i].h);
+        }
+        /* bsdfs[1] "sig-image", [5] "wooden": textured lambert; [4] "top-base": rough_conductor, pbrt-ggx, 0.05,
+         * Ag; [7] "Mirror": mirror, albedo 0.9; [8] "dragon": rough_conductor 0.1, Au; [11] the inline forward */
+        assert_int_equal(s->bsdfs[1].type, BSDF_LAMBERT);
+        assert_int_equal(s->bsdfs[1].texture, texture_named(s, "sig.tga"));
+        assert_int_equal(s->bsdfs[5].texture, texture_named(s, "walnut.tga"));
+        assert_int_equal(s->bsdfs[4].type, BSDF_ROUGH_CONDUCTOR);
+        assert_int_equal(s->bsdfs[4].distribution, MICROFACET_PBRT_GGX);
+        ASSERT_NEAR(s->bsdfs[4].roughness, 0.05, 0.0);
+        vec3 eta, k;
+        assert_true(bsdf_conductor_preset("Ag", &eta, &k));
+        ASSERT_VEC(s->bsdfs[4].eta, eta.x, eta.y, eta.z, 0.0);
+        ASSERT_VEC(s->bsdfs[4].k, k.x, k.y, k.z, 0.0);
+        assert_int_equal(s->bsdfs[7].type, BSDF_MIRROR);
+        ASSERT_VEC(s->bsdfs[7].albedo, 0.9, 0.9, 0.9, 0.0);
+        assert_int_equal(s->bsdfs[8].type, BSDF_ROUGH_CONDUCTOR);
+        ASSERT_NEAR(s->bsdfs[8].roughness, 0.1, 0.0);
+        assert_true(bsdf_conductor_preset("Au", &eta, &k));
+        ASSERT_VEC(s->bsdfs[8].eta, eta.x, eta.y, eta.z, 0.0);
+        assert_int_equal(s->bsdfs[11].type, BSDF_FORWARD);
+        /* integrator keys the files set */
+        assert_int_equal(s->integrator.two_sided_shading, 1);
+        assert_int_equal(s->integrator.consistency_checks, 1);
+        ASSERT_NEAR(s->integrator.glossy_gather_alpha, 0.1, 0.0);
+        /* path_trace.json: "timeout": "-1" = no limit; the others "14.5834" minutes */
+        ASSERT_NEAR(s->renderer.timeout_seconds, f == 2 ? 0.0 : 14.5834 * 60.0, 1e-9);
+        fx_drop(s);
+    }
+}
+
+/* Every BSDF key reaches its field (values as written in the scene text); a conductor's material wins over
+ * eta and k (Tungsten's ConductorBsdf reads material last). */
+static void test_bsdf_keys_read(void **state)
+{
+    (void)state;
+    static const char from[] = "{\"name\": \"white\", \"type\": \"lambert\", \"albedo\": 0.5}";
+    char *text = replace1(BASE_SCENE, from,
+                          "{\"name\": \"white\", \"type\": \"lambert\", \"albedo\": [0.2, 0.3, 0.4]},"
+                          "{\"name\": \"rc\", \"type\": \"rough_conductor\", \"distribution\": \"beckmann\", \"roughness\": 0.3,"
+                          " \"eta\": [0.5, 0.6, 0.7], \"k\": [2.5, 2.6, 2.7]},"
+                          "{\"name\": \"ag\", \"type\": \"conductor\", \"eta\": 9, \"k\": 9, \"material\": \"Ag\"},"
+                          "{\"name\": \"gl\", \"type\": \"dielectric\", \"ior\": 1.33, \"enable_refraction\": false},"
+                          "{\"name\": \"pl\", \"type\": \"rough_plastic\", \"distribution\": \"ggx\", \"roughness\": 0.2,"
+                          " \"thickness\": 0.5, \"sigma_a\": [0.1, 0.2, 0.3]},"
+                          "{\"name\": \"pp\", \"type\": \"pbrt_plastic\", \"distribution\": \"pbrt-ggx\", \"Ks\": 0.4}");
+    dp_error err;
+    scene *s = fx_load_text("keys.json", text, NULL, &err);
+    free(text);
+    if (!s) fail_msg("%s", err.msg);
+    assert_int_equal(s->bsdf_count, 6);
+    ASSERT_VEC(s->bsdfs[0].albedo, 0.2, 0.3, 0.4, 0.0);
+    assert_int_equal(s->bsdfs[0].texture, -1);
+    assert_int_equal(s->bsdfs[1].type, BSDF_ROUGH_CONDUCTOR);
+    assert_int_equal(s->bsdfs[1].distribution, MICROFACET_BECKMANN);
+    ASSERT_NEAR(s->bsdfs[1].roughness, 0.3, 0.0);
+    ASSERT_VEC(s->bsdfs[1].eta, 0.5, 0.6, 0.7, 0.0);
+    ASSERT_VEC(s->bsdfs[1].k, 2.5, 2.6, 2.7, 0.0);
+    vec3 eta, k;
+    assert_true(bsdf_conductor_preset("Ag", &eta, &k));
+    assert_int_equal(s->bsdfs[2].type, BSDF_CONDUCTOR);
+    ASSERT_VEC(s->bsdfs[2].eta, eta.x, eta.y, eta.z, 0.0);
+    ASSERT_VEC(s->bsdfs[2].k, k.x, k.y, k.z, 0.0);
+    assert_int_equal(s->bsdfs[3].type, BSDF_DIELECTRIC);
+    ASSERT_NEAR(s->bsdfs[3].ior, 1.33, 0.0);
+    assert_int_equal(s->bsdfs[3].enable_refraction, 0);
+    assert_int_equal(s->bsdfs[4].type, BSDF_ROUGH_PLASTIC);
+    assert_int_equal(s->bsdfs[4].distribution, MICROFACET_GGX);
+    ASSERT_NEAR(s->bsdfs[4].roughness, 0.2, 0.0);
+    ASSERT_NEAR(s->bsdfs[4].thickness, 0.5, 0.0);
+    ASSERT_VEC(s->bsdfs[4].sigma_a, 0.1, 0.2, 0.3, 0.0);
+    assert_int_equal(s->bsdfs[5].type, BSDF_PBRT_PLASTIC);
+    assert_int_equal(s->bsdfs[5].distribution, MICROFACET_PBRT_GGX);
+    ASSERT_NEAR(s->bsdfs[5].ks, 0.4, 0.0);
+    assert_string_equal(s->bsdfs[1].name, "rc");
+}
+
+/* BSDF keys with bad values: the message names the file and the key. */
+static void test_bsdf_key_errors(void **state)
+{
+    (void)state;
+    static const char from[] = "{\"name\": \"white\", \"type\": \"lambert\", \"albedo\": 0.5}";
+    static const struct {
+        const char *to, *key, *word;
+    } cases[] = {
+        {"{\"name\": \"white\", \"type\": \"rough_conductor\", \"distribution\": \"phong\"}", "bsdfs[0].distribution", "phong"},
+        {"{\"name\": \"white\", \"type\": \"rough_conductor\", \"material\": \"Unobtainium\"}", "bsdfs[0].material", "Unobtainium"},
+        {"{\"name\": \"white\", \"type\": \"conductor\", \"material\": 3}", "bsdfs[0].material", "material"},
+        {"{\"name\": \"white\", \"type\": \"velvet\"}", "bsdfs[0].type", "unsupported BSDF 'velvet'"},
+        {"{\"name\": \"white\", \"type\": \"rough_plastic\", \"roughness\": \"rough.png\"}", "bsdfs[0].roughness", "roughness"},
+        {"{\"name\": \"white\", \"type\": \"dielectric\", \"ior\": \"glass\"}", "bsdfs[0].ior", "ior"},
+        {"{\"name\": \"white\", \"type\": \"plastic\", \"sigma_a\": [1, 2]}", "bsdfs[0].sigma_a", "sigma_a"},
+        {"{\"name\": \"white\", \"type\": \"lambert\", \"albedo\": {\"type\": \"checker\"}}", "bsdfs[0].albedo", "albedo"},
+    };
+    int failures = 0;
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        char *text = replace1(BASE_SCENE, from, cases[i].to);
+        dp_error err;
+        char name[64];
+        snprintf(name, sizeof name, "b%02zu.json", i);
+        scene *s = fx_load_text(name, text, NULL, &err);
+        free(text);
+        if (s) {
+            fx_drop(s);
+            print_message("[%s] loaded, expected an error naming '%s'\n", cases[i].to, cases[i].key);
+            failures++;
+        } else if (!strstr(err.msg, name) || !strstr(err.msg, cases[i].key) || !strstr(err.msg, cases[i].word)) {
+            print_message("[%s] the message lacks the file, '%s' or '%s': %s\n", cases[i].to, cases[i].key,
+                          cases[i].word, err.msg);
+            failures++;
+        }
+    }
+    if (failures) fail_msg("%d bad BSDF keys not reported as required", failures);
+}
+
+/* enable_two_sided_shading, enable_consistency_checks, glossy_gather_alpha and a negative timeout. */
+static void test_shading_keys_and_timeout(void **state)
+{
+    (void)state;
+    dp_error err;
+    scene *s = fx_load_text("d.json", BASE_SCENE, NULL, &err);
+    if (!s) fail_msg("%s", err.msg);
+    assert_int_equal(s->integrator.two_sided_shading, 1); /* defaults */
+    assert_int_equal(s->integrator.consistency_checks, 0);
+    ASSERT_NEAR(s->integrator.glossy_gather_alpha, 0.1, 0.0);
+    fx_drop(s);
+    char *text = replace1(BASE_SCENE, "\"max_bounces\": 4,",
+                          "\"max_bounces\": 4, \"enable_two_sided_shading\": false, \"enable_consistency_checks\": true, "
+                          "\"glossy_gather_alpha\": 0.25,");
+    char *t2 = replace1(text, "\"timeout\": \"0\"", "\"timeout\": \"-1\"");
+    free(text);
+    s = fx_load_text("k.json", t2, NULL, &err);
+    free(t2);
+    if (!s) fail_msg("%s", err.msg);
+    assert_int_equal(s->integrator.two_sided_shading, 0);
+    assert_int_equal(s->integrator.consistency_checks, 1);
+    ASSERT_NEAR(s->integrator.glossy_gather_alpha, 0.25, 0.0);
+    ASSERT_NEAR(s->renderer.timeout_seconds, 0.0, 0.0);
+    fx_drop(s);
+    /* a negative number and a negative duration with a unit are "no limit" too */
+    static const char *const neg[] = {"\"timeout\": -2", "\"timeout\": \"-30s\""};
+    for (size_t i = 0; i < 2; i++) {
+        t2 = replace1(BASE_SCENE, "\"timeout\": \"0\"", neg[i]);
+        s = fx_load_text("n.json", t2, NULL, &err);
+        free(t2);
+        if (!s) fail_msg("%s: %s", neg[i], err.msg);
+        ASSERT_NEAR(s->renderer.timeout_seconds, 0.0, 0.0);
+        fx_drop(s);
+    }
+    /* glossy_gather_alpha must be finite and >= 0 */
+    static const char *const bad[] = {"-0.1", "1e999", "\"wide\""};
+    for (size_t i = 0; i < 3; i++) {
+        char to[128];
+        snprintf(to, sizeof to, "\"max_bounces\": 4, \"glossy_gather_alpha\": %s,", bad[i]);
+        t2 = replace1(BASE_SCENE, "\"max_bounces\": 4,", to);
+        s = fx_load_text("g.json", t2, NULL, &err);
+        free(t2);
+        if (s) fail_msg("glossy_gather_alpha %s was accepted", bad[i]);
+        ASSERT_CONTAINS(err.msg, "g.json");
+        ASSERT_CONTAINS(err.msg, "integrator.glossy_gather_alpha");
+    }
 }
 
 /* ---- 7. fuzz ---- */
@@ -1064,6 +1270,10 @@ int main(void)
         T(test_set_overrides),
         T(test_unknown_keys_notes),
         T(test_texture_albedo_missing),
+        T(test_dragon_scenes_load),
+        T(test_bsdf_keys_read),
+        T(test_bsdf_key_errors),
+        T(test_shading_keys_and_timeout),
         T(test_fuzz_scene_json),
         T(test_fuzz_wo3),
     };

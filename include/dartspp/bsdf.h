@@ -5,8 +5,11 @@
  *   the surface: wi towards the previous vertex of the path being traced (the camera side for camera paths,
  *   the light side for light paths), wo the other direction (sampled, or towards the light/photon).
  * - f(wi, wo) is returned WITHOUT the cosine. Sampling weights are f·|cos θo| / pdf (lobe choice included).
- * - The models are symmetric, f(wi, wo) = f(wo, wi): refraction carries no η² radiance scale (as the
- *   reference renderer, a Tungsten fork), so camera and light paths use the same functions.
+ * - Camera paths transport radiance divided by η² ("basic radiance", Veach 1997 §5.2): reflection is
+ *   symmetric, f(wi, wo) = f(wo, wi), and a refraction's sampling weight is 1 − F from either side (as the
+ *   reference renderer, a Tungsten fork). Transmission then obeys f(wi, wo)/η_o² = f(wo, wi)/η_i², so light
+ *   paths (the adjoint) multiply a transmitted sample's weight by bsdf_adjoint_scale. The reference omits
+ *   that factor: its photons inside a dielectric carry the wrong power (they cancel on paths that leave it).
  * - z < 0 is the surface's back (inside of a dielectric). Opaque models return 0 unless wi.z > 0 and
  *   wo.z > 0; the caller flips the frame for two-sided shading (bsdf_frame_init).
  * - `albedo` is the BSDF's albedo at the hit point (its texture applied, else bsdf.albedo).
@@ -88,6 +91,10 @@ typedef struct {
     double pdf;     /* solid-angle pdf (non-delta), or the discrete probability of the delta outcome */
     unsigned lobe;  /* the single BSDF_LOBE_* bit sampled */
 } bsdf_sample;
+
+/* (η_i/η_o)² for a transmission through a dielectric (wi and wo on opposite sides; η of each side: 1 on +z,
+ * ior on −z), else 1: the factor that turns a sampled weight into the adjoint's, for light paths. */
+double bsdf_adjoint_scale(const bsdf *b, vec3 wi, vec3 wo);
 
 /* Samples wo given wi with three uniforms in [0,1). Returns 0 when nothing can be sampled (below the
  * surface, no selected lobe, a failed microfacet sample): the path ends. */

@@ -1,7 +1,8 @@
 /* dartspp gather: the sensor pass of photon points. One jittered camera ray per pixel, walked through
- * mirror, null and forward surfaces; along every medium segment the point-beam 2D estimator (biweight
- * kernel) over the volume photons; at the first Lambertian hit the surface estimate (k nearest within R,
- * box kernel); camera-warped time for every photon; box gate and frames through the film. */
+ * null and forward surfaces and continued through specular and near-specular lobes by sampling them; along
+ * every medium segment the point-beam 2D estimator (biweight kernel) over the volume photons; at surface
+ * hits the surface estimate over the gathered lobes (k nearest within R, box kernel), by the rule of
+ * surface_photon_split; camera-warped time for every photon; box gate and frames through the film. */
 #ifndef DARTSPP_GATHER_H
 #define DARTSPP_GATHER_H
 
@@ -17,6 +18,7 @@ typedef struct {
     double r_surf;                  /* surface search radius R of this iteration */
     int k_surf;                     /* gather_photon_count */
     bounce_limits bounces;          /* which light + camera paths count */
+    surface_shading shading;        /* BSDF frames and the gather/continue split (same as the photon pass) */
     int camera_leg_projected;       /* 0: Euclidean distance segment origin → photon (reference) */
     const dp_stop_flag *stop;       /* rows not started once it is set are skipped (may be NULL) */
 } gather_input;

@@ -53,8 +53,8 @@ size_t volume_map_bytes(size_t n);
 
 /* ---- photon pass ----
  * Light paths from the point lights (light picked uniformly, direction uniform): photons stored at medium
- * scattering vertices (volume) and at hits on Lambertian surfaces (surface), never on null/forward
- * surfaces. Budgets: at most `photon_count` paths; surface and volume budgets `photon_count` and
+ * scattering vertices (volume) and at surface hits whose BSDF has lobes the sensor pass gathers
+ * (surface_photon_split: diffuse and rough glossy lobes), never on null/forward or purely specular surfaces. Budgets: at most `photon_count` paths; surface and volume budgets `photon_count` and
  * `volume_photon_count`. A map keeps the photons of the leading paths whose photons all fit (the cut is
  * decided by path index, so the result does not depend on the thread count), and its powers are divided
  * by that number of paths. */
@@ -83,6 +83,7 @@ typedef struct {
     double surface_slack;           /* widening of the DARTS surface time tests and early exit: the camera-leg
                                      * change across the surface gather radius, so the gather's own gate
                                      * test decides (plan_surface_slack) */
+    surface_shading shading;        /* BSDF frames and the gather/continue split (same as the sensor pass) */
     const eda_set *eda;             /* EDA tables per medium, or NULL: phase sampling everywhere */
     uint64_t seed;
     long iteration;

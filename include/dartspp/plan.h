@@ -7,6 +7,7 @@
 #define DARTSPP_PLAN_H
 
 #include "dartspp/scene.h"
+#include "dartspp/surface.h"
 
 /* Which light paths count, in path segments including the light connection (DESIGN §4). */
 typedef struct {
@@ -59,6 +60,7 @@ typedef struct render_plan {
     time_window window;
     bounce_limits bounces;
     int enable_rr;                   /* path tracer: Russian roulette */
+    surface_shading shading;         /* two-sided shading, consistency checks, the photon-points glossy rule */
     /* photon points */
     double light_paths;              /* photon_count: light paths per iteration */
     double volume_budget, surface_budget; /* photons per iteration */

@@ -142,6 +142,13 @@ int bsdf_transmits(const bsdf *b)
     return (b->type == BSDF_DIELECTRIC || b->type == BSDF_ROUGH_DIELECTRIC) && b->enable_refraction;
 }
 
+double bsdf_adjoint_scale(const bsdf *b, vec3 wi, vec3 wo)
+{
+    if (!bsdf_transmits(b) || wi.z * wo.z >= 0.0) return 1.0;
+    double eta_i = wi.z > 0.0 ? 1.0 : b->ior, eta_o = wo.z > 0.0 ? 1.0 : b->ior;
+    return (eta_i / eta_o) * (eta_i / eta_o); /* Veach 1997 §5.2: f(wi→wo)/η_o² = f(wo→wi)/η_i² */
+}
+
 vec3 bsdf_eval(const bsdf *b, vec3 albedo, vec3 wi, vec3 wo, unsigned lobes)
 {
     lobes &= bsdf_lobes(b);

@@ -4,8 +4,8 @@
  * and pbrt_plastic (bsdf_rough_boundary_*).
  *
  * The transmission term is eq. 21 as written, with η_o² in the numerator: its sampling weight tends to 1 as
- * the roughness goes to 0, matching the smooth dielectric, and no η² radiance scale is applied (the
- * reference's choice, see README.md). */
+ * the roughness goes to 0, matching the smooth dielectric (camera paths carry radiance / η²); light paths
+ * take the adjoint through bsdf_adjoint_scale (see bsdf.h and README.md). */
 #include "bsdf_internal.h"
 
 double bsdf_widened_alpha(const bsdf *b, double cos_i)

@@ -10,6 +10,7 @@
 #include "dartspp/cli.h"
 #include "dartspp/darts.h"
 #include "dartspp/render.h"
+#include "dartspp/surface.h"
 
 typedef struct {
     const char *scene_path;
@@ -170,25 +171,30 @@ static int after_pass(void *ctx, const film *f, const render_stats *st, dp_error
     return 0;
 }
 
-/* Mirrors break two assumptions, and the user should hear which one applies (src/darts/README.md, mirrors):
- * the path tracer cannot reach a point light through a mirror, so light that hits a mirror
- * before any diffuse or medium vertex is missing; DARTS's time bounds and control vertices assume a
- * straight camera leg, so what the camera sees through a mirror is biased. */
+/* Specular and near-specular surfaces break two assumptions, and the user should hear which one applies
+ * (src/darts/README.md, mirrors): the path tracer cannot reach a point light through a delta lobe (mirror,
+ * smooth metal or glass, a plastic's coat), so light that takes one before any diffuse, glossy or medium
+ * vertex is missing; DARTS's time bounds and control vertices assume a straight camera leg, so what the
+ * camera sees through a surface it continues through (surface_photon_split) is biased. */
 static void warn_mirrors(const scene *s, const render_plan *p)
 {
-    const char *mirror = NULL;
-    for (int i = 0; i < s->surface_count && !mirror; i++)
-        if (s->surfaces[i].tri_count > 0 && s->bsdfs[s->surfaces[i].bsdf].type == BSDF_MIRROR)
-            mirror = s->surfaces[i].name;
-    if (!mirror) return;
-    if (p->type == INTEGRATOR_PATH_TRACER && s->light_count > 0)
-        fprintf(stderr, "warning: %s: surface '%s' is a mirror: the path tracer cannot connect to point lights "
-                "through it, so light reflected by it before any diffuse or medium vertex (caustics) is missing "
-                "from the image; photon points render it\n", s->path, mirror);
-    if (p->darts.active && (p->darts.control_vertices || p->darts.strict))
-        fprintf(stderr, "warning: %s: surface '%s' is a mirror: DARTS time bounds and control vertices assume a "
-                "straight camera leg, so what the camera sees through it is too dark; enable_elliptical=false "
-                "and strict_time_width=false render it without that bias\n", s->path, mirror);
+    const char *delta = NULL, *continued = NULL;
+    for (int i = 0; i < s->surface_count; i++) {
+        const bsdf *b = &s->bsdfs[s->surfaces[i].bsdf];
+        if (s->surfaces[i].tri_count == 0 || bsdf_is_passthrough(b)) continue;
+        if (!delta && (bsdf_lobes(b) & BSDF_LOBE_SPECULAR)) delta = s->surfaces[i].name;
+        if (!continued && surface_photon_split(b, &p->shading).cont) continued = s->surfaces[i].name;
+    }
+    if (delta && p->type == INTEGRATOR_PATH_TRACER && s->light_count > 0)
+        fprintf(stderr, "warning: %s: surface '%s' is specular: the path tracer cannot connect to point lights "
+                "through it, so light reflected or refracted by it before any diffuse or medium vertex (caustics) "
+                "is missing from the image; photon points render it\n", s->path, delta);
+    if (continued && p->type == INTEGRATOR_PHOTON_POINTS && p->darts.active &&
+        (p->darts.control_vertices || p->darts.strict))
+        fprintf(stderr, "warning: %s: surface '%s' is specular or near-specular: camera paths continue through "
+                "it, but DARTS time bounds and control vertices assume a straight camera leg, so what the camera "
+                "sees through it is too dark; enable_elliptical=false and strict_time_width=false render it "
+                "without that bias\n", s->path, continued);
 }
 
 /* Elliptical control vertices assume one refractive index along the camera leg; when the media and vacuum

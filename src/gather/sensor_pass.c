@@ -2,11 +2,13 @@
 #include <stdlib.h>
 
 #include "dartspp/gather.h"
+#include "dartspp/surface.h"
 
 typedef struct {
     const scene *s;
     const gather_input *g;
     film_pixel *pix;
+    dp_rng *rng;     /* continuations through specular and near-specular lobes */
 } pixel_ctx;
 
 typedef struct {
@@ -37,27 +39,56 @@ static void visit_volume_photon(void *ctx, const photon *p, double t, double d2)
     film_pixel_splat(b->c->pix, time, v3_scale(v3_mul(v3_mul(b->thr, tr), photon_vec(p->power)), f), p->frame);
 }
 
-/* Surface estimate at a Lambertian hit: k nearest within R, box kernel over the disc of the k-th. */
-static void gather_surface(pixel_ctx *c, vec3 x, vec3 n_in, const bsdf *b, vec3 thr, double t_cam, int b_cam)
+/* Surface estimate at a hit, over the gathered lobes: k nearest within R, box kernel over the disc of the
+ * k-th; each photon contributes P·f(ω_cam, −ω_p), the BSDF without the cosine (reference §9.4). */
+static void gather_surface(pixel_ctx *c, const surface_site *ss, unsigned lobes, vec3 thr, double t_cam, int b_cam)
 {
     const gather_input *g = c->g;
     if (!g->surf) return;
     int idx[256];
     double d2[256];
     int k = g->k_surf < 256 ? g->k_surf : 256;
-    int n = photon_map_query_knn(g->surf, x, k, g->r_surf, idx, d2);
+    int n = photon_map_query_knn(g->surf, ss->p, k, g->r_surf, idx, d2);
     if (n == 0) return;
     double r2 = n == k ? d2[n - 1] : g->r_surf * g->r_surf;
     if (!(r2 > 0.0)) return;
-    vec3 f = v3_scale(b->albedo, DP_INV_PI / (M_PI * r2));
+    vec3 w = v3_scale(thr, 1.0 / (M_PI * r2));
     for (int i = 0; i < n; i++) {
         const photon *p = &g->surf_photons[idx[i]];
-        if (v3_dot(photon_vec(p->dir), n_in) >= 0.0) continue; /* arrived on the other side */
         if (!bounces_count(&g->bounces, p->bounce + b_cam)) continue;
-        film_pixel_splat(c->pix, t_cam + p->time, v3_mul(v3_mul(thr, f), photon_vec(p->power)), p->frame);
+        vec3 f = surface_eval(ss, v3_neg(photon_vec(p->dir)), lobes);
+        if (v3_is_zero(f)) continue; /* e.g. arrived on the other side of an opaque surface */
+        film_pixel_splat(c->pix, t_cam + p->time, v3_mul(v3_mul(w, f), photon_vec(p->power)), p->frame);
     }
 }
 
+/* Direct light at a surface the camera path continues through on a non-delta lobe: no photon carries the
+ * unscattered light of a point light, so next-event estimation adds it (light → surface → camera), with the
+ * continued lobes evaluated. Delta lobes cannot see a point light. */
+static void direct_light(pixel_ctx *c, const surface_site *ss, unsigned lobes, int med, vec3 thr, double t_cam,
+                         int b_cam)
+{
+    const scene *s = c->s;
+    if (!bounces_count(&c->g->bounces, b_cam + 1)) return;
+    for (int i = 0; i < s->light_count; i++) {
+        const point_light *L = &s->lights[i];
+        vec3 to = v3_sub(L->pos, ss->p);
+        double d2 = v3_dot(to, to);
+        if (!(d2 > 0.0)) continue;
+        vec3 w = v3_scale(to, 1.0 / sqrt(d2));
+        vec3 f = surface_eval_cos(ss, w, lobes);
+        if (v3_max(f) <= 0.0) continue;
+        vec3 tr;
+        double t = t_cam;
+        c->pix->rays += 1;
+        if (!scene_transmittance(s, surface_spawn(s, ss, w), surface_medium_toward(ss, med, w), L->pos, &tr, &t))
+            continue;
+        film_pixel_splat(c->pix, t, v3_scale(v3_mul(v3_mul(v3_mul(thr, tr), L->intensity), f), 1.0 / d2), -1);
+    }
+}
+
+/* The camera walk: volume gathers along every medium segment; at a surface, the gather over the lobes the
+ * photon map carries and a continuation through the others (surface_photon_split), sampled. */
 static void trace_sensor_path(pixel_ctx *c, vec3 d)
 {
     const scene *s = c->s;
@@ -79,20 +110,25 @@ static void trace_sensor_path(pixel_ctx *c, vec3 d)
         t_cam += medium_eta(s, med) * len;
         const surface *sf = &s->surfaces[h.surface];
         const bsdf *bs = &s->bsdfs[sf->bsdf];
-        vec3 n_in = v3_dot(d, h.ng) < 0.0 ? h.ng : v3_neg(h.ng);
         if (bsdf_is_passthrough(bs)) {
+            vec3 n_out = v3_dot(d, h.ng) < 0.0 ? v3_neg(h.ng) : h.ng; /* the far side */
             med = surface_next_medium(sf, med, d, h.ng);
-            o = scene_offset_ray_origin(s, h.p, v3_neg(n_in));
+            o = scene_offset_ray_origin(s, h.p, n_out);
             continue;
         }
-        if (bs->type != BSDF_MIRROR) {
-            gather_surface(c, h.p, n_in, bs, thr, t_cam, b_cam);
-            return;
-        }
-        d = v3_reflect(d, h.ng);
-        thr = v3_mul(thr, bs->albedo);
-        med = surface_next_medium(sf, med, d, h.ng);
-        o = scene_offset_ray_origin(s, h.p, n_in);
+        surface_site ss;
+        if (!surface_site_init(&ss, s, &c->g->shading, &h, d)) return;
+        photon_split split = surface_photon_split(bs, &c->g->shading);
+        if (split.gather) gather_surface(c, &ss, split.gather, thr, t_cam, b_cam);
+        if (!split.cont) return;
+        if (split.cont & ~BSDF_LOBE_SPECULAR) direct_light(c, &ss, split.cont, med, thr, t_cam, b_cam);
+        double u[3] = {rng_uniform(c->rng), rng_uniform(c->rng), rng_uniform(c->rng)};
+        surface_sample smp;
+        if (!surface_sample_bsdf(&ss, u, split.cont, 0, &smp)) return;
+        thr = v3_mul(thr, smp.weight);
+        d = smp.w;
+        med = surface_medium_toward(&ss, med, d);
+        o = surface_spawn(s, &ss, d);
         b_cam++;
     }
 }
@@ -104,9 +140,8 @@ typedef struct {
 
 static void sample_pixel(void *ctx, film_pixel *pix, vec3 dir, dp_rng *rng)
 {
-    (void)rng; /* the gather draws nothing after the jitter */
     const pass_ctx *p = ctx;
-    pixel_ctx c = {.s = p->s, .g = p->g, .pix = pix};
+    pixel_ctx c = {.s = p->s, .g = p->g, .pix = pix, .rng = rng};
     trace_sensor_path(&c, dir);
 }
 

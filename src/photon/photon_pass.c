@@ -1,5 +1,5 @@
 /* The photon pass (baseline photon points): light paths from the point lights, photons stored at medium
- * scattering vertices and Lambertian hits. Paths are traced in batches in parallel into per-thread buffers
+ * scattering vertices and at surface hits whose BSDF has gathered lobes (surface_photon_split). Paths are traced in batches in parallel into per-thread buffers
  * and merged in path order, so budgets are cut by path index and the result is thread-count independent. */
 #include <omp.h>
 #include <stdlib.h>
@@ -8,6 +8,7 @@
 #include "dartspp/darts.h"
 #include "dartspp/photon.h"
 #include "dartspp/scene.h"
+#include "dartspp/surface.h"
 
 
 typedef struct {
@@ -164,31 +165,34 @@ static int medium_segment(light_path *lp, double tmax)
     return 1;
 }
 
-/* Scattering at a surface hit; returns 0 to end the path. */
+/* Scattering at a surface hit: a surface photon where the BSDF has lobes the sensor pass gathers
+ * (surface_photon_split), then the adjoint BSDF sample. Returns 0 to end the path. */
 static int surface_event(light_path *lp, const hit_record *h)
 {
     const scene *s = lp->s;
     const surface *sf = &s->surfaces[h->surface];
     const bsdf *b = &s->bsdfs[sf->bsdf];
-    vec3 n_in = v3_dot(lp->d, h->ng) < 0.0 ? h->ng : v3_neg(h->ng);
     if (bsdf_is_passthrough(b)) {
+        vec3 n_out = v3_dot(lp->d, h->ng) < 0.0 ? v3_neg(h->ng) : h->ng; /* the far side */
         lp->med = surface_next_medium(sf, lp->med, lp->d, h->ng);
-        lp->o = scene_offset_ray_origin(lp->s, h->p, v3_neg(n_in));
+        lp->o = scene_offset_ray_origin(lp->s, h->p, n_out);
         new_vertex(lp);
         return 1;
     }
     lp->bounce++;
     lp->medium_events = 0;
-    if (b->type == BSDF_MIRROR) lp->d = v3_reflect(lp->d, h->ng);
-    else {
-        if (lp->in->include_surfaces && surface_time_ok(lp, h->p))
-            store(lp, &lp->tb->surf, &lp->pc->n_surf, h->p, lp->d, lp->beta, lp->bounce, lp->time);
-        double u1 = rng_uniform(lp->rng), u2 = rng_uniform(lp->rng);
-        lp->d = sample_cosine_about(n_in, u1, u2);
-    }
-    lp->beta = v3_mul(lp->beta, b->albedo);
+    surface_site ss;
+    if (!surface_site_init(&ss, s, &lp->in->shading, h, lp->d)) return 0;
+    if (surface_photon_split(b, &lp->in->shading).gather && lp->in->include_surfaces && surface_time_ok(lp, h->p))
+        store(lp, &lp->tb->surf, &lp->pc->n_surf, h->p, lp->d, surface_photon_power(&ss, lp->beta), lp->bounce,
+              lp->time);
+    double u[3] = {rng_uniform(lp->rng), rng_uniform(lp->rng), rng_uniform(lp->rng)};
+    surface_sample smp;
+    if (!surface_sample_bsdf(&ss, u, BSDF_LOBES_ALL, 1, &smp)) return 0;
+    lp->beta = v3_mul(lp->beta, smp.weight);
+    lp->d = smp.w;
     lp->med = surface_next_medium(sf, lp->med, lp->d, h->ng);
-    lp->o = scene_offset_ray_origin(lp->s, h->p, n_in);
+    lp->o = surface_spawn(s, &ss, lp->d);
     new_vertex(lp);
     return 1;
 }
@@ -268,7 +272,8 @@ void photon_pass_input_init(photon_pass_input *in, const scene *s, const render_
                               .surface_budget = p->surface_budget, .max_bounces = p->bounces.max,
                               .t_end = p->window.gated ? time_window_end(&p->window) : INFINITY,
                               .include_surfaces = p->include_surfaces, .low_order_scattering = p->low_order_scattering,
-                              .surface_slack = plan_surface_slack(p, iteration), .eda = eda, .seed = seed,
+                              .surface_slack = plan_surface_slack(p, iteration), .shading = p->shading,
+                              .eda = eda, .seed = seed,
                               .iteration = iteration, .stop = stop};
     darts_guide_init(p, s->cam.pos, &in->guide);
 }

@@ -62,6 +62,7 @@ int plan_resolve(const scene *s, render_plan *p, dp_error *err)
     p->window = in->window;
     p->bounces = (bounce_limits){in->min_bounces, in->max_bounces};
     p->enable_rr = in->enable_rr;
+    p->shading = (surface_shading){in->two_sided_shading, in->consistency_checks, in->glossy_gather_alpha};
     p->light_paths = in->photon_count;
     p->volume_budget = in->volume_photon_count;
     p->surface_budget = in->photon_count;
@@ -116,6 +117,8 @@ int plan_json(const render_plan *p, const scene *s, char *out, size_t n)
     if (!tw->gated) put(out, n, &len, ",\"window\":\"steady\"");
     else put(out, n, &len, ",\"window\":[%.17g,%.17g],\"frames\":%d", tw->start, time_window_end(tw), tw->frame_count);
     put(out, n, &len, ",\"bounces\":[%d,%d]", p->bounces.min, p->bounces.max);
+    put(out, n, &len, ",\"two_sided_shading\":%s,\"consistency_checks\":%s", p->shading.two_sided ? "true" : "false",
+        p->shading.consistency_checks ? "true" : "false");
     if (p->type == INTEGRATOR_PATH_TRACER) {
         put(out, n, &len, ",\"russian_roulette\":%s}", p->enable_rr ? "true" : "false");
         return len < n ? 0 : -1;
@@ -124,10 +127,11 @@ int plan_json(const render_plan *p, const scene *s, char *out, size_t n)
     put(out, n, &len,
         ",\"light_paths\":%.17g,\"volume_budget\":%.17g,\"surface_budget\":%.17g"
         ",\"r_vol\":{\"r0\":%.17g,\"alpha\":%.17g,\"dims\":%d},\"r_surf\":{\"r0\":%.17g,\"alpha\":%.17g,\"k\":%d}"
-        ",\"camera_leg\":\"%s\",\"surfaces\":%s,\"low_order_scattering\":%s",
+        ",\"camera_leg\":\"%s\",\"surfaces\":%s,\"low_order_scattering\":%s,\"glossy_gather_alpha\":%.17g",
         p->light_paths, p->volume_budget, p->surface_budget, p->r_vol.r0, p->r_vol.alpha, p->r_vol.dims, p->r_surf.r0,
         p->r_surf.alpha, p->k_surf, p->camera_leg_projected ? "projected" : "euclidean",
-        p->include_surfaces ? "true" : "false", p->low_order_scattering ? "true" : "false");
+        p->include_surfaces ? "true" : "false", p->low_order_scattering ? "true" : "false",
+        p->shading.glossy_gather_alpha);
     put(out, n, &len, ",\"darts\":{\"active\":%s", d->active ? "true" : "false");
     if (d->active)
         put(out, n, &len,

@@ -15,8 +15,9 @@
 /* Resident memory of the process before any scene data: the C and C++ runtimes, Embree, OpenEXR, FLANN,
  * OpenMP threads (measured: a 1-pixel render of a fog scene without geometry peaks at 8.7 MiB, Debian 12). */
 #define RUNTIME_BYTES (9.0 * 1048576.0)
-/* Geometry per triangle: our float vertices and indices, Embree's BVH and its build scratch. */
-#define BYTES_PER_TRIANGLE 160.0
+/* Geometry per triangle: our float vertices and indices, Embree's BVH and its build scratch, and the corner
+ * normals and UVs of smooth and textured meshes (60 bytes, counted for every triangle: an upper bound). */
+#define BYTES_PER_TRIANGLE 220.0
 /* Photons one batch may leave in the per-thread buffers, per light path (they keep their capacity). */
 
 static void add(memory_estimate *m, const char *what, const char *key, double bytes)
@@ -48,6 +49,9 @@ void render_memory_estimate(const scene *s, const render_plan *p, int have_refer
     double px = (double)s->cam.width * s->cam.height, image = px * 3 * sizeof(float);
     add(m, "libraries and threads", NULL, RUNTIME_BYTES);
     add(m, "geometry (triangles and Embree BVH)", NULL, s->tri_count * BYTES_PER_TRIANGLE);
+    double texels = 0;
+    for (int i = 0; i < s->texture_count; i++) texels += (double)s->textures[i].width * s->textures[i].height;
+    add(m, "albedo textures", NULL, texels * 3 * sizeof(float));
     /* film_bytes in double: frames × pixels can be large */
     int frames = p->window.frame_count;
     double film = 2 * px * 3 * sizeof(double) + 2 * px * 3 * (double)frames * sizeof(float);

@@ -5,6 +5,7 @@
  * Bounces (DESIGN §4): a path of n segments, the light connection included, counts iff
  * n <= max_bounces and n - 1 >= min_bounces. Crossing a null/forward surface does not end a segment. */
 #include "dartspp/render.h"
+#include "dartspp/surface.h"
 
 #include <omp.h>
 
@@ -23,10 +24,10 @@ typedef struct {
     dp_rng *rng;
 } pixel_ctx;
 
-/* NEE to every point light from x; f_eval(w_to_light) is the phase function or BSDF·cos. */
-typedef double (*scatter_eval)(const void *ctx, vec3 w);
-
-static void connect_lights(pixel_ctx *c, const path_state *ps, vec3 x, scatter_eval fe, const void *fctx)
+/* NEE to every point light from x (a medium vertex), or from the surface site ss (x = its point): the
+ * contribution is β·Tr·I·f/d², f the phase function or the BSDF with its cosine. */
+static void connect_lights(pixel_ctx *c, const path_state *ps, vec3 x, const phase_function *pf,
+                           const surface_site *ss)
 {
     const scene *s = c->s;
     for (int i = 0; i < s->light_count; i++) {
@@ -35,35 +36,16 @@ static void connect_lights(pixel_ctx *c, const path_state *ps, vec3 x, scatter_e
         double d2 = v3_dot(to, to);
         if (d2 <= 0.0) continue;
         vec3 w = v3_scale(to, 1.0 / sqrt(d2));
-        double f = fe(fctx, w);
-        if (f <= 0.0) continue;
+        vec3 f = ss ? surface_eval_cos(ss, w, BSDF_LOBES_ALL) : v3s(phase_eval(pf, ps->d, w));
+        if (v3_max(f) <= 0.0) continue;
         vec3 tr;
         double t = ps->time;
         c->pix->rays += 1;
-        if (!scene_transmittance(s, x, ps->medium, L->pos, &tr, &t)) continue;
-        film_pixel_splat(c->pix, t, v3_scale(v3_mul(v3_mul(ps->beta, tr), L->intensity), f / d2), -1);
+        vec3 o = ss ? surface_spawn(s, ss, w) : x;
+        if (!scene_transmittance(s, o, ss ? surface_medium_toward(ss, ps->medium, w) : ps->medium, L->pos, &tr, &t))
+            continue;
+        film_pixel_splat(c->pix, t, v3_scale(v3_mul(v3_mul(v3_mul(ps->beta, tr), L->intensity), f), 1.0 / d2), -1);
     }
-}
-
-typedef struct {
-    const phase_function *pf;
-    vec3 w_in;
-} phase_ctx;
-
-static double eval_phase(const void *ctx, vec3 w)
-{
-    const phase_ctx *p = ctx;
-    return phase_eval(p->pf, p->w_in, w);
-}
-
-typedef struct {
-    vec3 n; /* facing the side the path arrived from */
-} lambert_ctx;
-
-static double eval_lambert_cos(const void *ctx, vec3 w)
-{
-    double c = v3_dot(((const lambert_ctx *)ctx)->n, w);
-    return c > 0.0 ? c * DP_INV_PI : 0.0;
 }
 
 /* Medium vertex: NEE, then phase sampling. Returns 0 when the path ends. */
@@ -75,42 +57,39 @@ static int scatter_medium(pixel_ctx *c, path_state *ps, double t, int *medium_ev
     ps->time += m->eta * t;
     ps->depth++;
     if (++*medium_events > m->max_bounces) return 0;
-    phase_ctx pc = {&m->phase, ps->d};
-    if (bounces_count(&c->p->bounces, ps->depth + 1)) connect_lights(c, ps, ps->o, eval_phase, &pc);
+    if (bounces_count(&c->p->bounces, ps->depth + 1)) connect_lights(c, ps, ps->o, &m->phase, NULL);
     double u1 = rng_uniform(c->rng), u2 = rng_uniform(c->rng);
     ps->d = phase_sample(&m->phase, ps->d, u1, u2);
     return 1;
 }
 
-/* Surface hit: pass-through, mirror or Lambert. Returns 0 when the path ends. */
+/* Surface hit: pass-through, or NEE with the BSDF evaluated and a BSDF sample. Returns 0 when the path
+ * ends. The medium beyond follows the sampled direction (refraction enters a dielectric's interior). */
 static int scatter_surface(pixel_ctx *c, path_state *ps, const hit_record *h, int *medium_events)
 {
     const scene *s = c->s;
     const surface *sf = &s->surfaces[h->surface];
     const bsdf *b = &s->bsdfs[sf->bsdf];
     ps->time += medium_eta(s, ps->medium) * h->t;
-    vec3 n_in = v3_dot(ps->d, h->ng) < 0.0 ? h->ng : v3_neg(h->ng); /* facing the arriving path */
     if (bsdf_is_passthrough(b)) {
+        vec3 n_out = v3_dot(ps->d, h->ng) < 0.0 ? v3_neg(h->ng) : h->ng; /* the far side */
         ps->medium = surface_next_medium(sf, ps->medium, ps->d, h->ng);
-        ps->o = scene_offset_ray_origin(c->s, h->p, v3_neg(n_in));
+        ps->o = scene_offset_ray_origin(c->s, h->p, n_out);
         return 1;
     }
     ps->depth++;
     *medium_events = 0;
-    if (b->type == BSDF_MIRROR) {
-        ps->d = v3_reflect(ps->d, h->ng);
-    } else {
-        lambert_ctx lc = {n_in};
-        path_state at = *ps;
-        at.beta = v3_mul(ps->beta, b->albedo);
-        if (bounces_count(&c->p->bounces, ps->depth + 1))
-            connect_lights(c, &at, scene_offset_ray_origin(c->s, h->p, n_in), eval_lambert_cos, &lc);
-        double u1 = rng_uniform(c->rng), u2 = rng_uniform(c->rng);
-        ps->d = sample_cosine_about(n_in, u1, u2);
-    }
-    ps->beta = v3_mul(ps->beta, b->albedo);
+    surface_site ss;
+    if (!surface_site_init(&ss, s, &c->p->shading, h, ps->d)) return 0;
+    if ((bsdf_lobes(b) & ~BSDF_LOBE_SPECULAR) && bounces_count(&c->p->bounces, ps->depth + 1))
+        connect_lights(c, ps, h->p, NULL, &ss);
+    double u[3] = {rng_uniform(c->rng), rng_uniform(c->rng), rng_uniform(c->rng)};
+    surface_sample smp;
+    if (!surface_sample_bsdf(&ss, u, BSDF_LOBES_ALL, 0, &smp)) return 0;
+    ps->beta = v3_mul(ps->beta, smp.weight);
+    ps->d = smp.w;
     ps->medium = surface_next_medium(sf, ps->medium, ps->d, h->ng);
-    ps->o = scene_offset_ray_origin(c->s, h->p, n_in);
+    ps->o = surface_spawn(s, &ss, ps->d);
     return 1;
 }
 

@@ -1,8 +1,11 @@
 /* Ray queries through Embree 3: one triangle geometry per surface (geomID = surface index), robust
- * (watertight) traversal, hit points from barycentrics, self-intersection avoided by offsetting origins. */
+ * (watertight) traversal, hit points from barycentrics, self-intersection avoided by offsetting origins.
+ * Shading normals and UVs come from the scene_rt corner arrays; `backface_culling` surfaces get an Embree
+ * intersection filter that drops hits on their back (d·ng > 0), so other surfaces pay nothing. */
 #include "scene_internal.h"
 
 #include <embree3/rtcore.h>
+#include <stdlib.h>
 #include <string.h>
 
 static void embree_error(void *user, enum RTCError code, const char *str)
@@ -12,8 +15,24 @@ static void embree_error(void *user, enum RTCError code, const char *str)
     (void)str; /* reported through rtcGetDeviceError where it matters */
 }
 
+/* Embree's Ng is (p1 - p0) x (p2 - p0) for our triangles (counter-clockwise front), the same as hit.ng.
+ * RTCRayN and RTCHitN are arrays of N-wide float columns (rtcore_ray.h: dir at columns 4-6 of the ray, Ng
+ * at columns 0-2 of the hit); the accessor functions there are C++ only. */
+static void cull_back_faces(const struct RTCFilterFunctionNArguments *args)
+{
+    const float *ray = (const float *)args->ray, *hit = (const float *)args->hit;
+    unsigned n = args->N;
+    for (unsigned i = 0; i < n; i++) {
+        if (args->valid[i] != -1) continue;
+        float d = ray[4 * n + i] * hit[i] + ray[5 * n + i] * hit[n + i] + ray[6 * n + i] * hit[2 * n + i];
+        if (d > 0.0f) args->valid[i] = 0;
+    }
+}
+
 int scene_build_embree(scene *s, dp_error *err)
 {
+    scene_rt *rt = scene_rt_get(s);
+    if (!rt) return dp_fail(err, "%s: out of memory", s->path);
     s->ray_offset_scale = 0.0f;
     for (size_t i = 0; i < 3 * (size_t)s->vert_count; i++) s->ray_offset_scale = fmaxf(s->ray_offset_scale, fabsf(s->verts[i]));
     if (!(s->ray_offset_scale > 0.0f)) s->ray_offset_scale = 1.0f;
@@ -44,6 +63,10 @@ int scene_build_embree(scene *s, dp_error *err)
                 ib[3 * (size_t)t + k] = 3 * t + (unsigned)k;
             }
         }
+        if (i < rt->flag_cap && (rt->flags[i] & SURF_CULL)) {
+            rtcSetGeometryIntersectFilterFunction(g, cull_back_faces);
+            rtcSetGeometryOccludedFilterFunction(g, cull_back_faces);
+        }
         rtcCommitGeometry(g);
         rtcAttachGeometryByID(sc, g, (unsigned)i);
         rtcReleaseGeometry(g);
@@ -55,13 +78,20 @@ int scene_build_embree(scene *s, dp_error *err)
         return dp_fail(err, "%s: Embree failed to build the scene", s->path);
     }
     s->rt_device = dev;
-    s->rt_scene = sc;
+    rt->rtc = sc;
     return 0;
 }
 
 void scene_release_embree(scene *s)
 {
-    if (s->rt_scene) rtcReleaseScene((RTCScene)s->rt_scene);
+    scene_rt *rt = s->rt_scene;
+    if (rt) {
+        if (rt->rtc) rtcReleaseScene((RTCScene)rt->rtc);
+        free(rt->corner_n);
+        free(rt->corner_uv);
+        free(rt->flags);
+        free(rt);
+    }
     if (s->rt_device) rtcReleaseDevice((RTCDevice)s->rt_device);
     s->rt_scene = s->rt_device = NULL;
 }
@@ -90,16 +120,36 @@ int scene_intersect(const scene *s, vec3 o, vec3 d, double tmax, hit_record *h)
     rh.ray.time = 0.0f;
     rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
     rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-    rtcIntersect1((RTCScene)s->rt_scene, &ctx, &rh);
+    const scene_rt *rt = s->rt_scene;
+    rtcIntersect1((RTCScene)rt->rtc, &ctx, &rh);
     if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return 0;
     const surface *sf = &s->surfaces[rh.hit.geomID];
-    const uint32_t *tri = &s->tris[3 * (size_t)(sf->first_tri + rh.hit.primID)];
+    uint32_t t = sf->first_tri + rh.hit.primID;
+    const uint32_t *tri = &s->tris[3 * (size_t)t];
     vec3 p0 = vert(s, tri[0]), p1 = vert(s, tri[1]), p2 = vert(s, tri[2]);
-    double u = rh.hit.u, v = rh.hit.v;
+    double u = rh.hit.u, v = rh.hit.v, w = 1.0 - u - v;
     h->t = rh.ray.tfar;
-    h->p = v3_add(v3_scale(p0, 1.0 - u - v), v3_add(v3_scale(p1, u), v3_scale(p2, v)));
+    h->p = v3_add(v3_scale(p0, w), v3_add(v3_scale(p1, u), v3_scale(p2, v)));
     h->ng = v3_norm(v3_cross(v3_sub(p1, p0), v3_sub(p2, p0)));
+    h->ns = h->ng;
+    h->uv[0] = h->uv[1] = 0.0;
+    h->tri = t;
     h->surface = (int)rh.hit.geomID;
+    unsigned flags = (int)rh.hit.geomID < rt->flag_cap ? rt->flags[rh.hit.geomID] : 0u;
+    if (flags & SURF_SMOOTH) {
+        const float *c = &rt->corner_n[9 * (size_t)t];
+        vec3 n = v3(w * c[0] + u * c[3] + v * c[6], w * c[1] + u * c[4] + v * c[7], w * c[2] + u * c[5] + v * c[8]);
+        double l = v3_len(n);
+        if (l > 1e-12) { /* a zero normal (absent, or opposite corners cancelling) leaves ng */
+            n = v3_scale(n, 1.0 / l);
+            h->ns = v3_dot(n, h->ng) < 0.0 ? v3_neg(n) : n;
+        }
+    }
+    if (flags & SURF_UV) {
+        const float *c = &rt->corner_uv[6 * (size_t)t];
+        h->uv[0] = w * c[0] + u * c[2] + v * c[4];
+        h->uv[1] = w * c[1] + u * c[3] + v * c[5];
+    }
     return 1;
 }
 

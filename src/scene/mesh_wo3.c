@@ -1,6 +1,7 @@
 /* Tungsten's `.wo3` binary mesh (scene-format.md §1): uint64 vertex count, 32-byte vertices
  * (pos, normal, uv as float32), uint64 triangle count, 16-byte triangles (3 × uint32 index, int32 material).
- * Little-endian; the file size must be exactly 16 + 32·nv + 16·nt. */
+ * Little-endian; the file size must be exactly 16 + 32·nv + 16·nt. Normals and UVs are kept (has_normals and
+ * has_uvs are set when some vertex has a non-zero one; a non-finite one counts as absent). */
 #include "scene_internal.h"
 
 #include <errno.h>
@@ -36,6 +37,15 @@ static int read_vertices(FILE *f, const char *path, uint64_t nv, tri_mesh *m, dp
         if (!isfinite(x) || !isfinite(y) || !isfinite(z))
             return dp_fail(err, "%s: vertex %llu has a non-finite position", path, (unsigned long long)i);
         if (tri_mesh_add_vertex(m, x, y, z)) return dp_fail(err, "%s: out of memory", path);
+        float *n = &m->nrm[3 * (size_t)i], *uv = &m->uv[2 * (size_t)i];
+        for (int k = 0; k < 3; k++) n[k] = lef32(v + 12 + 4 * k);
+        uv[0] = lef32(v + 24);
+        uv[1] = lef32(v + 28);
+        /* exporters write NaN normals for degenerate faces: such a normal or UV counts as absent */
+        if (!isfinite(n[0]) || !isfinite(n[1]) || !isfinite(n[2])) n[0] = n[1] = n[2] = 0.0f;
+        if (!isfinite(uv[0]) || !isfinite(uv[1])) uv[0] = uv[1] = 0.0f;
+        m->has_normals |= n[0] != 0.0f || n[1] != 0.0f || n[2] != 0.0f;
+        m->has_uvs |= uv[0] != 0.0f || uv[1] != 0.0f;
     }
     return 0;
 }

@@ -16,25 +16,67 @@ static inline vec3 xform_point(const xform *m, vec3 p)
     return v3_add(m->pos, v3_add(v3_scale(m->x, p.x), v3_add(v3_scale(m->y, p.y), v3_scale(m->z, p.z))));
 }
 
-/* A triangle list being built: positions (local, float) and vertex indices. */
+/* A triangle list being built: positions (local, float), per-vertex normals and UVs, vertex indices. */
 typedef struct {
     float *pos;       /* 3 per vertex */
+    float *nrm;       /* 3 per vertex; zero where the file gives none */
+    float *uv;        /* 2 per vertex; zero where the file gives none */
     uint32_t *idx;    /* 3 per triangle */
     uint32_t nv, nt;
     uint32_t cap_v, cap_t;
+    int has_normals;  /* the file gave vertex normals */
+    int has_uvs;      /* the file gave texture coordinates */
 } tri_mesh;
 
 void tri_mesh_free(tri_mesh *m);
+/* Appends a vertex with zero normal and UV (set m->nrm / m->uv of index m->nv - 1 afterwards). */
 int tri_mesh_add_vertex(tri_mesh *m, double x, double y, double z);
 int tri_mesh_add_tri(tri_mesh *m, uint32_t a, uint32_t b, uint32_t c);
+/* Tungsten's smooth vertex normals (`recompute_normals` with `smooth`): a vertex whose faces differ by
+ * more than the split angle (cos 0.15π) is duplicated; each vertex gets the area-weighted normal of the
+ * faces around its position that lie within the split angle of its own face. -1 when out of memory. */
+int tri_mesh_smooth_normals(tri_mesh *m);
+#define MESH_SPLIT_COS 0.89100652418836786 /* cos(0.15π) */
 
 int mesh_load_wo3(const char *path, tri_mesh *m, dp_error *err);
 int mesh_load_obj(const char *path, tri_mesh *m, dp_error *err);
 void mesh_make_quad(tri_mesh *m);   /* unit square in the local xz-plane, normal +y */
 void mesh_make_cube(tri_mesh *m);   /* [-0.5, 0.5]^3, outward normals */
 
+/* ---- per-triangle attributes and per-surface flags, private to the scene module ----
+ * scene.rt_scene points to this record (the Embree scene is one of its members), so that the public
+ * struct stays as it is. Corner arrays are indexed by the global triangle index and exist only when some
+ * surface needs them. */
+#define SURF_SMOOTH 1u   /* `smooth`: interpolated vertex normals as shading normal */
+#define SURF_CULL 2u     /* `backface_culling`: hits with d·ng > 0 are ignored */
+#define SURF_UV 4u       /* the mesh has texture coordinates */
+typedef struct {
+    void *rtc;               /* RTCScene, once built */
+    float *corner_n;         /* 9 floats per triangle: unit world vertex normals of its corners (smooth surfaces) */
+    float *corner_uv;        /* 6 floats per triangle: UVs of its corners (surfaces with UVs) */
+    uint32_t corner_cap;     /* triangles allocated in each corner array present */
+    unsigned char *flags;    /* per surface (geomID): SURF_* bits */
+    int flag_cap;
+} scene_rt;
+
+/* The record (created on first use; NULL when out of memory). */
+scene_rt *scene_rt_get(scene *s);
+/* Stores a mesh's attributes for triangles [first, first + m->nt) of surface `surf`: normals (world, by
+ * the normal matrix of T) when smooth, UVs when the mesh has them, and the flags. -1 when out of memory. */
+int scene_rt_add_mesh(scene *s, int surf, uint32_t first, const tri_mesh *m, const xform *T, unsigned flags);
+
 /* Embree scene over s->verts/s->tris, one geometry per surface (geomID = surface index). */
 int scene_build_embree(scene *s, dp_error *err);
 void scene_release_embree(scene *s);
+
+/* ---- BSDFs and textures ---- */
+/* A bsdf object of the scene file (scene-format.md §2.4 bsdfs); textures are loaded into s->textures. */
+int bsdf_parse(json_ctx *c, const cJSON *v, const char *where, scene *s, bsdf *b);
+/* The texture file `file` (relative to the scene's folder) for key `key` of `where`: *index into
+ * s->textures (a file already loaded is shared), or -1 with a warning in the notes when the file does not
+ * exist. Returns -1 with an error naming the file, the key and the decoder's reason when it cannot be read. */
+int texture_fetch(json_ctx *c, scene *s, const char *where, const char *key, const char *file, int *index);
+vec3 texture_mean(const texture *t);
+void texture_free_all(scene *s);
 
 #endif

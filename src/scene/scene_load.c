@@ -12,7 +12,6 @@
 static const char *const top_keys[] = {"media", "bsdfs", "primitives", "camera", "integrator", "renderer", NULL};
 static const char *const medium_keys[] = {"name", "type", "sigma_s", "sigma_a", "density", "speed_of_light",
                                           "max_bounces", "phase_function", NULL};
-static const char *const bsdf_keys[] = {"name", "type", "albedo", NULL};
 static const char *const prim_keys[] = {"name", "type", "transform", "bsdf", "emission", "power", "int_medium",
                                         "ext_medium", "file", "smooth", "backface_culling", "recompute_normals", NULL};
 static const char *const camera_keys[] = {"type", "resolution", "fov", "transform", "medium", NULL};
@@ -204,39 +203,7 @@ static int medium_ref(json_ctx *c, scene *s, const cJSON *v, const char *where, 
     return jfail(c, where, key, "expected a medium name or object");
 }
 
-/* ---- BSDFs ---- */
-
-static int parse_albedo(json_ctx *c, const cJSON *v, const char *where, scene *s, vec3 *albedo)
-{
-    const cJSON *a = cJSON_GetObjectItemCaseSensitive(v, "albedo");
-    if (cJSON_IsString(a)) {
-        char path[2100];
-        snprintf(path, sizeof path, "%s/%s", s->dir, a->valuestring);
-        FILE *f = fopen(path, "rb");
-        if (f) fclose(f);
-        jwarn(c, "%s.albedo: texture '%s' %s; using the constant albedo 0.5", where, a->valuestring,
-              f ? "ignored (textures are not supported)" : "not found");
-        *albedo = v3s(0.5);
-        return 0;
-    }
-    if (jget_vec3(c, v, where, "albedo", v3s(1.0), albedo)) return -1;
-    if (albedo->x < 0 || albedo->y < 0 || albedo->z < 0) return jfail(c, where, "albedo", "must be >= 0");
-    return 0;
-}
-
-static int parse_bsdf(json_ctx *c, const cJSON *v, const char *where, scene *s, bsdf *b)
-{
-    if (!cJSON_IsObject(v)) return jfail(c, where, NULL, "expected a BSDF object");
-    jnote_unknown_keys(c, v, where, bsdf_keys);
-    const char *type = "lambert";
-    if (jget_string(c, v, where, "type", &type) < 0) return -1;
-    if (!strcmp(type, "lambert")) b->type = BSDF_LAMBERT;
-    else if (!strcmp(type, "mirror")) b->type = BSDF_MIRROR;
-    else if (!strcmp(type, "null")) b->type = BSDF_NULL;
-    else if (!strcmp(type, "forward")) b->type = BSDF_FORWARD;
-    else return jfail(c, where, "type", "unsupported BSDF '%s' (supported: lambert, mirror, null, forward)", type);
-    return parse_albedo(c, v, where, s, &b->albedo);
-}
+/* ---- BSDFs (bsdf_load.c) ---- */
 
 static int parse_bsdfs(json_ctx *c, const cJSON *root, scene *s, const cJSON **names)
 {
@@ -252,7 +219,7 @@ static int parse_bsdfs(json_ctx *c, const cJSON *root, scene *s, const cJSON **n
         char w[64];
         snprintf(w, sizeof w, "bsdfs[%d]", i);
         const cJSON *v = cJSON_GetArrayItem(arr, i);
-        if (parse_bsdf(c, v, w, s, &s->bsdfs[i])) return -1;
+        if (bsdf_parse(c, v, w, s, &s->bsdfs[i])) return -1;
         const char *name = "";
         if (jget_string(c, v, w, "name", &name) < 0) return -1;
         cJSON_AddItemToArray(list, cJSON_CreateString(name));
@@ -274,16 +241,19 @@ static int bsdf_ref(json_ctx *c, scene *s, const cJSON *names, const cJSON *v, c
     bsdf *grown = realloc(s->bsdfs, ((size_t)s->bsdf_count + 1) * sizeof(bsdf));
     if (!grown) return jfail(c, where, "bsdf", "out of memory");
     s->bsdfs = grown;
+    memset(&s->bsdfs[s->bsdf_count], 0, sizeof(bsdf));
     char w[256];
     snprintf(w, sizeof w, "%s.bsdf", where);
-    if (parse_bsdf(c, v, w, s, &s->bsdfs[s->bsdf_count])) return -1;
+    if (bsdf_parse(c, v, w, s, &s->bsdfs[s->bsdf_count])) return -1;
     *out = s->bsdf_count++;
     return 0;
 }
 
 /* ---- primitives ---- */
 
-static int append_surface_mesh(json_ctx *c, scene *s, const tri_mesh *m, const xform *T, surface *sf, const char *where)
+/* Appends the mesh's triangles in world space, and its shading attributes for surface s->surface_count. */
+static int append_surface_mesh(json_ctx *c, scene *s, const tri_mesh *m, const xform *T, surface *sf, const char *where,
+                               unsigned flags)
 {
     if (m->nt == 0) return jfail(c, where, NULL, "the shape has no triangles");
     uint32_t base = s->vert_count;
@@ -304,6 +274,7 @@ static int append_surface_mesh(json_ctx *c, scene *s, const tri_mesh *m, const x
         s->verts[3 * (size_t)(base + i) + 2] = (float)p.z;
     }
     for (uint32_t i = 0; i < 3 * m->nt; i++) s->tris[3 * (size_t)s->tri_count + i] = base + m->idx[i];
+    if (scene_rt_add_mesh(s, s->surface_count, s->tri_count, m, T, flags)) return jfail(c, where, NULL, "out of memory");
     sf->first_tri = s->tri_count;
     sf->tri_count = m->nt;
     s->vert_count += m->nv;
@@ -311,8 +282,27 @@ static int append_surface_mesh(json_ctx *c, scene *s, const tri_mesh *m, const x
     return 0;
 }
 
-static int load_shape(json_ctx *c, scene *s, const cJSON *v, const char *where, const char *type, tri_mesh *m)
+/* `smooth`, `backface_culling` and `recompute_normals` of a mesh primitive into SURF_* flags; smooth normals
+ * recomputed as Tungsten does when asked, or when a smooth mesh has no vertex normals of its own. */
+static int mesh_flags(json_ctx *c, const cJSON *v, const char *where, const char *file, tri_mesh *m, unsigned *flags)
 {
+    int smooth, cull, recompute;
+    if (jget_bool(c, v, where, "smooth", 0, &smooth) || jget_bool(c, v, where, "backface_culling", 0, &cull) ||
+        jget_bool(c, v, where, "recompute_normals", 0, &recompute))
+        return -1;
+    *flags = (smooth ? SURF_SMOOTH : 0u) | (cull ? SURF_CULL : 0u);
+    if (!smooth) return 0;
+    if (!recompute && !m->has_normals)
+        jwarn(c, "%s: smooth mesh '%s' has no vertex normals; computed from its faces as recompute_normals does",
+              where, file);
+    if ((recompute || !m->has_normals) && tri_mesh_smooth_normals(m)) return jfail(c, where, NULL, "out of memory");
+    return 0;
+}
+
+static int load_shape(json_ctx *c, scene *s, const cJSON *v, const char *where, const char *type, tri_mesh *m,
+                      unsigned *flags)
+{
+    *flags = 0;
     if (!strcmp(type, "quad")) mesh_make_quad(m);
     else if (!strcmp(type, "cube")) mesh_make_cube(m);
     else {
@@ -327,6 +317,7 @@ static int load_shape(json_ctx *c, scene *s, const cJSON *v, const char *where, 
         else if (n > 4 && !strcmp(file + n - 4, ".obj")) rc = mesh_load_obj(path, m, &merr);
         else return jfail(c, where, "file", "'%s': unsupported mesh format (supported: .wo3, .obj)", file);
         if (rc) return jfail(c, where, "file", "%s", merr.msg);
+        return mesh_flags(c, v, where, file, m, flags);
     }
     return 0;
 }
@@ -372,8 +363,9 @@ static int parse_surface(json_ctx *c, scene *s, const cJSON *names, const cJSON 
     if (im && medium_ref(c, s, im, where, "int_medium", &sf.int_medium)) return -1;
     if (em && medium_ref(c, s, em, where, "ext_medium", &sf.ext_medium)) return -1;
     tri_mesh m = {0};
-    int rc = load_shape(c, s, v, where, type, &m);
-    if (!rc) rc = append_surface_mesh(c, s, &m, T, &sf, where);
+    unsigned flags;
+    int rc = load_shape(c, s, v, where, type, &m, &flags);
+    if (!rc) rc = append_surface_mesh(c, s, &m, T, &sf, where, flags);
     tri_mesh_free(&m);
     if (rc) return rc;
     surface *grown = realloc(s->surfaces, ((size_t)s->surface_count + 1) * sizeof(surface));
@@ -504,6 +496,7 @@ int scene_load(const char *path, const scene_load_options *opt, scene *s, dp_err
 void scene_free(scene *s)
 {
     scene_release_embree(s);
+    texture_free_all(s);
     free(s->bsdfs);
     free(s->media);
     free(s->surfaces);

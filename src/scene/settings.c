@@ -11,7 +11,7 @@ static const char *const integrator_keys[] = {
     "enable_volume_light_sampling", "photon_count", "volume_photon_count", "gather_photon_count",
     "gather_radius", "volume_gather_radius", "volume_photon_type", "alpha", "volume_alpha",
     "fixed_volume_radius", "include_surfaces", "low_order_scattering", "enable_guiding", "enable_elliptical",
-    "strict_time_width", "camera_leg", "radius_schedule", "ellipse_residual", "control_vertex_mis", "early_exit", "da_defensive", "eda", "eda_alpha", "eda_table_dir", "eda_shape", "enable_consistency_checks", "enable_two_sided_shading", "exclude_non_mis", "use_grid",
+    "strict_time_width", "camera_leg", "radius_schedule", "ellipse_residual", "control_vertex_mis", "early_exit", "da_defensive", "eda", "eda_alpha", "eda_table_dir", "eda_shape", "enable_consistency_checks", "enable_two_sided_shading", "glossy_gather_alpha", "exclude_non_mis", "use_grid",
     NULL};
 static const char *const renderer_keys[] = {"spp", "spp_step", "timeout", "checkpoint_interval", "output_file",
                                             "hdr_output_file", "output_buffers", "overwrite_output_files",
@@ -93,11 +93,14 @@ double parse_duration_seconds(const char *text)
     return -1;
 }
 
+/* A duration key; a negative number (the reference writes "timeout": "-1") means no limit, stored as 0. */
 static int get_duration(json_ctx *c, const cJSON *obj, const char *key, double *out)
 {
     const cJSON *v = cJSON_GetObjectItemCaseSensitive(obj, key);
     *out = 0;
     if (!v) return 0;
+    if (cJSON_IsNumber(v) && v->valuedouble < 0 && isfinite(v->valuedouble)) return 0;
+    if (cJSON_IsString(v) && v->valuestring[0] == '-' && parse_duration_seconds(v->valuestring + 1) > 0) return 0;
     if (cJSON_IsNumber(v)) *out = v->valuedouble >= 0 ? v->valuedouble * 60.0 : -1;
     else if (cJSON_IsString(v)) *out = parse_duration_seconds(v->valuestring);
     else *out = -1;
@@ -212,6 +215,19 @@ static int parse_photon_keys(json_ctx *c, const cJSON *v, integrator_settings *i
     return 0;
 }
 
+/* enable_two_sided_shading, enable_consistency_checks (Tungsten's TraceSettings), glossy_gather_alpha (ours) */
+static int parse_shading_keys(json_ctx *c, const cJSON *v, integrator_settings *in)
+{
+    const char *w = "integrator";
+    if (jget_bool(c, v, w, "enable_two_sided_shading", 1, &in->two_sided_shading) ||
+        jget_bool(c, v, w, "enable_consistency_checks", 0, &in->consistency_checks) ||
+        jget_number(c, v, w, "glossy_gather_alpha", 0.1, &in->glossy_gather_alpha))
+        return -1;
+    if (!(in->glossy_gather_alpha >= 0.0) || !isfinite(in->glossy_gather_alpha))
+        return jfail(c, w, "glossy_gather_alpha", "must be finite and >= 0 (got %g)", in->glossy_gather_alpha);
+    return 0;
+}
+
 static int parse_integrator(json_ctx *c, const cJSON *root, integrator_settings *in)
 {
     const cJSON *v = cJSON_GetObjectItemCaseSensitive(root, "integrator");
@@ -222,7 +238,8 @@ static int parse_integrator(json_ctx *c, const cJSON *root, integrator_settings 
     if (parse_integrator_type(c, v, in) || jget_int(c, v, "integrator", "min_bounces", 0, &minb) ||
         jget_int(c, v, "integrator", "max_bounces", 64, &maxb) ||
         jget_number(c, v, "integrator", "vaccum_speed_of_light", 1.0, &vac_speed) ||
-        jget_bool(c, v, "integrator", "enable_rr", 1, &in->enable_rr) || parse_photon_keys(c, v, in))
+        jget_bool(c, v, "integrator", "enable_rr", 1, &in->enable_rr) || parse_photon_keys(c, v, in) ||
+        parse_shading_keys(c, v, in))
         return -1;
     if (minb < 0) return jfail(c, "integrator", "min_bounces", "must be >= 0 (got %ld)", minb);
     if (maxb < 1 || maxb > 100000) return jfail(c, "integrator", "max_bounces", "must be in [1, 100000] (got %ld)", maxb);
