@@ -10,9 +10,9 @@
  * 2. ∫ bsdf_pdf over the sphere ≤ 1 (+ quadrature error) and equal to the fraction of non-delta successful
  *    samples (4 standard errors).
  * 3. Each non-delta sample: weight = bsdf_eval(selected lobes)·|wo.z| / pdf and pdf = bsdf_pdf (1e-6).
- * 4. Reciprocity f(wi, wo) = f(wo, wi); for transmission through rough_dielectric the relation the module
- *    documents (src/bsdf/README.md: no η² radiance scale, Walter's eq. 21 as written):
- *    f(wi, wo)/η(wo side)² = f(wo, wi)/η(wi side)².
+ * 4. Reciprocity f(wi, wo) = f(wo, wi); for transmission through rough_dielectric the relation bsdf.h
+ *    documents (camera paths carry radiance/η², Walter's eq. 21 as written):
+ *    f(wi, wo)/η(wo side)² = f(wo, wi)/η(wi side)², with bsdf_adjoint_scale = (η_i/η_o)².
  * 5. White furnace: albedo 1, mean sample weight (delta lobes included) ≤ 1 + 4 SE for every model, = 1
  *    for lambert, mirror, smooth dielectric and smooth plastic (closed form: F + (1 − F) = 1), < 1 for
  *    lossy cases (gold, absorbing coat, dielectric without refraction).
@@ -23,8 +23,40 @@
  *
  * Every figure printed (χ² p-values, furnace means) is a line starting with "chi2" or "furnace".
  *
- * Broken variants (scratch copies of src/bsdf, never committed), and which tests caught them:
- *   (filled in below the table of tests when run; see the end of this comment)
+ * About 30 s under ASan+UBSan on a loaded 2-core machine. DARTSPP_BSDF_SEED=n reruns the χ² tests with other
+ * samples (seed 7: smallest of the 112 p-values 0.042).
+ *
+ * Broken variants (scratch copies of src/bsdf, never committed; 2026-11-23), and which tests caught them
+ * (beyond the two failures of the unbroken code listed at the end):
+ *   A  rough_conductor pdf without the Jacobian 1/(4 wi·h)        χ² (27 of 30 reflector cases, p = 0),
+ *                                                                  ∫pdf > 1 (up to 3.9), ∫pdf ≠ success
+ *                                                                  fraction, furnace (mean 1.26–1.42 at 80°)
+ *   B  α squared once more in microfacet sampling only            χ² (94 of 112 cases: every microfacet family),
+ *                                                                  ∫pdf ≠ success fraction, furnace (30 cases
+ *                                                                  > 1, e.g. rough_plastic 1.07)
+ *   C1 smooth conductor weight without Fresnel                    delta lobes (weight (1,1,1) against the
+ *                                                                  closed form), furnace (Au not below 1)
+ *   C2 rough_conductor sample weight without Fresnel              eval/pdf consistency (27 reflector cases);
+ *                                                                  χ² and furnace blind (as expected)
+ *   C3 dielectric without refraction: weight albedo, not albedo·F delta lobes, furnace (not below 1)
+ *   D  rough_plastic pdf without the glossy lobe's probability    χ² (9 plastic cases), ∫pdf > 1, ∫pdf ≠
+ *                                                                  success fraction
+ *   E  rough_dielectric eval with the widened (sampling) α        reciprocity (7 configurations); χ², furnace
+ *                                                                  blind (the pdf is unchanged)
+ *   F  smooth refraction with the index ratio inverted            delta lobes (Snell)
+ *   G  rough transmission without η_o² (eq. 21)                   reciprocity (5), furnace (mean 2.15 from
+ *                                                                  inside, 0.47 from outside at r = 0.05)
+ *   H  lambert pdf without the wo.z > 0 check, no sanitising      no-NaN (negative pdf), χ² (lambert, 3 cases)
+ *      of values in the dispatch
+ *   I  rough_conductor Fresnel at cos θo instead of wi·h          reciprocity (9 configurations)
+ *
+ * Failures of the code as merged (real findings, kept failing on purpose):
+ *   - rough_dielectric with ior < 1 never transmits: reciprocity finds 0 transmission pairs; furnace at
+ *     r = 0.05, ior 0.75, normal incidence 0.0215 (≥ 0.98 expected); χ² shows 97 % failed samples at θi = 10°
+ *     (consistent with its pdf, so χ² passes).
+ *   - rough_plastic gains energy: furnace beckmann r = 0.2 at θi = 45°: 1.00302 ± 0.00055 (> 1 + 4 SE);
+ *     quadrature of bsdf_eval: glossy 0.05293 + diffuse 0.94977 = 1.0027 (the diffuse lobe is weighted by the
+ *     smooth 1 − F(θi) while the rough coat reflects more than F(θi)).
  */
 #include "test_util.h"
 
@@ -471,9 +503,11 @@ static void test_chi2_dielectrics(void **state)
 /* η of the medium on the side of w: outside 1, inside ior */
 static double eta_side(const bsdf *b, vec3 w) { return w.z > 0.0 ? 1.0 : b->ior; }
 
-/* For every configuration of the χ² tests (and each one's full lobe set): pairs (wi random, wo sampled from the
+/* For every configuration of the χ² tests (with its lobe selection): pairs (wi random, wo sampled from the
  * BSDF, so that f ≠ 0) and pairs of uniform directions. f(wi, wo) = f(wo, wi) per channel to 1e-9 relative;
- * transmission pairs of rough_dielectric: f(wi, wo)/η(wo)² = f(wo, wi)/η(wi)². */
+ * transmission pairs of rough_dielectric: f(wi, wo)/η(wo)² = f(wo, wi)/η(wi)² (bsdf.h: camera paths carry
+ * radiance/η²), and bsdf_adjoint_scale is (η_i/η_o)² there and 1 for reflections. A refracting rough
+ * dielectric must give transmission pairs with f > 0. */
 static void test_reciprocity(void **state)
 {
     (void)state;
@@ -501,9 +535,14 @@ static void test_reciprocity(void **state)
             vec3 b = bsdf_eval(&bc->b, bc->albedo, wo, wi, bc->lobes);
             if (wi.z * wo.z < 0.0) { /* transmission */
                 double ei = eta_side(&bc->b, wi), eo = eta_side(&bc->b, wo);
+                /* the adjoint's factor the module exports is that same (η_i/η_o)² */
+                double adj = bsdf_adjoint_scale(&bc->b, wi, wo);
+                if (bc->b.enable_refraction && !(rel_dev(adj, (ei / eo) * (ei / eo)) <= 1e-12)) worst = INFINITY;
                 a = v3_scale(a, 1.0 / (eo * eo));
                 b = v3_scale(b, 1.0 / (ei * ei));
                 n_trans += v3_max(a) > 0.0;
+            } else if (bsdf_adjoint_scale(&bc->b, wi, wo) != 1.0) {
+                worst = INFINITY; /* reflection needs no adjoint factor */
             }
             n_pairs++;
             nonzero += v3_max(a) > 0.0 || v3_max(b) > 0.0;
@@ -668,7 +707,8 @@ static void test_white_furnace(void **state)
             if (!(mean > 0.0)) bad = "zero";
             print_message("furnace %-46s θi=%5.1f  mean weight %.5f ± %.5f (%s)%s%s\n", fc->name, th, mean, se,
                           fc->expect == EXPECT_EQ1 ? "expect 1" : fc->expect == EXPECT_LT1 ? "expect < 1" :
-                          fc->bound == 1.0 ? "expect ≤ 1" : "expect ≤ 1.25",
+                          fc->bound == 1.0 ? (fc->lo > 0.0 && (th == 0.0 || th == 150.0) ? "expect ≤ 1, ≥ 0.98" : "expect ≤ 1")
+                                           : "expect ≤ 1.25",
                           bad ? "  FAILED: " : "", bad ? bad : "");
             fails += bad != NULL;
         }
