@@ -62,7 +62,8 @@ typedef struct {
     double ks;                 /* pbrt_plastic: specular scale `Ks`; plastics: 1 unless given */
     /* derived by bsdf_prepare */
     double diffuse_fresnel;    /* plastics: hemispherical average of the coat's internal Fresnel */
-    double fresnel_avg_out;    /* plastics: 1 − average external Fresnel reflectance, if used */
+    float coat_scale[33];      /* rough_plastic: s(μ) at μ = k/32, the base's share kept below a rough coat
+                                * (1 − R_coat(μ)) / (1 − F(μ)), at most 1 (see rough_plastic.c) */
 } bsdf;
 
 /* A bsdf with the defaults of its type (the reference's defaults, documented in src/bsdf/README.md). */

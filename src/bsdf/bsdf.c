@@ -114,10 +114,10 @@ int bsdf_prepare(bsdf *b, dp_error *err)
             return dp_fail(err, "bsdf \"%s\" (%s): sigma_a must be finite and non-negative", name, type);
         /* light leaving the coat from inside: index ratio outside / inside = 1/ior */
         b->diffuse_fresnel = bsdf_fresnel_average(1.0 / b->ior);
-        b->fresnel_avg_out = 1.0 - bsdf_fresnel_average(b->ior);
     }
     if ((b->type == BSDF_ROUGH_PLASTIC || b->type == BSDF_PBRT_PLASTIC) && (!isfinite(b->ks) || b->ks < 0.0))
         return dp_fail(err, "bsdf \"%s\" (%s): Ks %g must be finite and non-negative", name, type, b->ks);
+    if (b->type == BSDF_ROUGH_PLASTIC) bsdf_rough_plastic_prepare(b);
     return 0;
 }
 

@@ -76,6 +76,8 @@ double bsdf_widened_alpha(const bsdf *b, double cos_i);
 /* ---- the coated-diffuse base shared by plastic and rough_plastic (plastic.c) ---- */
 /* f of the diffuse lobe under a smooth coat (README.md, plastic), 0 unless wi.z > 0 and wo.z > 0. */
 vec3 bsdf_plastic_substrate(const bsdf *b, vec3 albedo, vec3 wi, vec3 wo);
+/* rough_plastic: the table b->coat_scale (after alpha, ior and ks are set) */
+void bsdf_rough_plastic_prepare(bsdf *b);
 
 /* ---- small helpers ---- */
 static inline vec3 bsdf_reflect_z(vec3 w) { return v3(-w.x, -w.y, w.z); }

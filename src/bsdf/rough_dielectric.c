@@ -27,6 +27,7 @@ static int half_vector(const bsdf_rough_boundary *rb, vec3 wi, vec3 wo, vec3 *h,
         if (wi.z < 0.0) v = v3_neg(v);
     } else {
         v = v3_neg(v3_add(wi, v3_scale(wo, eta_across(rb, wi)))); /* eq. 16, divided by η_i */
+        if (v.z < 0.0) v = v3_neg(v); /* it points to the denser side: towards −z when ior < 1 */
     }
     double l = v3_len(v);
     if (!(l > 1e-12)) return 0;
