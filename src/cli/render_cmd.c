@@ -253,10 +253,11 @@ static void print_samplers(const scene *s, const render_plan *p)
     printf("\n");
 }
 
-static void print_summary(const scene *s, const render_plan *p, const render_stats *st)
+static void print_summary(const scene *s, const render_plan *p, const render_stats *st, double load_seconds)
 {
     const time_window *tw = &p->window;
-    printf("scene %s: %s, %dx%d, ", s->path, p->type_name, s->cam.width, s->cam.height);
+    printf("scene %s (loaded in %.2f s: %u triangles, %d textures): %s, %dx%d, ", s->path, load_seconds, s->tri_count,
+           s->texture_count, p->type_name, s->cam.width, s->cam.height);
     if (!tw->gated) printf("steady state (no gate)\n");
     else if (tw->frame_count) printf("%d frames of width %g from %g (camera-warped optical path length)\n", tw->frame_count, tw->width, tw->start);
     else printf("gate [%g, %g) (camera-warped optical path length)\n", tw->start, time_window_end(tw));
@@ -287,6 +288,7 @@ typedef struct {
     char plan_json[8192];
     char out[OUTPUT_PATH_MAX];
     memory_estimate mem;
+    double load_seconds;  /* scene_load: JSON, meshes, textures, Embree build */
 } render_job;
 
 /* The memory guard (before any work): the plan's estimate against the limit; exit 2 naming the key that
@@ -342,10 +344,12 @@ static int prepare(const render_args *a, render_job *j)
 {
     dp_error err;
     scene_load_options lo = {.sets = a->sets, .set_count = a->set_count, .verbose = a->verbose};
+    double t0 = dp_seconds();
     if (scene_load(a->scene_path, &lo, &j->s, &err)) {
         fprintf(stderr, "dartspp render: %s\n", err.msg);
         return 2;
     }
+    j->load_seconds = dp_seconds() - t0;
     int rc = 0;
     if (plan_resolve(&j->s, &j->p, &err) ||
         (plan_json(&j->p, &j->s, j->plan_json, sizeof j->plan_json) && dp_fail(&err, "%s: plan too long", j->s.path))) {
@@ -407,7 +411,7 @@ int cli_render(int argc, char **argv)
         failed = 1;
     }
     if (!failed) {
-        print_summary(&j.s, &j.p, &st);
+        print_summary(&j.s, &j.p, &st, j.load_seconds);
         print_memory(&j.mem);
         if (cp.log)
             printf("error log: %s (%.3f s spent logging, %.2f%% of the render)\n", a.log, error_log_overhead(cp.log),
