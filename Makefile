@@ -65,9 +65,9 @@ test: build/dartspp build/san/dartspp $(TEST_BIN)
 	@tests/run_tests.sh build/san/tests
 
 # The whole stress matrix (extreme media, anisotropy, gates, scales, geometry): the estimator-level cases of
-# tests/test_darts.c and tests/test_eda.c and the renders of tests/test_stress.c, about 3 minutes under ASan
-# on 2 cores. `make test` runs a fast subset of each. DARTSPP_STRESS_ONLY=text picks render cases by name.
-STRESS_TESTS = build/san/tests/test_darts build/san/tests/test_eda build/san/tests/test_stress
+# tests/test_darts.c and tests/test_eda.c, the renders of tests/test_stress.c and all 18 material cases of
+# tests/test_materials.c, about 6 minutes under ASan on 2 cores. `make test` runs a fast subset of each. DARTSPP_STRESS_ONLY=text picks render cases by name.
+STRESS_TESTS = build/san/tests/test_darts build/san/tests/test_eda build/san/tests/test_stress build/san/tests/test_materials
 stress: $(STRESS_TESTS)
 	@rm -rf build/san/stress && mkdir -p build/san/stress && cp $(STRESS_TESTS) build/san/stress/
 	@DARTSPP_STRESS=full tests/run_tests.sh build/san/stress
