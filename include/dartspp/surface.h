@@ -42,7 +42,6 @@ typedef struct {
     vec3 w;        /* world direction, unit */
     vec3 weight;   /* f·|cos|/pdf, and for light paths the adjoint shading-normal factor */
     unsigned lobe;
-    int transmitted; /* w leaves on the back of the geometric surface */
 } surface_sample;
 
 /* Samples the selected lobes with three uniforms. adjoint: the path carries flux from a light (photon pass),

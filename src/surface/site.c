@@ -47,10 +47,8 @@ int surface_sample_bsdf(const surface_site *ss, const double u[3], unsigned lobe
     out->w = w;
     out->lobe = bs.lobe;
     out->weight = bs.weight;
-    double gi = v3_dot(ss->wi_world, ss->fr.ng);
-    out->transmitted = (gi > 0.0) != (gw > 0.0);
     if (adjoint) { /* Veach 1997 §5.2-5.3: the adjoint of refraction, and of shading normals */
-        double num = fabs(ss->wi.z) * fabs(gw), den = fabs(gi) * fabs(bs.wo.z);
+        double num = fabs(ss->wi.z) * fabs(gw), den = fabs(v3_dot(ss->wi_world, ss->fr.ng)) * fabs(bs.wo.z);
         if (!(den > 0.0)) return 0;
         out->weight = v3_scale(out->weight, bsdf_adjoint_scale(ss->b, ss->wi, bs.wo) * num / den);
     }
