@@ -257,7 +257,8 @@ static void pp_keys(char *out, size_t len, double scale)
              "\"type\": \"progressive_transient_photon_map\", \"volume_photon_type\": \"points\","
              " \"enable_guiding\": false, \"enable_elliptical\": false,"
              " \"photon_count\": 20000, \"volume_photon_count\": 20000, \"gather_photon_count\": 256,"
-             " \"gather_radius\": %g, \"volume_gather_radius\": %g, \"alpha\": 0.7, \"volume_alpha\": 0.7",
+             " \"gather_radius\": %g, \"volume_gather_radius\": %g, \"alpha\": 0.7, \"volume_alpha\": 0.7,"
+             " \"glossy_gather_alpha\": 0.1", /* both paths at test: α 0.3 gathered, α 0.05 continued */
              0.06 * scale, 0.04 * scale);
 }
 

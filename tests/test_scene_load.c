@@ -828,7 +828,7 @@ static void test_dragon_scenes_load(void **state)
         /* integrator keys the files set */
         assert_int_equal(s->integrator.two_sided_shading, 1);
         assert_int_equal(s->integrator.consistency_checks, 1);
-        ASSERT_NEAR(s->integrator.glossy_gather_alpha, 0.1, 0.0);
+        ASSERT_NEAR(s->integrator.glossy_gather_alpha, 0.5, 0.0);
         /* path_trace.json: "timeout": "-1" = no limit; the others "14.5834" minutes */
         ASSERT_NEAR(s->renderer.timeout_seconds, f == 2 ? 0.0 : 14.5834 * 60.0, 1e-9);
         fx_drop(s);
@@ -928,7 +928,7 @@ static void test_shading_keys_and_timeout(void **state)
     if (!s) fail_msg("%s", err.msg);
     assert_int_equal(s->integrator.two_sided_shading, 1); /* defaults */
     assert_int_equal(s->integrator.consistency_checks, 0);
-    ASSERT_NEAR(s->integrator.glossy_gather_alpha, 0.1, 0.0);
+    ASSERT_NEAR(s->integrator.glossy_gather_alpha, 0.5, 0.0);
     fx_drop(s);
     char *text = replace1(BASE_SCENE, "\"max_bounces\": 4,",
                           "\"max_bounces\": 4, \"enable_two_sided_shading\": false, \"enable_consistency_checks\": true, "

@@ -131,7 +131,8 @@ typedef struct {
     int consistency_checks;         /* enable_consistency_checks: a direction on different sides of the shading and
                                      * geometric normals is refused (default false) */
     double glossy_gather_alpha;     /* glossy_gather_alpha: photon points gather on glossy lobes at least this rough
-                                     * (microfacet α) and continue camera paths through smoother ones (default 0.1) */
+                                     * (microfacet α) and continue camera paths through smoother ones (default 0.5,
+                                     * bench/results/glossy_gather.md) */
 } integrator_settings;
 
 

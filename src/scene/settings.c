@@ -221,7 +221,7 @@ static int parse_shading_keys(json_ctx *c, const cJSON *v, integrator_settings *
     const char *w = "integrator";
     if (jget_bool(c, v, w, "enable_two_sided_shading", 1, &in->two_sided_shading) ||
         jget_bool(c, v, w, "enable_consistency_checks", 0, &in->consistency_checks) ||
-        jget_number(c, v, w, "glossy_gather_alpha", 0.1, &in->glossy_gather_alpha))
+        jget_number(c, v, w, "glossy_gather_alpha", 0.5, &in->glossy_gather_alpha))
         return -1;
     if (!(in->glossy_gather_alpha >= 0.0) || !isfinite(in->glossy_gather_alpha))
         return jfail(c, w, "glossy_gather_alpha", "must be finite and >= 0 (got %g)", in->glossy_gather_alpha);
