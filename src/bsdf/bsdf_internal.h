@@ -67,6 +67,9 @@ typedef struct {
 double bsdf_rough_boundary_eval(const bsdf_rough_boundary *rb, vec3 wi, vec3 wo);
 double bsdf_rough_boundary_pdf(const bsdf_rough_boundary *rb, vec3 wi, vec3 wo);
 /* Samples wo; *value = f(wi, wo) and *pdf its density. 0 when the sample fails. */
+/* The boundary of a rough dielectric or coat b (its distribution, α, ior), sampled with the α widened for
+ * wi; transmit 0: reflection only. */
+bsdf_rough_boundary bsdf_rough_boundary_of(const bsdf *b, vec3 wi, int transmit);
 int bsdf_rough_boundary_sample(const bsdf_rough_boundary *rb, vec3 wi, const double u[3], vec3 *wo, double *value,
                                double *pdf);
 /* The alpha normals are sampled with for wi of cos θi: the roughness widened as Walter et al. 2007 §5.3,

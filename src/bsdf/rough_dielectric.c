@@ -114,7 +114,7 @@ int bsdf_rough_boundary_sample(const bsdf_rough_boundary *rb, vec3 wi, const dou
     return *pdf > 0.0 && *value > 0.0;
 }
 
-static bsdf_rough_boundary boundary_of(const bsdf *b, vec3 wi)
+bsdf_rough_boundary bsdf_rough_boundary_of(const bsdf *b, vec3 wi, int transmit)
 {
     bsdf_rough_boundary rb = {
         .dist = b->distribution,
@@ -123,9 +123,14 @@ static bsdf_rough_boundary boundary_of(const bsdf *b, vec3 wi)
         .ior = b->ior,
         .fresnel_eta = b->ior,
         .reflect = 1,
-        .transmit = b->enable_refraction,
+        .transmit = transmit,
     };
     return rb;
+}
+
+static bsdf_rough_boundary boundary_of(const bsdf *b, vec3 wi)
+{
+    return bsdf_rough_boundary_of(b, wi, b->enable_refraction);
 }
 
 vec3 bsdf_rough_dielectric_eval(const bsdf *b, vec3 albedo, vec3 wi, vec3 wo, unsigned lobes)

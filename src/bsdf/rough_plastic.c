@@ -12,19 +12,8 @@
  * bsdf_prepare (33 values of μ, 4096 stratified samples of the coat's own sampler each). */
 #include "bsdf_internal.h"
 
-static bsdf_rough_boundary coat_of(const bsdf *b, vec3 wi)
-{
-    bsdf_rough_boundary rb = {
-        .dist = b->distribution,
-        .alpha = b->alpha,
-        .sample_alpha = bsdf_widened_alpha(b, wi.z),
-        .ior = b->ior,
-        .fresnel_eta = b->ior,
-        .reflect = 1,
-        .transmit = 0,
-    };
-    return rb;
-}
+/* the coat: the rough dielectric boundary of rough_dielectric.c, reflection only */
+static bsdf_rough_boundary coat_of(const bsdf *b, vec3 wi) { return bsdf_rough_boundary_of(b, wi, 0); }
 
 static double glossy_probability(const bsdf *b, vec3 albedo, vec3 wi)
 {
