@@ -36,9 +36,15 @@ typedef struct {
     int distance_sampling;  /* DA distance sampling */
     int control_vertex_mis; /* control vertices by one-sample MIS with an exponential (control_vertex_sample) */
     residual_sampling residual;
-    int strict;             /* strict time mode: surface photons that cannot be in their bin are dropped */
+    int strict;             /* strict time mode's start test on surface photons (darts_plan.strict_surfaces) */
     int early_exit;         /* paths end once no photon can reach their bin */
     double da_defensive;
+    /* control-vertex techniques behind continued surfaces (darts_plan.cv_multi; cv_techniques below) */
+    int cv_multi;
+    int focus_count;                        /* mirror foci */
+    vec3 focus[PLAN_MAX_MIRRORS];
+    double cv_share[1 + PLAN_MAX_MIRRORS];  /* straight focus, then each mirror focus */
+    double cv_defensive;
 } darts_guide;
 
 typedef struct {
@@ -94,6 +100,34 @@ double ellipse_control_vertex_pdf(const ellipse_record *r, vec3 d, double t, res
  * Returns 1 with (t, mixture pdf) when 0 < t < tmax. */
 int control_vertex_sample(const ellipse_record *r, vec3 d, double tmax, residual_sampling mode, double sigma,
                           double u_select, double u_t, double *t, double *pdf_t);
+
+/* Density in t of control_vertex_sample (mis = 1) or ellipse_control_vertex (mis = 0) at distance t along d:
+ * the same mixture, evaluated (not sampled), so the two can be checked against each other. */
+double control_vertex_pdf(const ellipse_record *r, vec3 d, double t, int mis, residual_sampling mode, double sigma);
+
+/* ---- control vertices behind mirrors (ours; plan.h camera_side_scan, issue 18) ----
+ * One-sample MIS over the techniques of one medium segment: the control vertex of the record with focus
+ * the camera (rec[0]), of each record with focus a mirror image of the camera (rec[1..n-1]: there a camera
+ * path through that mirror has exactly the bin's time), and a defensive free flight, a σ-exponential in t
+ * over [0, min(tmax, t_reach)) with t_reach where the straight line to the camera leaves the reachable set
+ * (rec[0].S_reach): no later photon can count. Technique k is drawn with probability share[k] (defensive:
+ * `defensive`), renormalised over the techniques that can sample at this vertex (a record valid, the
+ * reachable set not empty); the photon's pdf is Σ_k share_k·p_k(t) (balance heuristic), positive wherever
+ * the defensive technique is: every place a photon can count by any camera path gets photons. */
+typedef struct {
+    int n;                                     /* records: 1 + mirror foci */
+    ellipse_record rec[1 + PLAN_MAX_MIRRORS];
+    double share[1 + PLAN_MAX_MIRRORS];
+    double defensive;
+} cv_techniques;
+
+/* u: three uniforms (technique, then the two of the technique). Returns 1 with (t, pdf) when a photon lands
+ * at 0 < t < tmax. mis: control_vertex_mis for the record techniques. */
+int cv_techniques_sample(const cv_techniques *ct, vec3 d, double tmax, int mis, residual_sampling mode, double sigma,
+                         const double u[3], double *t, double *pdf);
+/* The pdf of cv_techniques_sample at t (0 <= t < tmax). */
+double cv_techniques_pdf(const cv_techniques *ct, vec3 d, double tmax, int mis, residual_sampling mode, double sigma,
+                         double t);
 
 /* ---- DA distance sampling (reference §5 with DESIGN §5.4–5.5) ----
  * One segment from r->x along d, next surface at tmax (may be INFINITY), channel chosen by u_channel.

@@ -35,6 +35,37 @@ static inline double schedule_radius(const radius_schedule *r, long iteration)
 /* The DARTS photon pass as it will run. */
 typedef enum { RESIDUAL_UNIFORM = 0, RESIDUAL_EXPONENTIAL = 1 } residual_sampling;
 
+/* What camera paths see besides straight lines (camera_side.c). Camera paths continue through surfaces with
+ * `cont` lobes (surface_photon_split): through them the camera leg is longer than the straight line from the
+ * pinhole, which the DARTS time bounds and control vertices assume. The scan traces the camera's rays at the
+ * corners and centres of every pixel (through null/forward surfaces) to the first surface that is not
+ * passthrough. A camera-seen surface whose continued lobes are a delta reflection only (mirror, smooth
+ * conductor, the coat of plastic), planar and flat-shaded, reflects the medium as seen from the camera's
+ * mirror image: there a camera leg is exactly η·|x − focus|. Anything else continued (glossy, curved,
+ * transmissive, a second continued bounce behind a mirror) has no such focus. */
+#define PLAN_MAX_MIRRORS 4
+
+typedef struct {
+    int seen;                  /* the scan met some continued surface */
+    char first[64];            /* the name of one continued surface seen (messages) */
+    int rays;                  /* rays traced */
+    int mirror_count;          /* planar mirrors seen first (at most PLAN_MAX_MIRRORS; the rest count as other) */
+    int mirror_surface[PLAN_MAX_MIRRORS];
+    vec3 focus[PLAN_MAX_MIRRORS];              /* the camera's mirror image in each */
+    double mirror_fraction[PLAN_MAX_MIRRORS];  /* share of the rays that continue through this mirror only */
+    double other_fraction;     /* share of the rays that continue through anything without a focus */
+} camera_side_scan;
+
+/* Scans what the camera sees (above); cheap (one ray per pixel corner and centre, OpenMP). */
+void plan_scan_camera_side(const scene *s, const surface_shading *sh, camera_side_scan *out);
+
+/* darts_mirrors: "full" (ours, default): where the camera sees continued surfaces, control vertices also
+ * aim at each planar mirror's focus, a defensive share of free-flight volume photons covers the rest, both
+ * by one-sample MIS with the straight control vertex, and strict mode keeps every surface photon a camera
+ * path could gather; "straight": the authors' behaviour, a straight camera leg assumed everywhere (biased
+ * where the camera sees the medium through a mirror or glossy surface). */
+typedef enum { DARTS_MIRRORS_FULL = 0, DARTS_MIRRORS_STRAIGHT = 1 } darts_mirror_mode;
+
 typedef struct {
     int active;            /* some DARTS sampler runs: a switch on, the window gated, a medium present */
     int distance_sampling; /* enable_guiding: DA distance sampling */
@@ -46,6 +77,16 @@ typedef struct {
     int early_exit;
     double da_defensive;
     double eta_lb, eta_ub; /* smallest and largest η of the scene's regions: bounds of a straight camera leg */
+    darts_mirror_mode mirrors;
+    camera_side_scan side; /* scanned when DARTS runs control vertices or strict mode */
+    /* Control-vertex techniques (full mode, control vertices on, side.seen): selection probabilities of the
+     * straight focus, each mirror focus and the defensive free flight; cv_share[0] = 1 and the rest 0 when
+     * off (the authors' single technique, bit-identical images). */
+    int cv_multi;
+    double cv_share[1 + PLAN_MAX_MIRRORS];
+    double cv_defensive;
+    double mirror_defensive; /* the smallest defensive share where a continued surface is seen (key) */
+    int strict_surfaces;   /* strict's start test on surface photons: strict, and not (full mode and side.seen) */
 } darts_plan;
 
 /* EDA direction sampling in one medium. */

@@ -189,12 +189,13 @@ static void warn_mirrors(const scene *s, const render_plan *p)
         fprintf(stderr, "warning: %s: surface '%s' is specular: the path tracer cannot connect to point lights "
                 "through it, so light reflected or refracted by it before any diffuse or medium vertex (caustics) "
                 "is missing from the image; photon points render it\n", s->path, delta);
-    if (continued && p->type == INTEGRATOR_PHOTON_POINTS && p->darts.active &&
-        (p->darts.control_vertices || p->darts.strict))
-        fprintf(stderr, "warning: %s: surface '%s' is specular or near-specular: camera paths continue through "
-                "it, but DARTS time bounds and control vertices assume a straight camera leg, so what the camera "
-                "sees through it is too dark; enable_elliptical=false and strict_time_width=false render it "
-                "without that bias\n", s->path, continued);
+    const darts_plan *d = &p->darts;
+    if (continued && p->type == INTEGRATOR_PHOTON_POINTS && d->active && d->mirrors == DARTS_MIRRORS_STRAIGHT &&
+        d->side.seen)
+        fprintf(stderr, "warning: %s: the camera sees surface '%s', which is specular or near-specular: camera paths "
+                "continue through it, but with darts_mirrors \"straight\" the DARTS time bounds and control vertices "
+                "assume a straight camera leg, so what the camera sees through it is too dark; darts_mirrors \"full\" "
+                "(the default) renders it without that bias\n", s->path, d->side.first);
 }
 
 /* Elliptical control vertices assume one refractive index along the camera leg; when the media and vacuum
@@ -237,6 +238,17 @@ static void print_samplers(const scene *s, const render_plan *p)
            "strict time %s", p->window.frame_count ? "per-frame" : "gate", d->distance_sampling ? "on" : "off",
            d->control_vertices ? "on" : d->elliptical_asked ? "off: refractive index not uniform" : "off",
            d->residual == RESIDUAL_EXPONENTIAL ? "exponential" : "uniform", d->strict ? "on" : "off");
+    if (d->side.seen && d->mirrors == DARTS_MIRRORS_FULL) {
+        printf("; behind continued surfaces (the camera sees '%s'):", d->side.first);
+        if (d->cv_multi) {
+            printf(" control vertices %.0f %% straight", 100.0 * d->cv_share[0]);
+            for (int k = 0; k < d->side.mirror_count; k++)
+                printf(", %.0f %% at the mirror image in '%s'", 100.0 * d->cv_share[1 + k],
+                       s->surfaces[d->side.mirror_surface[k]].name);
+            printf(", %.0f %% defensive free flight", 100.0 * d->cv_defensive);
+        }
+        if (d->strict) printf("%s strict mode keeps every surface photon a camera path could gather", d->cv_multi ? ";" : "");
+    }
     const char *sep = "; EDA direction sampling in ";
     for (int i = 0; i < s->medium_count; i++) {
         if (!p->eda[i].on) continue;

@@ -107,3 +107,16 @@ int control_vertex_sample(const ellipse_record *r, vec3 d, double tmax, residual
     *pdf_t = CV_ELLIPTICAL_FRACTION * p_ell + (1.0 - CV_ELLIPTICAL_FRACTION) * pdf_e_at; /* balance heuristic */
     return isfinite(*pdf_t) && *pdf_t > 0.0;
 }
+
+double control_vertex_pdf(const ellipse_record *r, vec3 d, double t, int mis, residual_sampling mode, double sigma)
+{
+    double p_ell = ellipse_control_vertex_pdf(r, d, t, mode, sigma);
+    if (!mis || !r->valid) return p_ell;
+    double cos_theta = v3_dot(d, r->e);
+    double t_lo = ellipse_distance(r->C, cos_theta, r->S_lo), t_hi = ellipse_distance(r->C, cos_theta, r->S_hi);
+    if (!(t_hi > t_lo) || !(t_lo >= 0.0)) return p_ell; /* control_vertex_sample's fallback */
+    double span = t_hi - t_lo, a = sigma * span;
+    double p_exp = !(t >= t_lo && t < t_hi) ? 0.0
+                   : a > 1e-6 ? sigma * exp(-sigma * (t - t_lo)) / -expm1(-a) : 1.0 / span;
+    return CV_ELLIPTICAL_FRACTION * p_ell + (1.0 - CV_ELLIPTICAL_FRACTION) * p_exp;
+}

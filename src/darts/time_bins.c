@@ -10,7 +10,11 @@ void darts_guide_init(const render_plan *p, vec3 cam, darts_guide *g)
                        .width = tw->width, .frames = tw->frame_count, .eta_lb = d->eta_lb, .eta_ub = d->eta_ub,
                        .control_vertices = d->control_vertices, .distance_sampling = d->distance_sampling,
                        .control_vertex_mis = d->control_vertex_mis, .residual = d->residual, .strict = d->strict,
-                       .early_exit = d->early_exit, .da_defensive = d->da_defensive};
+                       .early_exit = d->early_exit, .da_defensive = d->da_defensive, .cv_multi = d->cv_multi,
+                       .focus_count = d->cv_multi ? d->side.mirror_count : 0, .cv_defensive = d->cv_defensive};
+    g->strict = d->strict_surfaces;
+    for (int k = 0; k < g->focus_count; k++) g->focus[k] = d->side.focus[k];
+    for (int k = 0; k <= PLAN_MAX_MIRRORS; k++) g->cv_share[k] = d->cv_share[k];
 }
 
 int darts_sample_bin(const darts_guide *g, vec3 x_light, double u, darts_bin *b)

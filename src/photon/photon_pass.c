@@ -63,6 +63,7 @@ typedef struct {
     int volume_open;       /* the volume budget still has room (decided per batch, in path order) */
     darts_bin bin;         /* target bin; gate mode: the gate with pdf 1 */
     ellipse_record rec;    /* of the current vertex (DARTS, in a medium) */
+    cv_techniques cvt;     /* g->cv_multi: the records of every focus at the current vertex (cvt.rec[0] = rec) */
     vec3 o, d, beta;
     int med, bounce, medium_events;
     double time;
@@ -85,6 +86,23 @@ static void store(light_path *lp, photon_buf *b, uint32_t *count, vec3 x, vec3 d
 /* The DARTS samplers serve the volume map: they run only while its budget has room. */
 static int aims_at_volume(const light_path *lp) { return lp->g->active && lp->volume_open; }
 
+/* The records of the camera's mirror images at the current vertex: the same record with the focus moved. */
+static void mirror_records(light_path *lp, const medium *m)
+{
+    const darts_guide *g = lp->g;
+    darts_guide moved = *g;
+    cv_techniques *ct = &lp->cvt;
+    ct->n = 1 + g->focus_count;
+    ct->rec[0] = lp->rec;
+    ct->defensive = g->cv_defensive;
+    for (int k = 0; k <= g->focus_count; k++) ct->share[k] = g->cv_share[k];
+    for (int k = 0; k < g->focus_count; k++) {
+        moved.cam = g->focus[k];
+        ellipse_record_init(&ct->rec[1 + k], &moved, &lp->bin, lp->o, lp->time, m->eta, g->residual, v3_avg(m->sigma_t),
+                            rng_uniform(lp->rng));
+    }
+}
+
 /* A new vertex at lp->o: the ellipse record its samplers share (DARTS, inside a medium). */
 static void new_vertex(light_path *lp)
 {
@@ -92,6 +110,7 @@ static void new_vertex(light_path *lp)
     const medium *m = &lp->s->media[lp->med];
     ellipse_record_init(&lp->rec, lp->g, &lp->bin, lp->o, lp->time, m->eta, lp->g->residual, v3_avg(m->sigma_t),
                         rng_uniform(lp->rng));
+    if (lp->g->cv_multi) mirror_records(lp, m);
 }
 
 /* Surface photons with DARTS: the full path time with a straight camera leg lies in [t_lb, t_ub], the leg
@@ -122,9 +141,14 @@ static int medium_segment(light_path *lp, double tmax)
     if (darts && g->control_vertices) {
         double t, pdf;
         double sigma = v3_avg(m->sigma_t), u1 = rng_uniform(lp->rng), u2 = rng_uniform(lp->rng);
-        int made = g->control_vertex_mis
-                       ? control_vertex_sample(&lp->rec, lp->d, tmax, g->residual, sigma, u1, u2, &t, &pdf)
-                       : ellipse_control_vertex(&lp->rec, lp->d, tmax, &t, &pdf);
+        int made;
+        if (g->cv_multi) {
+            const double u[3] = {u1, u2, rng_uniform(lp->rng)};
+            made = cv_techniques_sample(&lp->cvt, lp->d, tmax, g->control_vertex_mis, g->residual, sigma, u, &t, &pdf);
+        } else {
+            made = g->control_vertex_mis ? control_vertex_sample(&lp->rec, lp->d, tmax, g->residual, sigma, u1, u2, &t, &pdf)
+                                         : ellipse_control_vertex(&lp->rec, lp->d, tmax, &t, &pdf);
+        }
         if (made) { /* W = σs e^{−σt t}/p(t) (§6) */
             vec3 w = v3_scale(v3_mul(m->sigma_s, v3_exp_neg(v3_scale(m->sigma_t, t))), 1.0 / pdf);
             store(lp, &lp->tb->vol, &lp->pc->n_vol, v3_add(lp->o, v3_scale(lp->d, t)), lp->d, v3_mul(lp->beta, w),

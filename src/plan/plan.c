@@ -49,6 +49,31 @@ static void resolve_darts(const scene *s, render_plan *p)
         d->eta_lb = fmin(d->eta_lb, s->media[i].eta);
         d->eta_ub = fmax(d->eta_ub, s->media[i].eta);
     }
+    d->mirrors = in->darts_mirrors_straight ? DARTS_MIRRORS_STRAIGHT : DARTS_MIRRORS_FULL;
+    d->mirror_defensive = in->mirror_defensive;
+    d->cv_share[0] = 1.0;
+}
+
+/* Behind continued surfaces (full mode): the control-vertex techniques and strict mode's surface test.
+ * Shares follow what the camera sees: the straight focus 1 (every camera ray starts with a straight leg),
+ * each mirror focus its share of the scanned rays, the defensive free flight the share of rays with no
+ * focus, at least mirror_defensive (thin features the scan misses still get photons), then normalised. */
+static void resolve_camera_side(const scene *s, render_plan *p)
+{
+    darts_plan *d = &p->darts;
+    d->strict_surfaces = d->strict;
+    if (!d->active || !(d->control_vertices || d->strict)) return;
+    plan_scan_camera_side(s, &p->shading, &d->side);
+    if (d->mirrors != DARTS_MIRRORS_FULL || !d->side.seen) return;
+    d->strict_surfaces = 0; /* a camera path behind a continued surface has no upper bound on its leg */
+    if (!d->control_vertices) return;
+    d->cv_multi = 1;
+    double sum = 1.0, def = fmax(d->side.other_fraction, d->mirror_defensive);
+    for (int k = 0; k < d->side.mirror_count; k++) sum += d->side.mirror_fraction[k];
+    sum += def;
+    d->cv_share[0] = 1.0 / sum;
+    for (int k = 0; k < d->side.mirror_count; k++) d->cv_share[1 + k] = d->side.mirror_fraction[k] / sum;
+    d->cv_defensive = def / sum;
 }
 
 int plan_resolve(const scene *s, render_plan *p, dp_error *err)
@@ -77,6 +102,7 @@ int plan_resolve(const scene *s, render_plan *p, dp_error *err)
         return dp_fail(err, "%s: out of memory for the render plan", s->path);
     resolve_eda(s, p);
     resolve_darts(s, p);
+    resolve_camera_side(s, p);
     snprintf(p->eda_table_dir, sizeof p->eda_table_dir, "%s", in->eda_table_dir);
     memcpy(p->eda_shape, in->eda_shape, sizeof p->eda_shape);
     p->spp = s->renderer.spp;
@@ -140,6 +166,18 @@ int plan_json(const render_plan *p, const scene *s, char *out, size_t n)
             d->distance_sampling ? "true" : "false", d->control_vertices ? "true" : "false",
             d->control_vertex_mis ? "true" : "false", d->residual == RESIDUAL_EXPONENTIAL ? "exponential" : "uniform",
             d->strict ? "true" : "false", d->early_exit ? "true" : "false", d->da_defensive, d->eta_lb, d->eta_ub);
+    if (d->active) {
+        put(out, n, &len, ",\"mirrors\":\"%s\",\"strict_surfaces\":%s", d->mirrors == DARTS_MIRRORS_FULL ? "full" : "straight",
+            d->strict_surfaces ? "true" : "false");
+        if (d->cv_multi) {
+            put(out, n, &len, ",\"cv_share\":[%.17g", d->cv_share[0]);
+            for (int k = 0; k < d->side.mirror_count; k++)
+                put(out, n, &len, ",{\"mirror\":\"%s\",\"share\":%.17g,\"focus\":[%.17g,%.17g,%.17g]}",
+                    s->surfaces[d->side.mirror_surface[k]].name, d->cv_share[1 + k], d->side.focus[k].x, d->side.focus[k].y,
+                    d->side.focus[k].z);
+            put(out, n, &len, ",{\"defensive\":%.17g}]", d->cv_defensive);
+        }
+    }
     put(out, n, &len, "},\"eda\":{");
     const char *sep = "";
     for (int i = 0; i < p->medium_count; i++) {
