@@ -38,22 +38,23 @@ typedef enum { RESIDUAL_UNIFORM = 0, RESIDUAL_EXPONENTIAL = 1 } residual_samplin
 /* What camera paths see besides straight lines (camera_side.c). Camera paths continue through surfaces with
  * `cont` lobes (surface_photon_split): through them the camera leg is longer than the straight line from the
  * pinhole, which the DARTS time bounds and control vertices assume. The scan traces the camera's rays at the
- * corners and centres of every pixel (through null/forward surfaces) to the first surface that is not
- * passthrough. A camera-seen surface whose continued lobes are a delta reflection only (mirror, smooth
- * conductor, the coat of plastic), planar and flat-shaded, reflects the medium as seen from the camera's
- * mirror image: there a camera leg is exactly η·|x − focus|. Anything else continued (glossy, curved,
- * transmissive, a second continued bounce behind a mirror) has no such focus. */
+ * corners and centres of every pixel (up to 512² pixels; a 1025² grid over larger images), through
+ * null/forward surfaces, to the first surface that is not passthrough. A planar, flat-shaded surface whose
+ * continued lobes only reflect (a mirror, smooth or rough metal, a plastic's coat) reflects the medium as
+ * seen from the camera's mirror image, its focus: behind a delta reflection whose reflected ray then meets
+ * no other continued surface, a camera leg is exactly η·|x − focus|; behind a glossy one, about that.
+ * Anything else continued (curved, transmissive, smooth-shaded, a second continued bounce) has no focus. */
 #define PLAN_MAX_MIRRORS 4
 
 typedef struct {
     int seen;                  /* the scan met some continued surface */
     char first[64];            /* the name of one continued surface seen (messages) */
     int rays;                  /* rays traced */
-    int mirror_count;          /* planar mirrors seen first (at most PLAN_MAX_MIRRORS; the rest count as other) */
+    int mirror_count;          /* planar reflectors seen (the PLAN_MAX_MIRRORS seen most) */
     int mirror_surface[PLAN_MAX_MIRRORS];
     vec3 focus[PLAN_MAX_MIRRORS];              /* the camera's mirror image in each */
-    double mirror_fraction[PLAN_MAX_MIRRORS];  /* share of the rays that continue through this mirror only */
-    double other_fraction;     /* share of the rays that continue through anything without a focus */
+    double mirror_fraction[PLAN_MAX_MIRRORS];  /* share of the rays that continue through it first */
+    double other_fraction;     /* share of the rays that continue through something no focus gives exactly */
 } camera_side_scan;
 
 /* Scans what the camera sees (above); cheap (one ray per pixel corner and centre, OpenMP). */

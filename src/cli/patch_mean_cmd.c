@@ -2,6 +2,7 @@
  * top (for transient curves). Non-finite pixels are left out and reported on stderr. */
 #include <errno.h>
 #include <stdio.h>
+#include <string.h>
 #include <stdlib.h>
 
 #include "dartspp/cli.h"
@@ -20,9 +21,16 @@ static int parse_int(const char *s, long *out)
 int cli_patch_mean(int argc, char **argv)
 {
     long r[4];
+    const char *mask_path = NULL;
+    if (argc == 7 && !strcmp(argv[5], "--mask")) {
+        mask_path = argv[6];
+        argc = 5;
+    }
     if (argc != 5 || parse_int(argv[1], &r[0]) || parse_int(argv[2], &r[1]) || parse_int(argv[3], &r[2]) ||
         parse_int(argv[4], &r[3])) {
-        fprintf(stderr, "usage: dartspp patch-mean IMAGE X0 Y0 X1 Y1   (integers, pixel rectangle [X0,X1) x [Y0,Y1))\n");
+        fprintf(stderr, "usage: dartspp patch-mean IMAGE X0 Y0 X1 Y1 [--mask MASK]   (integers, pixel rectangle "
+                        "[X0,X1) x [Y0,Y1); with a mask image of the same size, only its pixels whose first "
+                        "channel is > 0.5)\n");
         return 2;
     }
     image_rgb img = {0};
@@ -37,11 +45,26 @@ int cli_patch_mean(int argc, char **argv)
         image_free(&img);
         return 2;
     }
+    image_rgb mask = {0};
+    if (mask_path && image_read(mask_path, &mask, &err)) {
+        fprintf(stderr, "dartspp patch-mean: --mask: %s\n", err.msg);
+        image_free(&img);
+        return 2;
+    }
+    if (mask_path && (mask.width != img.width || mask.height != img.height)) {
+        fprintf(stderr, "dartspp patch-mean: --mask %s is %dx%d, the image %s %dx%d\n", mask_path, mask.width,
+                mask.height, argv[0], img.width, img.height);
+        image_free(&img);
+        image_free(&mask);
+        return 2;
+    }
     double sum = 0.0;
     long n = 0, bad = 0;
     for (long y = r[1]; y < r[3]; y++)
         for (long x = r[0]; x < r[2]; x++) {
-            const float *p = &img.rgb[3 * ((size_t)y * img.width + x)];
+            size_t i = (size_t)y * img.width + x;
+            if (mask_path && !(mask.rgb[3 * i] > 0.5f)) continue;
+            const float *p = &img.rgb[3 * i];
             if (!isfinite(p[0]) || !isfinite(p[1]) || !isfinite(p[2])) {
                 bad++;
                 continue;
@@ -50,7 +73,14 @@ int cli_patch_mean(int argc, char **argv)
             n += 3;
         }
     if (bad) fprintf(stderr, "dartspp patch-mean: %s: %ld non-finite pixels left out\n", argv[0], bad);
+    if (mask_path && n == 0) {
+        fprintf(stderr, "dartspp patch-mean: --mask %s selects no finite pixel of the rectangle\n", mask_path);
+        image_free(&img);
+        image_free(&mask);
+        return 2;
+    }
     printf("%.9g\n", n ? sum / n : 0.0);
     image_free(&img);
+    image_free(&mask);
     return 0;
 }
