@@ -1,4 +1,4 @@
-/* bench/mirror_mask SCENE.json SURFACE OUT.pfm: 1 where the camera ray through a pixel's centre first meets
+/* bench/mirror_mask SCENE.json SURFACE OUT.pfm [--set key=value ...]: 1 where the camera ray through a pixel's centre first meets
  * SURFACE (a name, or primitives[i] as the run summary prints it) after any null/forward surfaces, else 0.
  * The mask of a mirror's region for `dartspp patch-mean IMAGE ... --mask OUT.pfm` (bench/dragon_mirror.sh). */
 #include <stdio.h>
@@ -20,13 +20,16 @@ static int first_opaque_surface(const scene *s, vec3 o, vec3 d)
 
 int main(int argc, char **argv)
 {
-    if (argc != 4) {
-        fprintf(stderr, "usage: mirror_mask SCENE.json SURFACE OUT.pfm\n");
+    const char *sets[64];
+    int nsets = 0;
+    for (int i = 4; i + 1 < argc && !strcmp(argv[i], "--set") && nsets < 64; i += 2) sets[nsets++] = argv[i + 1];
+    if (argc < 4 || argc != 4 + 2 * nsets) {
+        fprintf(stderr, "usage: mirror_mask SCENE.json SURFACE OUT.pfm [--set key=value ...]\n");
         return 2;
     }
     scene s;
     dp_error err;
-    scene_load_options opt = {0};
+    scene_load_options opt = {.sets = sets, .set_count = nsets};
     if (scene_load(argv[1], &opt, &s, &err)) {
         fprintf(stderr, "mirror_mask: %s\n", err.msg);
         return 2;

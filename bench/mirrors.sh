@@ -39,7 +39,7 @@ for variant in mirror glossy; do
     # shellcheck disable=SC2086
     [ -f "$ref" ] || "$bin" render "$scene" --set resolution=128 $base --seed 7 --time "$rsecs" --quiet --output "$ref" > /dev/null
     mask=$out/$variant-mask.pfm
-    "$mask_bin" "$scene" back "$mask" 2>&1 | sed 's/^mirror_mask: //' > "$out/$variant-mask.txt"
+    "$mask_bin" "$scene" back "$mask" --set resolution=128 2>&1 | sed 's/^mirror_mask: //' > "$out/$variant-mask.txt"
     rwall=$("$bin" patch-mean "$ref" 0 0 128 128 --mask "$mask"); rall=$("$bin" patch-mean "$ref" 0 0 128 128)
     echo
     echo "### Back wall: $variant ($(cat "$out/$variant-mask.txt"))"
