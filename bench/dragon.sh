@@ -4,6 +4,13 @@
 #   bench/dragon.sh reference SECONDS  a long baseline photon-points render of ours (seed 1): refs/dragon-base-ref.exr
 #   bench/dragon.sh convergence N      the baseline again with seed 2 for N passes (N = the reference's passes),
 #                                      its error against the reference logged every 60 s
+#   bench/dragon.sh mirror [SECONDS] [SEEDS]
+#                                      DARTS behind the mirror wall (issue 18): the DARTS file with darts_mirrors
+#                                      "full" (ours) and "straight" (the authors' behaviour, ours before) and the
+#                                      baseline file, SECONDS each (default 180), seeds 1..SEEDS (default 2), error
+#                                      against refs/dragon-base-ref.exr logged every 20 s; the mean of the pixels
+#                                      whose camera ray meets the mirror first (bench/mirror_mask.c) and of the
+#                                      rest, each ÷ the reference's
 # Why photon points and not the path tracer for the reference: the dragon has a mirror wall and smooth
 # metal, which the path tracer cannot connect to the point light through (it warns), so its image misses
 # those caustics. The reference's own noise: the seed-2 run is the same estimator, so at the reference's pass
@@ -45,5 +52,40 @@ convergence)
                    for (i = 2; i <= last; i++) printf "%8.0f %4d %.4g %.4g\n", t[i], it[i], m[i], m[i] - v }' \
         out/dragon/convergence.csv
     ;;
-*) echo "usage: $0 timings | reference SECONDS | convergence PASSES" >&2; exit 2 ;;
+mirror)
+    secs=${2:-180}; seeds=${3:-2}; ref=refs/dragon-base-ref.exr
+    mirror=${MIRROR:-primitives[8]} # the mirror wall: the file's ninth primitive, unnamed
+    [ -f "$ref" ] || { echo "$0: no $ref: run '$0 reference' first" >&2; exit 2; }
+    cc -std=c11 -D_GNU_SOURCE -O2 -fopenmp -Iinclude bench/mirror_mask.c build/libdartspp.a \
+        -lembree3 -lOpenEXRCore-3_1 -lcjson -lpng -lstb -lflann -lm -fopenmp -o out/dragon/mirror_mask
+    mask=out/dragon/mirror-mask.pfm
+    npix=$(out/dragon/mirror_mask "$scenes/scene-points-darts-short.json" "$mirror" "$mask" 2>&1 | sed -n 's/^mirror_mask: \([0-9]*\) of.*/\1/p')
+    total=$((960 * 960))
+    rm_=$("$bin" patch-mean "$ref" 0 0 960 960 --mask "$mask"); ra=$("$bin" patch-mean "$ref" 0 0 960 960)
+    echo "date: $(date -u +%Y-%m-%dT%H:%MZ)  machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ *//')"
+    echo "mirror region: $npix of $total pixels; $secs s per run, seeds 1..$seeds"
+    echo
+    echo "| method | seed | iterations at 60 s | MSE at 60 s | iterations | MSE at the end | mirror mean ÷ reference | rest mean ÷ reference |"
+    echo "|---|---|---|---|---|---|---|---|"
+    for m in "full|DARTS, darts_mirrors full|scene-points-darts-short|" \
+             "straight|DARTS, darts_mirrors straight (authors')|scene-points-darts-short|--set darts_mirrors=straight" \
+             "baseline|baseline photon points|scene-points-short|"; do
+        slug=${m%%|*}; rest=${m#*|}; name=${rest%%|*}; rest=${rest#*|}; file=${rest%%|*}; sets=${rest#*|}
+        s=1
+        while [ "$s" -le "$seeds" ]; do
+            f=out/dragon/mirror-$slug-s$s
+            # shellcheck disable=SC2086
+            "$bin" render "$scenes/$file.json" --seed "$s" --time "$secs" $sets --reference "$ref" --log "$f.csv" \
+                --log-every 20 --output "$f.exr" --quiet > "$f.txt" 2>&1
+            mm=$("$bin" patch-mean "$f.exr" 0 0 960 960 --mask "$mask"); ma=$("$bin" patch-mean "$f.exr" 0 0 960 960)
+            awk -F, -v n="$name" -v s="$s" -v mm="$mm" -v ma="$ma" -v rm="$rm_" -v ra="$ra" -v np="$npix" -v tot="$total" '
+                NR > 1 { if ($1 <= 60) { i60 = $2; m60 = $7 } it = $2; mse = $7 }
+                END { rest = (ma * tot - mm * np) / (tot - np); rrest = (ra * tot - rm * np) / (tot - np);
+                      printf "| %s | %d | %s | %s | %d | %.4g | %.3f | %.3f |\n", n, s, i60 == "" ? "0" : i60,
+                             m60 == "" ? "no pass yet" : sprintf("%.4g", m60), it, mse, mm / rm, rest / rrest }' "$f.csv"
+            s=$((s + 1))
+        done
+    done
+    ;;
+*) echo "usage: $0 timings | reference SECONDS | convergence PASSES | mirror [SECONDS] [SEEDS]" >&2; exit 2 ;;
 esac

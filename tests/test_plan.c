@@ -133,6 +133,71 @@ static void test_control_vertices_need_one_eta(void **state)
     plan_done(&s, &p);
 }
 
+/* Behind a mirror (darts_mirrors, plan.h camera_side_scan): a mirror floor y = -1 in the lower part of the view
+ * gives one focus, the camera (the origin) reflected in that plane, (0, -2, 0); the shares are normalised with
+ * the straight focus first and the defensive share at least mirror_defensive; strict mode's start test on
+ * surfaces goes off. "straight" keeps one technique and strict's test; a diffuse floor is not seen at all;
+ * a bad value is refused naming the key. */
+static void test_darts_mirrors(void **state)
+{
+    (void)state;
+    const char *floor_of[] = {"{ \"type\": \"mirror\" }", "{ \"type\": \"lambert\", \"albedo\": 0.5 }"};
+    char floor[512];
+    scene s;
+    render_plan p;
+    snprintf(floor, sizeof floor, ", { \"type\": \"quad\", \"name\": \"floor\", \"bsdf\": %s,"
+             " \"transform\": { \"position\": [0, -1, 2], \"scale\": [10, 1, 10] } }", floor_of[0]);
+    plan_of("", PP GATE R "\"enable_elliptical\": true, \"strict_time_width\": true, \"mirror_defensive\": 0.1", floor,
+            &s, &p);
+    const darts_plan *d = &p.darts;
+    assert_true(d->side.seen && d->side.mirror_count == 1 && d->mirrors == DARTS_MIRRORS_FULL);
+    assert_string_equal(s.surfaces[d->side.mirror_surface[0]].name, "floor");
+    assert_float_equal(d->side.focus[0].x, 0.0, 1e-6);
+    assert_float_equal(d->side.focus[0].y, -2.0, 1e-6);
+    assert_float_equal(d->side.focus[0].z, 0.0, 1e-6);
+    assert_true(d->side.mirror_fraction[0] > 0.05 && d->side.mirror_fraction[0] < 0.5);
+    assert_float_equal(d->side.other_fraction, 0.0, 0.0); /* the reflection ends in the fog: exact */
+    assert_true(d->cv_multi && !d->strict_surfaces && d->strict);
+    assert_float_equal(d->cv_share[0] + d->cv_share[1] + d->cv_defensive, 1.0, 1e-12);
+    assert_float_equal(d->cv_share[1] / d->cv_share[0], d->side.mirror_fraction[0], 1e-12);
+    assert_float_equal(d->cv_defensive / d->cv_share[0], 0.1, 1e-12);
+    plan_done(&s, &p);
+
+    plan_of("", PP GATE R "\"enable_elliptical\": true, \"strict_time_width\": true, \"darts_mirrors\": \"straight\"",
+            floor, &s, &p);
+    assert_true(p.darts.side.seen && p.darts.mirrors == DARTS_MIRRORS_STRAIGHT);
+    assert_true(!p.darts.cv_multi && p.darts.strict_surfaces && p.darts.cv_share[0] == 1.0 && p.darts.cv_defensive == 0.0);
+    plan_done(&s, &p);
+
+    snprintf(floor, sizeof floor, ", { \"type\": \"quad\", \"name\": \"floor\", \"bsdf\": %s,"
+             " \"transform\": { \"position\": [0, -1, 2], \"scale\": [10, 1, 10] } }", floor_of[1]);
+    plan_of("", PP GATE R "\"enable_elliptical\": true, \"strict_time_width\": true", floor, &s, &p);
+    assert_true(!p.darts.side.seen && !p.darts.cv_multi && p.darts.strict_surfaces && p.darts.cv_share[0] == 1.0);
+    plan_done(&s, &p);
+
+    char text[2048];
+    snprintf(text, sizeof text,
+             "{ \"media\": [ { \"name\": \"fog\", \"type\": \"homogeneous\", \"sigma_s\": 0.5, \"sigma_a\": 0.1 } ],"
+             "  \"primitives\": [ { \"type\": \"point\", \"emission\": 1, \"ext_medium\": \"fog\" } ],"
+             "  \"camera\": { \"type\": \"pinhole\", \"resolution\": [8, 8], \"fov\": 40, \"medium\": \"fog\" },"
+             "  \"integrator\": { " PP GATE R "\"darts_mirrors\": \"sideways\" } }");
+    char *dir = test_tmpdir();
+    assert_non_null(dir);
+    char path[600];
+    snprintf(path, sizeof path, "%s/scene.json", dir);
+    test_write_file(path, text);
+    dp_error err;
+    scene_load_options lo = {0};
+    int rc = scene_load(path, &lo, &s, &err);
+    unlink(path);
+    rmdir(dir);
+    free(dir);
+    if (rc == 0) scene_free(&s);
+    assert_int_not_equal(rc, 0);
+    assert_non_null(strstr(err.msg, "darts_mirrors"));
+    assert_non_null(strstr(err.msg, "sideways"));
+}
+
 /* The slack of the DARTS surface tests: η_ub times the surface radius of the iteration, from the closed form
  * of the schedule r0 · (Γ(i+1+α) / (Γ(1+α) Γ(i+2)))^{1/2}; none without surface photons. */
 static void test_surface_slack(void **state)
@@ -216,6 +281,7 @@ int main(void)
         cmocka_unit_test(test_keys_resolved),
         cmocka_unit_test(test_darts_and_eda_switches),
         cmocka_unit_test(test_control_vertices_need_one_eta),
+        cmocka_unit_test(test_darts_mirrors),
         cmocka_unit_test(test_surface_slack),
         cmocka_unit_test(test_plan_json),
         cmocka_unit_test(test_plan_in_cli_and_exr),

@@ -550,7 +550,8 @@ static void test_cli_bad_input(void **state)
 
 /* Mirrors: the render still runs (exit 0), and the warning names the scene, the mirror surface and the
  * assumption that breaks - for the path tracer (no connection to point lights through a mirror) and for
- * DARTS (straight camera leg) - and stays silent where neither applies. */
+ * DARTS with darts_mirrors "straight" (straight camera leg) - and stays silent where neither applies: DARTS
+ * with darts_mirrors "full" (the default) is unbiased behind the mirror (test_darts_mirror), DA alone too. */
 static void test_cli_mirror_warnings(void **state)
 {
     (void)state;
@@ -568,9 +569,12 @@ static void test_cli_mirror_warnings(void **state)
     } cases[] = {
         {"lambert floor, path tracer", 0, 0, "", 0, 0},
         {"mirror floor, path tracer", 1, 0, "", 1, 0},
-        {"mirror floor, DARTS", 1, 1, "", 0, 1},
-        {"mirror floor, DARTS strict", 1, 1, " --set enable_elliptical=false --set strict_time_width=true", 0, 1},
-        {"mirror floor, DA only", 1, 1, " --set enable_elliptical=false", 0, 0},
+        {"mirror floor, DARTS (full)", 1, 1, "", 0, 0},
+        {"mirror floor, DARTS strict (full)", 1, 1, " --set enable_elliptical=false --set strict_time_width=true", 0, 0},
+        {"mirror floor, DARTS straight", 1, 1, " --set darts_mirrors=straight", 0, 1},
+        {"mirror floor, DARTS strict straight", 1, 1,
+         " --set darts_mirrors=straight --set enable_elliptical=false --set strict_time_width=true", 0, 1},
+        {"mirror floor, DA only straight", 1, 1, " --set darts_mirrors=straight --set enable_elliptical=false", 0, 0},
         {"lambert floor, DARTS", 0, 1, "", 0, 0},
     };
     const char *dir = fx_dir();

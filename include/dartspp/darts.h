@@ -10,8 +10,10 @@
  * media it crosses (η_lb, η_ub: the smallest and largest η of the scene, vacuum's included): a photon is
  * dropped as too late (early exit, the reachable set of the distance sampler, the end test of the surface
  * time test) against the lower bound, as too early (the start test of strict time mode) against the upper
- * bound. So with straight camera legs strict mode never drops a photon that could be gathered in its bin
- * (a camera-side mirror makes the leg longer: the documented exception). Elliptical control vertices need
+ * bound. So with straight camera legs strict mode never drops a photon that could be gathered in its bin;
+ * where the camera sees a surface camera paths continue through (a mirror, glossy metal) the leg is longer
+ * and has no upper bound, so there (darts_mirrors "full") the start test is off (darts_plan.strict_surfaces)
+ * and control vertices also aim at the camera's mirror images, with a defensive free flight (cv_techniques). Elliptical control vertices need
  * the exact camera-leg time, which the vertex medium's single η gives only when every region of the scene
  * (each medium present, and vacuum if present) has the same η: otherwise they are off
  * (darts_guide.control_vertices), as a control vertex is then placed on the wrong equal-time surface and
