@@ -22,40 +22,6 @@
 #include "dartspp/plan.h"
 #include "dartspp/render.h"
 
-/* ---------------------------------------------------------------------------------------------------- */
-/* χ² helpers (Numerical Recipes §6.2 split, as tests/test_bsdf.c)                                      */
-
-static double gamma_q(double a, double x)
-{
-    if (!(x > 0.0)) return 1.0;
-    double lead = exp(-x + a * log(x) - lgamma(a));
-    if (x < a + 1.0) {
-        double ap = a, del = 1.0 / a, sum = del;
-        for (int n = 0; n < 1000000; n++) {
-            ap += 1.0;
-            del *= x / ap;
-            sum += del;
-            if (fabs(del) < fabs(sum) * 1e-16) break;
-        }
-        return fmax(0.0, 1.0 - sum * lead);
-    }
-    const double tiny = 1e-300;
-    double b = x + 1.0 - a, c = 1.0 / tiny, d = 1.0 / b, h = d;
-    for (int i = 1; i < 1000000; i++) {
-        double an = -i * (i - a);
-        b += 2.0;
-        d = an * d + b;
-        if (fabs(d) < tiny) d = tiny;
-        c = b + an / c;
-        if (fabs(c) < tiny) c = tiny;
-        d = 1.0 / d;
-        double del = d * c;
-        h *= del;
-        if (fabs(del - 1.0) < 1e-16) break;
-    }
-    return lead * h;
-}
-
 #define NBINS 40
 #define NSAMPLES 200000
 #define P_MIN 1e-3
@@ -104,7 +70,7 @@ static double chi2_case(const char *label, pdf_fn pdf, sample_fn sample, void *c
             pe = pc = 0.0;
         }
     }
-    double p = dof > 0 ? gamma_q(0.5 * dof, 0.5 * chi2) : 1.0;
+    double p = dof > 0 ? test_gamma_q(0.5 * dof, 0.5 * chi2) : 1.0;
     printf("chi2 %-44s mass %.4f  chi2 %.1f dof %d  p %.3g\n", label, mass, chi2, dof, p);
     return p;
 }

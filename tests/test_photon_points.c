@@ -1213,33 +1213,6 @@ static void test_darts_refractive_index(void **state)
 /* ---------------------------------------------------------------------------------------------------- */
 /* 6. DARTS frame mode against the path tracer's frames                                                  */
 
-/* Upper regularized incomplete gamma Q(a, x) (Numerical Recipes §6.2: series below a + 1, Lentz's continued
- * fraction above): the survival function of χ² with k degrees of freedom at q is Q(k/2, q/2). */
-static double gamma_q(double a, double x)
-{
-    if (x <= 0) return 1.0;
-    double gln = lgamma(a);
-    if (x < a + 1) {
-        double ap = a, sum = 1.0 / a, del = sum;
-        for (int n = 0; n < 1000 && fabs(del) > fabs(sum) * 1e-15; n++) sum += del *= x / ++ap;
-        return 1.0 - sum * exp(-x + a * log(x) - gln);
-    }
-    double b = x + 1 - a, c = 1e300, d = 1 / b, h = d;
-    for (int i = 1; i < 1000; i++) {
-        double an = -i * (i - a);
-        b += 2;
-        d = an * d + b;
-        d = fabs(d) < 1e-300 ? 1e-300 : d;
-        c = b + an / c;
-        c = fabs(c) < 1e-300 ? 1e-300 : c;
-        d = 1 / d;
-        double del = d * c;
-        h *= del;
-        if (fabs(del - 1) < 1e-15) break;
-    }
-    return exp(-x + a * log(x) - gln) * h;
-}
-
 /* In place: A (n × n, symmetric positive definite) -> A⁻¹, by Cholesky. Returns 0 if A is not positive
  * definite. */
 static int spd_inverse(double *A, int n)
@@ -1393,7 +1366,7 @@ static void test_darts_frames_vs_path_tracer(void **state)
     add_mean_covariance(&t[1], C);
     assert_true(spd_inverse(C, P));
     double Q = box_mahalanobis(C, d, b, P) * (t[0].n - P - 2.0) / (t[0].n - 1.0);
-    double pval = gamma_q(P / 2.0, Q / 2.0);
+    double pval = test_gamma_q(P / 2.0, Q / 2.0);
     print_message("  joint: Q = %.2f for %d degrees of freedom, chi-square survival %.3g (required > 1e-3)\n", Q, P, pval);
     assert_int_equal(failed, 0);
     assert_true(pval > 1e-3);
