@@ -3,7 +3,9 @@
 
 CC       ?= cc
 OPT      ?= -O2
-CFLAGS   += -std=c11 -D_GNU_SOURCE $(OPT) -g -Wall -Wextra -fopenmp -Iinclude \
+# ARCH=native (or a -march name) tunes the build for one CPU; the default build stays portable.
+ARCH     ?=
+CFLAGS   += -std=c11 -D_GNU_SOURCE $(OPT) $(if $(ARCH),-march=$(ARCH)) -g -Wall -Wextra -fopenmp -Iinclude \
             -I/usr/include/OpenEXR $(EXTRA_CFLAGS)
 LDLIBS   += -lembree3 -lOpenEXRCore-3_1 -lcjson -lpng -lstb -lflann -lm -fopenmp
 
@@ -36,7 +38,7 @@ $(DEPS_STAMP):
 	fi
 	@mkdir -p build && touch $@
 
-build/obj/%.o: src/%.c $(wildcard include/dartspp/*.h) | $(DEPS_STAMP)
+build/obj/%.o: src/%.c $(wildcard include/dartspp/*.h src/*/*.h) | $(DEPS_STAMP)
 	@mkdir -p $(dir $@)
 	$(CC) $(CFLAGS) -c $< -o $@
 
@@ -46,7 +48,7 @@ build/libdartspp.a: $(OBJ)
 build/dartspp: $(CLI_SRC) build/libdartspp.a
 	$(CC) $(CFLAGS) $< build/libdartspp.a $(LDLIBS) -o $@
 
-build/san/obj/%.o: src/%.c $(wildcard include/dartspp/*.h) | $(DEPS_STAMP)
+build/san/obj/%.o: src/%.c $(wildcard include/dartspp/*.h src/*/*.h) | $(DEPS_STAMP)
 	@mkdir -p $(dir $@)
 	$(CC) $(CFLAGS) $(SAN_FLAGS) -c $< -o $@
 

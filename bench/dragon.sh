@@ -11,6 +11,16 @@
 #                                      against refs/dragon-base-ref.exr logged every 20 s; the mean of the pixels
 #                                      whose camera ray meets the mirror first (bench/mirror_mask.c) and of the
 #                                      rest, each ÷ the reference's
+#   bench/dragon.sh mirror-const [REF_SECONDS] [REF_SEEDS] [SEEDS]
+#                                      the same question where noise cannot hide a bias: 240², constant radii (the
+#                                      DARTS file's r_vol 0.15 and R 0.07 for every method, alpha = 1), one thread
+#                                      per run. The reference is DARTS with DA distance sampling only
+#                                      (enable_elliptical false: no control vertices, so nothing depends on the
+#                                      camera leg's shape), seeds 101..100+REF_SEEDS, REF_SECONDS each (default 600,
+#                                      4); then full, straight and the baseline file at 60 s and 180 s, seeds
+#                                      1..SEEDS (default 3). Prints the mirror region's and the rest's means with
+#                                      their standard errors over seeds, and each method's difference from the
+#                                      reference in standard errors.
 # Why photon points and not the path tracer for the reference: the dragon has a mirror wall and smooth
 # metal, which the path tracer cannot connect to the point light through (it warns), so its image misses
 # those caustics. The reference's own noise: the seed-2 run is the same estimator, so at the reference's pass
@@ -87,5 +97,48 @@ mirror)
         done
     done
     ;;
-*) echo "usage: $0 timings | reference SECONDS | convergence PASSES | mirror [SECONDS] [SEEDS]" >&2; exit 2 ;;
+mirror-const)
+    rsecs=${2:-600}; rseeds=${3:-4}; seeds=${4:-3}; mirror=${MIRROR:-primitives[8]}; o=out/dragon/const
+    mkdir -p "$o"
+    cc -std=c11 -D_GNU_SOURCE -O2 -fopenmp -Iinclude bench/mirror_mask.c build/libdartspp.a \
+        -lembree3 -lOpenEXRCore-3_1 -lcjson -lpng -lstb -lflann -lm -fopenmp -o "$o/mirror_mask"
+    cp "$bin" "$o/dartspp" # the runs take an hour: a rebuild meanwhile must not change the binary under them
+    bin=$o/dartspp
+    common="--set resolution=240 --set alpha=1 --set volume_alpha=1 --set volume_gather_radius=0.15 --set gather_radius=0.07 --threads 1 --quiet"
+    "$o/mirror_mask" "$scenes/scene-points-darts-short.json" "$mirror" "$o/mask.pfm" --set resolution=240 >&2
+    run() { # slug file seconds seed extra-sets...
+        slug=$1; file=$2; secs=$3; seed=$4; shift 4; f=$o/$slug-$secs-s$seed
+        [ -f "$f.exr" ] || "$bin" render "$scenes/$file.json" $common "$@" --seed "$seed" --time "$secs" --output "$f.exr" > "$f.txt" 2>&1
+        printf '%s %s %s %s %s %s\n' "$slug" "$secs" "$seed" "$(sed -n 's/^rendered \([0-9]*\) passes.*/\1/p' "$f.txt")" \
+            "$("$bin" patch-mean "$f.exr" 0 0 240 240 --mask "$o/mask.pfm")" "$("$bin" patch-mean "$f.exr" 0 0 240 240)" >> "$o/means.txt"
+    }
+    : > "$o/means.txt"
+    s=1; while [ $s -le "$rseeds" ]; do run reference scene-points-darts-short "$rsecs" $((100 + s)) --set enable_elliptical=false; s=$((s + 1)); done
+    for secs in 60 180; do
+        s=1; while [ $s -le "$seeds" ]; do
+            run full scene-points-darts-short "$secs" "$s"
+            run straight scene-points-darts-short "$secs" "$s" --set darts_mirrors=straight
+            run baseline scene-points-short "$secs" "$s"
+            s=$((s + 1))
+        done
+    done
+    npix=$("$bin" patch-mean "$o/mask.pfm" 0 0 240 240 | awk '{ printf "%d", $1 * 240 * 240 + 0.5 }')
+    echo "date: $(date -u +%Y-%m-%dT%H:%MZ)  machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ *//')"
+    echo "240², constant radii r_vol 0.15, R 0.07, one thread per run; mirror region: $npix of 57600 pixels"
+    echo
+    awk -v np="$npix" 'function stats(key,   n, i, m, v, x) { n = cnt[key]; m = 0; for (i = 1; i <= n; i++) m += val[key, i]; m /= n;
+                                    v = 0; for (i = 1; i <= n; i++) { x = val[key, i] - m; v += x * x } se = n > 1 ? sqrt(v / (n - 1) / n) : 0; return m }
+        { rest = ($6 * 57600 - $5 * np) / (57600 - np); k = $1 " " $2
+          if (!(k in cnt)) order[++nk] = k; cnt[k]++; its[k] = its[k] (its[k] == "" ? "" : ", ") $4
+          val[k " mirror", cnt[k]] = $5; cnt[k " mirror"]++; val[k " rest", cnt[k]] = rest; cnt[k " rest"]++ }
+        END { print "| method | seconds | runs | iterations | mirror mean ± s.e. | (mirror − ref) / s.e. | rest mean ± s.e. | (rest − ref) / s.e. |"
+              print "|---|---|---|---|---|---|---|---|"
+              for (j = 1; j <= nk; j++) { k = order[j]; split(k, a, " ")
+                  mm = stats(k " mirror"); ms = se; rm = stats(k " rest"); rs = se
+                  if (j == 1) { refm = mm; refms = ms; refr = rm; refrs = rs }
+                  zm = j == 1 ? "—" : sprintf("%+.1f", (mm - refm) / sqrt(ms * ms + refms * refms))
+                  zr = j == 1 ? "—" : sprintf("%+.1f", (rm - refr) / sqrt(rs * rs + refrs * refrs))
+                  printf "| %s | %s | %d | %s | %.4f ± %.4f | %s | %.4f ± %.4f | %s |\n", a[1], a[2], cnt[k], its[k], mm, ms, zm, rm, rs, zr } }' "$o/means.txt"
+    ;;
+*) echo "usage: $0 timings | reference SECONDS | convergence PASSES | mirror [SECONDS] [SEEDS] | mirror-const [REF_SECONDS] [REF_SEEDS] [SEEDS]" >&2; exit 2 ;;
 esac

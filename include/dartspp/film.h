@@ -46,6 +46,18 @@ typedef struct {
     long nonfinite;   /* contributions dropped for being non-finite */
 } film_pixel;
 
+/* Whether a contribution at path time t (tagged with frame, as film_splat) would be counted: estimators test
+ * this first and skip the work of one that falls outside the window. */
+static inline int film_counts_time(const film *f, double t, int frame)
+{
+    const time_window *tw = &f->window;
+    if (!tw->gated) return 1;
+    double rel = (t - tw->start) / tw->width;
+    int frames = tw->frame_count > 0 ? tw->frame_count : 1;
+    if (!(rel >= 0.0 && rel < frames)) return 0;
+    return frame < 0 || (int)rel == frame;
+}
+
 /* Adds a contribution arriving at path time t to the pixel (frame: as film_splat), counting a non-finite one. */
 static inline void film_pixel_splat(film_pixel *p, double t, vec3 c, int frame)
 {

@@ -14,6 +14,11 @@ typedef struct {
     const volume_photon_map *vol;   /* may be NULL */
     const surface_photon_map *surf; /* may be NULL */
     const photon *surf_photons;     /* the array the surface map was built over */
+    const photon *vol_photons;      /* the array the volume map was built over (the splat reads it) */
+    size_t n_vol;
+    int volume_splat;               /* volume_gather "splat": the primary lines' medium segments gathered
+                                     * photon by photon (src/gather/volume_splat.c); 0 ("beam"): a beam
+                                     * query per segment */
     double r_vol;                   /* volume gather radius of this iteration */
     double r_surf;                  /* surface search radius R of this iteration */
     int k_surf;                     /* gather_photon_count */
@@ -27,5 +32,8 @@ typedef struct {
  * once g->stop is set the remaining rows are skipped and the pass is incomplete (the caller drops it).
  * Returns the rays traced; non-finite contributions are dropped and counted in f->nonfinite. */
 double sensor_pass(const scene *s, const gather_input *g, film *f, uint64_t seed, long iteration);
+
+/* Bytes the sensor pass allocates for a w × h image when the scene has a volume map (its primary lines). */
+size_t sensor_pass_bytes(int width, int height);
 
 #endif

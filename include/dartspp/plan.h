@@ -109,6 +109,7 @@ typedef struct render_plan {
     radius_schedule r_vol, r_surf;
     int k_surf;                      /* gather_photon_count */
     int camera_leg_projected;
+    int volume_splat;               /* primary lines gathered photon by photon (volume_gather "splat") */
     int include_surfaces, low_order_scattering;
     darts_plan darts;
     int medium_count;

@@ -118,6 +118,7 @@ typedef struct {
     int enable_guiding, enable_elliptical, strict_time_width;
     int volume_beams;               /* volume_photon_type "beams": loads, refused at render time */
     int camera_leg_projected;       /* camera_leg: "euclidean" (reference, default) or "projected" */
+    int volume_gather_beam;         /* volume_gather: "splat" (default) or "beam" (a query per camera segment) */
     int radius_schedule_3d;         /* radius_schedule: "2d" (default) or "3d" (reference cube root) */
     int eda;                        /* eda: EDA direction sampling in every medium (default false) */
     double eda_alpha;               /* eda_alpha: α of the EDA/phase selection (default 0.5) */

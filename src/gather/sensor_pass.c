@@ -3,12 +3,14 @@
 
 #include "dartspp/gather.h"
 #include "dartspp/surface.h"
+#include "primary_line.h"
 
 typedef struct {
     const scene *s;
     const gather_input *g;
     film_pixel *pix;
     dp_rng *rng;     /* continuations through specular and near-specular lobes */
+    primary_line *line; /* where the primary line's medium segments are recorded for the splat, or NULL */
 } pixel_ctx;
 
 typedef struct {
@@ -22,21 +24,43 @@ typedef struct {
 
 static vec3 photon_vec(const float *v) { return v3(v[0], v[1], v[2]); }
 
-/* Point-beam 2D: biweight kernel 3/(πr²)(1 − d²/r²)² on the disc around the camera ray. */
-static void visit_volume_photon(void *ctx, const photon *p, double t, double d2)
+void volume_photon_splat(const gather_input *g, film_pixel *pix, const medium *m, vec3 o, vec3 d, vec3 thr,
+                         double t_cam, int b_cam, const photon *p, double t, double d2)
 {
-    beam_ctx *b = ctx;
-    const gather_input *g = b->c->g;
-    if (!bounces_count(&g->bounces, p->bounce + b->b_cam)) return;
+    if (!bounces_count(&g->bounces, p->bounce + b_cam)) return;
+    double leg = g->camera_leg_projected ? t : v3_len(v3_sub(photon_vec(p->pos), o));
+    double time = t_cam + p->time + m->eta * leg;
+    if (!film_counts_time(pix->f, time, p->frame)) return; /* before the kernel, phase and exponentials */
     double r2 = g->r_vol * g->r_vol;
     double u = 1.0 - d2 / r2;
     double K = 3.0 / (M_PI * r2) * u * u;
-    vec3 x = photon_vec(p->pos);
-    double leg = g->camera_leg_projected ? t : v3_len(v3_sub(x, b->o));
-    double time = b->t_cam + p->time + b->m->eta * leg;
-    double f = K * phase_eval(&b->m->phase, photon_vec(p->dir), v3_neg(b->d));
-    vec3 tr = v3_exp_neg(v3_scale(b->m->sigma_t, t));
-    film_pixel_splat(b->c->pix, time, v3_scale(v3_mul(v3_mul(b->thr, tr), photon_vec(p->power)), f), p->frame);
+    double f = K * phase_eval(&m->phase, photon_vec(p->dir), v3_neg(d));
+    vec3 tr = m->sigma_t.x == m->sigma_t.y && m->sigma_t.y == m->sigma_t.z ? v3s(exp(-m->sigma_t.x * t))
+                                                                            : v3_exp_neg(v3_scale(m->sigma_t, t));
+    film_pixel_splat(pix, time, v3_scale(v3_mul(v3_mul(thr, tr), photon_vec(p->power)), f), p->frame);
+}
+
+static void visit_volume_photon(void *ctx, const photon *p, double t, double d2)
+{
+    const beam_ctx *b = ctx;
+    volume_photon_splat(b->c->g, b->c->pix, b->m, b->o, b->d, b->thr, b->t_cam, b->b_cam, p, t, d2);
+}
+
+/* Keeps a medium segment of the primary line for the splat; 0 when the line is full (then the caller
+ * queries it). */
+static int record_line_segment(const scene *s, primary_line *L, int med, vec3 o, vec3 d, double len, vec3 thr,
+                               double t_cam)
+{
+    if (L->n >= PRIMARY_SEGMENTS) return 0;
+    line_segment *sg = &L->seg[L->n++];
+    sg->t0 = v3_dot(v3_sub(o, s->cam.pos), d);
+    sg->t1 = sg->t0 + len;
+    sg->t_cam = t_cam;
+    sg->thr[0] = thr.x;
+    sg->thr[1] = thr.y;
+    sg->thr[2] = thr.z;
+    sg->medium = med;
+    return 1;
 }
 
 /* Surface estimate at a hit, over the gathered lobes: k nearest within R, box kernel over the disc of the
@@ -95,6 +119,13 @@ static void trace_sensor_path(pixel_ctx *c, vec3 d)
     vec3 o = s->cam.pos, thr = v3s(1.0);
     int med = s->cam.medium, b_cam = 1;
     double t_cam = 0.0;
+    primary_line *line = c->line; /* set while the walk is still on the primary line */
+    if (line) {
+        line->d[0] = d.x;
+        line->d[1] = d.y;
+        line->d[2] = d.z;
+        line->n = 0;
+    }
     for (int guard = 0; guard < 10000 && b_cam <= c->g->bounces.max; guard++) {
         hit_record h;
         c->pix->rays += 1;
@@ -103,7 +134,8 @@ static void trace_sensor_path(pixel_ctx *c, vec3 d)
         if (med != MEDIUM_VACUUM) {
             const medium *m = &s->media[med];
             beam_ctx b = {c, m, o, d, thr, t_cam, b_cam};
-            if (c->g->vol) photon_map_query_beam(c->g->vol, o, d, len, visit_volume_photon, &b);
+            if (c->g->vol && !(line && record_line_segment(s, line, med, o, d, len, thr, t_cam)))
+                photon_map_query_beam(c->g->vol, o, d, len, visit_volume_photon, &b);
             thr = v3_mul(thr, v3_exp_neg(v3_scale(m->sigma_t, len)));
         }
         if (!hit || v3_is_zero(thr)) return;
@@ -116,6 +148,7 @@ static void trace_sensor_path(pixel_ctx *c, vec3 d)
             o = scene_offset_ray_origin(s, h.p, n_out);
             continue;
         }
+        line = NULL; /* the walk scatters here: later segments are gathered by beam queries */
         surface_site ss;
         if (!surface_site_init(&ss, s, &c->g->shading, &h, d)) return;
         photon_split split = surface_photon_split(bs, &c->g->shading);
@@ -136,17 +169,47 @@ static void trace_sensor_path(pixel_ctx *c, vec3 d)
 typedef struct {
     const scene *s;
     const gather_input *g;
+    primary_line *lines; /* per pixel, or NULL */
 } pass_ctx;
 
 static void sample_pixel(void *ctx, film_pixel *pix, vec3 dir, dp_rng *rng)
 {
     const pass_ctx *p = ctx;
-    pixel_ctx c = {.s = p->s, .g = p->g, .pix = pix, .rng = rng};
+    pixel_ctx c = {.s = p->s, .g = p->g, .pix = pix, .rng = rng, .line = p->lines ? &p->lines[pix->px] : NULL};
     trace_sensor_path(&c, dir);
 }
 
+/* The fallback when the splat's tile lists would be too big: a beam query per recorded segment. */
+static void gather_lines_by_beams(const scene *s, const gather_input *g, film *f, const primary_line *lines)
+{
+    long bad = 0;
+    int w = s->cam.width, h = s->cam.height;
+#pragma omp parallel for schedule(dynamic, 1) reduction(+ : bad) default(none) shared(s, g, f, lines, w, h)
+    for (int y = 0; y < h; y++) {
+        if (dp_stopped(g->stop)) continue;
+        for (int x = 0; x < w; x++) {
+            film_pixel pix = {.f = f, .px = (size_t)y * w + x};
+            primary_line_gather_beam(s, g, &pix, &lines[pix.px]);
+            bad += pix.nonfinite;
+        }
+    }
+    f->nonfinite += bad;
+}
+
+size_t sensor_pass_bytes(int width, int height) { return volume_splat_bytes(width, height); }
+
+/* The camera walks (surface gathers, continuations, beam queries off the primary line), then the volume
+ * gather on the primary lines: photon by photon (volume_splat.c) where it applies, else by a beam query
+ * per recorded segment (volume_gather "beam", and the splat's fallback). */
 double sensor_pass(const scene *s, const gather_input *g, film *f, uint64_t seed, long iteration)
 {
-    pass_ctx p = {s, g};
-    return film_sample_pixels(f, &s->cam, seed, iteration, g->stop, sample_pixel, &p);
+    pass_ctx p = {s, g, NULL};
+    if (g->vol) p.lines = malloc(volume_splat_bytes(s->cam.width, s->cam.height)); /* NULL: queries in the walk */
+    double rays = film_sample_pixels(f, &s->cam, seed, iteration, g->stop, sample_pixel, &p);
+    if (p.lines && !dp_stopped(g->stop)) {
+        int splat = g->volume_splat && volume_splat_applies(s, g);
+        if (!splat || volume_splat(s, g, f, p.lines)) gather_lines_by_beams(s, g, f, p.lines);
+    }
+    free(p.lines);
+    return rays;
 }

@@ -95,6 +95,7 @@ int plan_resolve(const scene *s, render_plan *p, dp_error *err)
     p->r_surf = (radius_schedule){in->gather_radius, in->alpha, 2};
     p->k_surf = in->gather_photon_count;
     p->camera_leg_projected = in->camera_leg_projected;
+    p->volume_splat = !in->volume_gather_beam;
     p->include_surfaces = in->include_surfaces;
     p->low_order_scattering = in->low_order_scattering;
     p->medium_count = s->medium_count;
@@ -153,10 +154,10 @@ int plan_json(const render_plan *p, const scene *s, char *out, size_t n)
     put(out, n, &len,
         ",\"light_paths\":%.17g,\"volume_budget\":%.17g,\"surface_budget\":%.17g"
         ",\"r_vol\":{\"r0\":%.17g,\"alpha\":%.17g,\"dims\":%d},\"r_surf\":{\"r0\":%.17g,\"alpha\":%.17g,\"k\":%d}"
-        ",\"camera_leg\":\"%s\",\"surfaces\":%s,\"low_order_scattering\":%s,\"glossy_gather_alpha\":%.17g",
+        ",\"camera_leg\":\"%s\",\"volume_gather\":\"%s\",\"surfaces\":%s,\"low_order_scattering\":%s,\"glossy_gather_alpha\":%.17g",
         p->light_paths, p->volume_budget, p->surface_budget, p->r_vol.r0, p->r_vol.alpha, p->r_vol.dims, p->r_surf.r0,
         p->r_surf.alpha, p->k_surf, p->camera_leg_projected ? "projected" : "euclidean",
-        p->include_surfaces ? "true" : "false", p->low_order_scattering ? "true" : "false",
+        p->volume_splat ? "splat" : "beam", p->include_surfaces ? "true" : "false", p->low_order_scattering ? "true" : "false",
         p->shading.glossy_gather_alpha);
     put(out, n, &len, ",\"darts\":{\"active\":%s", d->active ? "true" : "false");
     if (d->active)

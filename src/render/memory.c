@@ -6,6 +6,7 @@
  * Written by hand: no library estimates this. */
 #include "dartspp/darts.h"
 #include "dartspp/photon.h"
+#include "dartspp/gather.h"
 #include "dartspp/render.h"
 
 #include <stdio.h>
@@ -68,6 +69,7 @@ void render_memory_estimate(const scene *s, const render_plan *p, int have_refer
     double per_mapped = (double)volume_map_bytes(1 << 20) / (1 << 20);
     int volume = s->medium_count > 0;
     if (volume) add(m, "volume photons and their map", "integrator.volume_photon_count", V * (ph + per_mapped));
+    if (volume) add(m, "primary lines of the sensor pass", "camera.resolution", (double)sensor_pass_bytes(1, 1) * px);
     if (p->include_surfaces || !volume)
         add(m, "surface photons and their map", "integrator.photon_count", S * (ph + per_mapped));
     add(m, "photon batch buffers", NULL, PHOTON_PASS_BATCH * fmax(rate_v + rate_s, 1.0) * ph);

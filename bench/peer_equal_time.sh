@@ -1,0 +1,85 @@
+#!/bin/sh
+# dartspp beside the authors' renderer (the DARTS Tungsten fork; ../shared/docs/peer-benchmark.md says how to
+# build it outside this repository), at equal wall time on the same scene file, threads and seeds, the two
+# runs of each seed one after the other:
+#   PEER_TUNGSTEN=/path/to/tungsten bench/peer_equal_time.sh SCENE.json SECONDS SEEDS REFERENCE.pfm [THREADS]
+# For each renderer: iterations, s/iteration, photon paths/s, camera rays/s (both per run), the image mean,
+# the seed variance (half the mean MSE between two seeds' images) and the MSE of each run against the
+# reference, and that MSE minus the reference's own noise (REF_NOISE, default 0.0003: see
+# ../shared/references/README.md). Without PEER_TUNGSTEN it runs dartspp alone and says so.
+# Seeds are 1..SEEDS for both (seed 99 made the authors' 40-minute image; use other seeds against it).
+# Our extra options go in DARTSPP_ARGS (e.g. "--set volume_gather=beam"). Output: out/peer/<stem>-<s>s/.
+set -eu
+scene=${1:?scene file}; secs=${2:-90}; seeds=${3:-3}; ref=${4:?reference image}; threads=${5:-2}
+bin=${DARTSPP:-build/dartspp}
+peer=${PEER_TUNGSTEN:-}
+noise=${REF_NOISE:-0.0003}
+[ -x "$bin" ] || make build/dartspp >&2
+[ -f "$scene" ] || { echo "$0: no scene $scene" >&2; exit 2; }
+[ -f "$ref" ] || { echo "$0: no reference image $ref" >&2; exit 2; }
+if [ -n "$peer" ] && [ ! -x "$peer" ]; then echo "$0: PEER_TUNGSTEN=$peer is not an executable" >&2; exit 2; fi
+stem=$(basename "$scene" .json)
+o=out/peer/$stem-${secs}s
+rm -rf "$o" && mkdir -p "$o" && o=$(cd "$o" && pwd) # absolute: the peer resolves paths against its scene
+# image size and photon paths per iteration, from the scene file
+wh=$(python3 -c "import json,sys; d=json.load(open(sys.argv[1])); r=d['camera']['resolution']; r=r if isinstance(r,list) else [r,r]; print(r[0], r[1], int(d['integrator'].get('photon_count', 0)))" "$scene")
+w=${wh%% *}; rest=${wh#* }; h=${rest%% *}; paths=${rest#* }
+
+echo "date: $(date -u +%Y-%m-%dT%H:%MZ)  machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ *//')"
+echo "scene: $scene, ${secs} s per run, $threads threads, seeds 1..$seeds, reference $(basename "$ref")"
+[ -n "$peer" ] || echo "PEER_TUNGSTEN is not set: dartspp alone (build the authors' renderer per ../shared/docs/peer-benchmark.md)"
+echo
+
+s=1
+while [ "$s" -le "$seeds" ]; do
+    # shellcheck disable=SC2086
+    "$bin" render "$scene" --threads "$threads" --seed "$s" --time "$secs" ${DARTSPP_ARGS:-} --output "$o/ours-s$s.pfm" \
+        > "$o/ours-s$s.txt" 2>&1 || { tail -5 "$o/ours-s$s.txt" >&2; exit 1; }
+    its=$(sed -n 's/^rendered \([0-9]*\) passes in \([0-9.]*\) s.*/\1 \2/p' "$o/ours-s$s.txt")
+    echo "ours $s $its" >> "$o/runs.txt"
+    if [ -n "$peer" ]; then
+        (cd "$o" && "$peer" -t "$threads" -s "$s" --timeout "${secs}s" --spp 100000000 -c 0 -r -e "$o/theirs-s$s.pfm" \
+            -o "$o/theirs-s$s.png" "$(cd "$(dirname "$scene")" && pwd)/$(basename "$scene")" > "$o/theirs-s$s.txt" 2>&1) ||
+            { tail -5 "$o/theirs-s$s.txt" >&2; exit 1; }
+        n=$(grep -c '^Completed [0-9]*/' "$o/theirs-s$s.txt" || true)
+        t=$(sed -n 's/^Finished render. Render time \(.*\)$/\1/p' "$o/theirs-s$s.txt" |
+            awk '{ t = 0; for (i = 1; i <= NF; i++) { v = $i + 0; u = $i; sub(/^[0-9.]+/, "", u)
+                   t += u == "ms" ? v / 1000 : u == "s" ? v : u == "m" ? 60 * v : u == "h" ? 3600 * v : u == "d" ? 86400 * v : 0 }
+                   printf "%.2f", t }')
+        echo "theirs $s $n $t" >> "$o/runs.txt"
+    fi
+    s=$((s + 1))
+done
+
+mse() { "$bin" compare "$1" "$2" | sed -n 's/^mse *\([^ ]*\).*/\1/p'; }
+echo "| renderer | iterations | s/iteration | photon paths/s | camera rays/s | image mean | seed variance | MSE vs reference | MSE − reference noise |"
+echo "|---|---|---|---|---|---|---|---|---|"
+for who in ours theirs; do
+    grep -q "^$who " "$o/runs.txt" || continue
+    its=""; spi=""; pps=""; crs=""; means=""; mses=""; msum=0
+    s=1
+    while [ "$s" -le "$seeds" ]; do
+        set -- $(grep "^$who $s " "$o/runs.txt")
+        n=$3; t=$4
+        its="$its${its:+, }$n"
+        spi="$spi${spi:+, }$(awk -v n="$n" -v t="$t" 'BEGIN { printf "%.3f", t / n }')"
+        pps="$pps${pps:+, }$(awk -v n="$n" -v t="$t" -v p="$paths" 'BEGIN { printf "%.2fM", n * p / t / 1e6 }')"
+        crs="$crs${crs:+, }$(awk -v n="$n" -v t="$t" -v w="$w" -v h="$h" 'BEGIN { printf "%.2fM", n * w * h / t / 1e6 }')"
+        means="$means${means:+, }$("$bin" patch-mean "$o/$who-s$s.pfm" 0 0 "$w" "$h" | awk '{ printf "%.4f", $1 }')"
+        m=$(mse "$o/$who-s$s.pfm" "$ref")
+        mses="$mses${mses:+, }$(awk -v m="$m" 'BEGIN { printf "%.4g", m }')"
+        msum=$(awk -v a="$msum" -v m="$m" 'BEGIN { print a + m }')
+        s=$((s + 1))
+    done
+    var=$(s=1; while [ "$s" -le "$seeds" ]; do k=$((s + 1)); while [ "$k" -le "$seeds" ]; do
+              mse "$o/$who-s$s.pfm" "$o/$who-s$k.pfm"; k=$((k + 1)); done; s=$((s + 1)); done |
+          awk '{ v += $1 / 2; n++ } END { if (n) printf "%.4g", v / n; else printf "—" }')
+    mean_mse=$(awk -v a="$msum" -v n="$seeds" 'BEGIN { printf "%.4g", a / n }')
+    net=$(awk -v a="$msum" -v n="$seeds" -v z="$noise" 'BEGIN { printf "%.4g", a / n - z }')
+    name=$([ "$who" = ours ] && echo "dartspp" || echo "authors' renderer")
+    echo "| $name | $its | $spi | $pps | $crs | $means | $var | $mses (mean $mean_mse) | $net |"
+done
+if grep -q '^theirs ' "$o/runs.txt"; then
+    awk '$1 == "ours" { o += $3; to += $4 } $1 == "theirs" { t += $3; tt += $4 }
+         END { printf "\niterations per second, ours ÷ theirs: %.2f\n", (o / to) / (t / tt) }' "$o/runs.txt"
+fi
