@@ -2,7 +2,7 @@
 # packages the build needs when they are missing, so each target works by itself on a fresh Debian 12.
 
 CC       ?= cc
-OPT      ?= -O2
+OPT      ?= -O3
 # ARCH=native (or a -march name) tunes the build for one CPU; the default build stays portable.
 ARCH     ?=
 CFLAGS   += -std=c11 -D_GNU_SOURCE $(OPT) $(if $(ARCH),-march=$(ARCH)) -g -Wall -Wextra -fopenmp -Iinclude \

@@ -8,7 +8,8 @@
 # reference, and that MSE minus the reference's own noise (REF_NOISE, default 0.0003: see
 # ../shared/references/README.md). Without PEER_TUNGSTEN it runs dartspp alone and says so.
 # Seeds are 1..SEEDS for both (seed 99 made the authors' 40-minute image; use other seeds against it).
-# Our extra options go in DARTSPP_ARGS (e.g. "--set volume_gather=beam"). Output: out/peer/<stem>-<s>s/.
+# Our extra options go in DARTSPP_ARGS (e.g. "--set volume_gather=beam"). Output: out/peer/<stem>-<s>s<TAG>/
+# (TAG from PEER_TAG, so that variants do not overwrite each other).
 set -eu
 scene=${1:?scene file}; secs=${2:-90}; seeds=${3:-3}; ref=${4:?reference image}; threads=${5:-2}
 bin=${DARTSPP:-build/dartspp}
@@ -19,7 +20,7 @@ noise=${REF_NOISE:-0.0003}
 [ -f "$ref" ] || { echo "$0: no reference image $ref" >&2; exit 2; }
 if [ -n "$peer" ] && [ ! -x "$peer" ]; then echo "$0: PEER_TUNGSTEN=$peer is not an executable" >&2; exit 2; fi
 stem=$(basename "$scene" .json)
-o=out/peer/$stem-${secs}s
+o=out/peer/$stem-${secs}s${PEER_TAG:-}
 rm -rf "$o" && mkdir -p "$o" && o=$(cd "$o" && pwd) # absolute: the peer resolves paths against its scene
 # image size and photon paths per iteration, from the scene file
 wh=$(python3 -c "import json,sys; d=json.load(open(sys.argv[1])); r=d['camera']['resolution']; r=r if isinstance(r,list) else [r,r]; print(r[0], r[1], int(d['integrator'].get('photon_count', 0)))" "$scene")
@@ -27,6 +28,7 @@ w=${wh%% *}; rest=${wh#* }; h=${rest%% *}; paths=${rest#* }
 
 echo "date: $(date -u +%Y-%m-%dT%H:%MZ)  machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ *//')"
 echo "scene: $scene, ${secs} s per run, $threads threads, seeds 1..$seeds, reference $(basename "$ref")"
+echo "dartspp options: ${DARTSPP_ARGS:-(the scene file as it is)}"
 [ -n "$peer" ] || echo "PEER_TUNGSTEN is not set: dartspp alone (build the authors' renderer per ../shared/docs/peer-benchmark.md)"
 echo
 
