@@ -122,6 +122,13 @@ mirror-const)
             s=$((s + 1))
         done
     done
+    # the reference image: the mean of the reference runs; each run's MSE against it (whole image)
+    set -- $(ls "$o"/reference-"$rsecs"-s*.exr)
+    if [ $# -ge 2 ]; then "$bin" merge "$o/reference.exr" "$@" > /dev/null; else cp "$1" "$o/reference.exr"; fi
+    for f in "$o"/full-*.exr "$o"/straight-*.exr "$o"/baseline-*.exr; do
+        [ -f "$f" ] || continue
+        printf '%s %s\n' "$(basename "$f" .exr)" "$("$bin" compare "$f" "$o/reference.exr" | sed -n 's/^mse  *\([0-9][^ ]*\).*/\1/p')"
+    done > "$o/mse.txt"
     npix=$("$bin" patch-mean "$o/mask.pfm" 0 0 240 240 | awk '{ printf "%d", $1 * 240 * 240 + 0.5 }')
     echo "date: $(date -u +%Y-%m-%dT%H:%MZ)  machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ *//')"
     echo "240², constant radii r_vol 0.15, R 0.07, one thread per run; mirror region: $npix of 57600 pixels"
@@ -139,6 +146,13 @@ mirror-const)
                   zm = j == 1 ? "—" : sprintf("%+.1f", (mm - refm) / sqrt(ms * ms + refms * refms))
                   zr = j == 1 ? "—" : sprintf("%+.1f", (rm - refr) / sqrt(rs * rs + refrs * refrs))
                   printf "| %s | %s | %d | %s | %.4f ± %.4f | %s | %.4f ± %.4f | %s |\n", a[1], a[2], cnt[k], its[k], mm, ms, zm, rm, rs, zr } }' "$o/means.txt"
+    echo
+    echo "MSE against the reference image (the mean of the reference runs; it carries their noise, the same for every row):"
+    echo
+    echo "| method | seconds | MSE per seed | mean |"
+    echo "|---|---|---|---|"
+    awk '{ n = split($1, a, "-"); k = a[1] " " a[2]; if (!(k in c)) o[++m] = k; c[k]++; v[k] = v[k] (v[k] == "" ? "" : ", ") sprintf("%.4g", $2); s[k] += $2 }
+         END { for (i = 1; i <= m; i++) { split(o[i], a, " "); printf "| %s | %s | %s | %.4g |\n", a[1], a[2], v[o[i]], s[o[i]] / c[o[i]] } }' "$o/mse.txt"
     ;;
 *) echo "usage: $0 timings | reference SECONDS | convergence PASSES | mirror [SECONDS] [SEEDS] | mirror-const [REF_SECONDS] [REF_SEEDS] [SEEDS]" >&2; exit 2 ;;
 esac
