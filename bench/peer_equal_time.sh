@@ -17,6 +17,7 @@ peer=${PEER_TUNGSTEN:-}
 noise=${REF_NOISE:-0.0003}
 [ -x "$bin" ] || make build/dartspp >&2
 [ -f "$scene" ] || { echo "$0: no scene $scene" >&2; exit 2; }
+scene_abs=$(cd "$(dirname "$scene")" && pwd)/$(basename "$scene") # the peer runs in the output folder
 [ -f "$ref" ] || { echo "$0: no reference image $ref" >&2; exit 2; }
 if [ -n "$peer" ] && [ ! -x "$peer" ]; then echo "$0: PEER_TUNGSTEN=$peer is not an executable" >&2; exit 2; fi
 stem=$(basename "$scene" .json)
@@ -41,7 +42,7 @@ while [ "$s" -le "$seeds" ]; do
     echo "ours $s $its" >> "$o/runs.txt"
     if [ -n "$peer" ]; then
         (cd "$o" && "$peer" -t "$threads" -s "$s" --timeout "${secs}s" --spp 100000000 -c 0 -r -e "$o/theirs-s$s.pfm" \
-            -o "$o/theirs-s$s.png" "$(cd "$(dirname "$scene")" && pwd)/$(basename "$scene")" > "$o/theirs-s$s.txt" 2>&1) ||
+            -o "$o/theirs-s$s.png" "$scene_abs" > "$o/theirs-s$s.txt" 2>&1) ||
             { tail -5 "$o/theirs-s$s.txt" >&2; exit 1; }
         n=$(grep -c '^Completed [0-9]*/' "$o/theirs-s$s.txt" || true)
         t=$(sed -n 's/^Finished render. Render time \(.*\)$/\1/p' "$o/theirs-s$s.txt" |
@@ -53,11 +54,12 @@ while [ "$s" -le "$seeds" ]; do
     s=$((s + 1))
 done
 
-mse() { "$bin" compare "$1" "$2" | sed -n 's/^mse *\([^ ]*\).*/\1/p'; }
+# the "mse" line of dartspp compare (not "mse / q99^2"): a number after the spaces
+mse() { "$bin" compare "$1" "$2" | sed -n 's/^mse  *\([0-9][^ ]*\).*/\1/p'; }
 echo "| renderer | iterations | s/iteration | photon paths/s | camera rays/s | image mean | seed variance | MSE vs reference | MSE − reference noise |"
 echo "|---|---|---|---|---|---|---|---|---|"
 for who in ours theirs; do
-    grep -q "^$who " "$o/runs.txt" || continue
+    [ "$(grep -c "^$who " "$o/runs.txt")" -eq "$seeds" ] || continue
     its=""; spi=""; pps=""; crs=""; means=""; mses=""; msum=0
     s=1
     while [ "$s" -le "$seeds" ]; do

@@ -32,6 +32,13 @@ vec3 phase_sample(const phase_function *pf, vec3 w_in, double u1, double u2);
  * event and by Tr/P(pass) otherwise. */
 struct medium;
 double medium_sample_free_flight(const struct medium *m, double tmax, dp_rng *rng, vec3 *beta, int *event);
+/* The same sampler before the next surface is known, for a grey medium (equal σt in every channel):
+ * returns t ~ σt e^{−σt t} (INFINITY where σt = 0), drawing what medium_sample_free_flight draws. The caller
+ * traces the ray to t: a surface before t is reached with weight 1, else a medium event at t, where beta
+ * becomes medium_grey_event_beta(m, beta) (σs/σt). 0 when the medium is not grey (then the caller needs
+ * the surface first). */
+int medium_free_flight_grey(const struct medium *m, dp_rng *rng, double *t);
+vec3 medium_grey_event_beta(const struct medium *m, vec3 beta);
 
 #define MEDIUM_VACUUM (-1)
 typedef struct medium {

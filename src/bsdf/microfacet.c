@@ -7,13 +7,13 @@
 double bsdf_mf_alpha(microfacet_distribution d, double roughness)
 {
     (void)d;
-    return fmax(roughness, 1e-3);
+    return dp_fmax(roughness, 1e-3);
 }
 
 double bsdf_mf_D(microfacet_distribution d, double alpha, vec3 m)
 {
     if (m.z <= 0.0) return 0.0;
-    double c2 = m.z * m.z, tan2 = fmax(1.0 - c2, 0.0) / c2, a2 = alpha * alpha;
+    double c2 = m.z * m.z, tan2 = dp_fmax(1.0 - c2, 0.0) / c2, a2 = alpha * alpha;
     double v;
     if (d == MICROFACET_BECKMANN) {
         v = exp(-tan2 / a2) / (M_PI * a2 * c2 * c2); /* Walter eq. 25 */
@@ -28,7 +28,7 @@ double bsdf_mf_D(microfacet_distribution d, double alpha, vec3 m)
 static double tan2_theta(vec3 v)
 {
     double c2 = v.z * v.z;
-    return c2 > 0.0 ? fmax(1.0 - c2, 0.0) / c2 : INFINITY;
+    return c2 > 0.0 ? dp_fmax(1.0 - c2, 0.0) / c2 : INFINITY;
 }
 
 /* Smith Λ of GGX (Heitz 2014, eq. 72): G1 = 1 / (1 + Λ). */
@@ -72,12 +72,12 @@ vec3 bsdf_mf_sample(microfacet_distribution d, double alpha, double u1, double u
     else
         tan2 = alpha * alpha * u1 / (1.0 - u1); /* Walter eq. 35 */
     double c = 1.0 / sqrt(1.0 + tan2);
-    double s = sqrt(fmax(0.0, 1.0 - c * c));
+    double s = sqrt(dp_fmax(0.0, 1.0 - c * c));
     double phi = 2.0 * M_PI * u2;
     return v3(s * cos(phi), s * sin(phi), c);
 }
 
 double bsdf_mf_pdf(microfacet_distribution d, double alpha, vec3 m)
 {
-    return bsdf_mf_D(d, alpha, m) * fmax(m.z, 0.0); /* Walter eq. 24 */
+    return bsdf_mf_D(d, alpha, m) * dp_fmax(m.z, 0.0); /* Walter eq. 24 */
 }

@@ -19,14 +19,14 @@ static double glossy_probability(const bsdf *b, vec3 albedo, vec3 wi)
 {
     double Fi = bsdf_fresnel_dielectric(b->ior, wi.z, NULL);
     double substrate = v3_avg(albedo) * exp(-2.0 * b->thickness * v3_avg(b->sigma_a)) * (1.0 - Fi);
-    double den = Fi + fmax(substrate, 0.0);
+    double den = Fi + dp_fmax(substrate, 0.0);
     return den > 0.0 ? Fi / den : 0.5;
 }
 
 /* R(μ): the coat's directional albedo, Ks·E[f cos θo / pdf] over its sampler (exact in expectation). */
 static double coat_albedo(const bsdf *b, double mu)
 {
-    vec3 wi = v3(sqrt(fmax(0.0, 1.0 - mu * mu)), 0.0, mu);
+    vec3 wi = v3(sqrt(dp_fmax(0.0, 1.0 - mu * mu)), 0.0, mu);
     bsdf_rough_boundary rb = coat_of(b, wi);
     const int n = 64;
     double sum = 0.0;
@@ -42,15 +42,15 @@ static double coat_albedo(const bsdf *b, double mu)
 void bsdf_rough_plastic_prepare(bsdf *b)
 {
     for (int k = 0; k <= 32; k++) {
-        double mu = fmax(k / 32.0, 1e-3);
+        double mu = dp_fmax(k / 32.0, 1e-3);
         double F = bsdf_fresnel_dielectric(b->ior, mu, NULL), R = coat_albedo(b, mu);
-        b->coat_scale[k] = (float)(F < 1.0 ? fmin(1.0, fmax(0.0, 1.0 - R) / (1.0 - F)) : 1.0);
+        b->coat_scale[k] = (float)(F < 1.0 ? dp_fmin(1.0, dp_fmax(0.0, 1.0 - R) / (1.0 - F)) : 1.0);
     }
 }
 
 static double coat_scale(const bsdf *b, double mu)
 {
-    double x = fmin(fmax(mu, 0.0), 1.0) * 32.0;
+    double x = dp_fmin(dp_fmax(mu, 0.0), 1.0) * 32.0;
     int k = (int)x;
     if (k >= 32) return b->coat_scale[32];
     double t = x - k;

@@ -13,7 +13,7 @@ void v3_basis(vec3 n, vec3 *s, vec3 *t)
 vec3 sample_uniform_sphere(double u1, double u2)
 {
     double z = 1.0 - 2.0 * u1;
-    double r = sqrt(fmax(0.0, 1.0 - z * z));
+    double r = sqrt(dp_fmax(0.0, 1.0 - z * z));
     double phi = 2.0 * M_PI * u2;
     return v3(r * cos(phi), r * sin(phi), z);
 }
@@ -22,7 +22,7 @@ vec3 sample_cosine_hemisphere(double u1, double u2)
 {
     double r = sqrt(u1);
     double phi = 2.0 * M_PI * u2;
-    return v3(r * cos(phi), r * sin(phi), sqrt(fmax(0.0, 1.0 - u1)));
+    return v3(r * cos(phi), r * sin(phi), sqrt(dp_fmax(0.0, 1.0 - u1)));
 }
 
 vec3 sample_cosine_about(vec3 n, double u1, double u2)

@@ -14,7 +14,7 @@ static double reach_distance(const ellipse_record *r0, vec3 d)
 /* The defensive technique's interval [0, t_d) and its σ-exponential density. */
 static double defensive_end(const cv_techniques *ct, vec3 d, double tmax)
 {
-    return fmin(tmax, reach_distance(&ct->rec[0], d));
+    return dp_fmin(tmax, reach_distance(&ct->rec[0], d));
 }
 
 static double defensive_pdf(double t_d, double sigma, double t)

@@ -62,7 +62,7 @@ void da_sample_distance(const medium *m, const ellipse_record *r, vec3 d, double
     double t_c[M_CAND], expo[M_CAND], amp[M_CAND];
     int ok[M_CAND], any = 0;
     double p_proj = r->C * v3_dot(d, r->e);                  /* (cam − x)·ω */
-    double perp2 = fmax(0.0, r->C * r->C - p_proj * p_proj); /* squared distance of the camera to the ray */
+    double perp2 = dp_fmax(0.0, r->C * r->C - p_proj * p_proj); /* squared distance of the camera to the ray */
     int row = (int)(rng_uniform(rng) * TABLE_ROWS);
     if (row >= TABLE_ROWS) row = TABLE_ROWS - 1;
     double rot = rng_uniform(rng), expo_max = -INFINITY, amp_max = 0.0;
@@ -83,8 +83,8 @@ void da_sample_distance(const medium *m, const ellipse_record *r, vec3 d, double
         ok[j] = isfinite(expo[j]) && isfinite(amp[j]);
         if (ok[j]) {
             any = 1;
-            expo_max = fmax(expo_max, expo[j]);
-            amp_max = fmax(amp_max, amp[j]);
+            expo_max = dp_fmax(expo_max, expo[j]);
+            amp_max = dp_fmax(amp_max, amp[j]);
         }
     }
     double w[M_CAND], W = 0.0;

@@ -52,8 +52,8 @@ vec3 eda_sample_direction(const eda_table *t, double alpha, const phase_function
     if (u[0] < gamma) {
         int k = cdf_search(cell, t->n_cos, 1.0 - u[1]);
         double c = -1.0 + (k + u[2]) * 2.0 / t->n_cos;
-        c = fmin(1.0, fmax(-1.0, c));
-        double s = sqrt(fmax(0.0, 1.0 - c * c)), phi = 2.0 * M_PI * u[3];
+        c = dp_fmin(1.0, dp_fmax(-1.0, c));
+        double s = sqrt(dp_fmax(0.0, 1.0 - c * c)), phi = 2.0 * M_PI * u[3];
         vec3 b1, b2;
         v3_basis(r->e, &b1, &b2);
         w = v3_norm(v3_add(v3_scale(r->e, c), v3_add(v3_scale(b1, s * cos(phi)), v3_scale(b2, s * sin(phi)))));

@@ -14,7 +14,7 @@
 static double log_integrand(double C, double S, double cos_t, double t, double D, double sigma_t, double sigma_a)
 {
     double s = S - t;
-    double ell2 = fmax(0.0, C * C - 2.0 * C * t * cos_t + t * t);
+    double ell2 = dp_fmax(0.0, C * C - 2.0 * C * t * cos_t + t * t);
     double fourDs = 4.0 * D * s;
     return -sigma_t * t - 1.5 * log(M_PI * fourDs) - ell2 / fourDs - sigma_a * s;
 }

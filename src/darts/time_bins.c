@@ -19,7 +19,7 @@ void darts_guide_init(const render_plan *p, vec3 cam, darts_guide *g)
 
 int darts_sample_bin(const darts_guide *g, vec3 x_light, double u, darts_bin *b)
 {
-    double t_min = fmax(g->beg, g->eta_lb * v3_len(v3_sub(g->cam, x_light)));
+    double t_min = dp_fmax(g->beg, g->eta_lb * v3_len(v3_sub(g->cam, x_light)));
     double range = g->end - t_min;
     if (!(range > 0.0)) return 0;
     if (g->frames == 0) {
@@ -31,7 +31,7 @@ int darts_sample_bin(const darts_guide *g, vec3 x_light, double u, darts_bin *b)
     if (k < 0) k = 0;
     if (k >= g->frames) k = g->frames - 1;
     double start = g->beg + k * g->width, end = k == g->frames - 1 ? g->end : start + g->width;
-    double reach = end - fmax(start, t_min); /* the part of this bin after the earliest arrival */
+    double reach = end - dp_fmax(start, t_min); /* the part of this bin after the earliest arrival */
     if (!(reach > 0.0)) return 0;           /* rounding at a bin edge: probability ~0 */
     *b = (darts_bin){.start = start, .end = end, .pdf = reach / range, .frame = k};
     return 1;

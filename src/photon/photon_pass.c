@@ -129,11 +129,12 @@ static int surface_time_ok(const light_path *lp, vec3 x)
     return t_lb < lp->bin.end + slack && (!lp->g->strict || t_ub >= lp->bin.start - slack);
 }
 
+static int medium_event(light_path *lp, const medium *m, double t, int darts);
+
 /* One medium segment up to tmax: the control vertex (elliptical), then the distance sample. Returns 1 for
  * a medium event (lp advanced to the scattering vertex), 0 for the surface at tmax, -1 to end the path. */
 static int medium_segment(light_path *lp, double tmax)
 {
-    const photon_pass_input *in = lp->in;
     const darts_guide *g = lp->g;
     const medium *m = &lp->s->media[lp->med];
     /* nothing to aim where nothing scatters, or once no volume photon can be stored */
@@ -167,6 +168,31 @@ static int medium_segment(light_path *lp, double tmax)
         t = medium_sample_free_flight(m, tmax, lp->rng, &lp->beta, &event);
     }
     if (!event) return 0;
+    return medium_event(lp, m, t, darts);
+}
+
+/* The plain free-flight segment (no DARTS sampler: the volume budget is full, or DARTS is off) in a grey
+ * medium, with the distance drawn before the ray is traced and the ray traced only that far: the same
+ * draws and the same path as medium_segment, at less traversal. Returns 1 for a medium event (lp advanced,
+ * as medium_segment), 0 with *h the surface before it (*hit), -1 to end the path; 2 when it does not apply
+ * (the caller traces the full ray). */
+static int free_flight_first(light_path *lp, hit_record *h, int *hit)
+{
+    const medium *m = &lp->s->media[lp->med];
+    double t;
+    if ((aims_at_volume(lp) && medium_scatters(m)) || !medium_free_flight_grey(m, lp->rng, &t)) return 2;
+    *hit = scene_intersect(lp->s, lp->o, lp->d, t, h);
+    if (*hit) return 0;
+    if (t == INFINITY) return -1; /* nothing scatters and nothing is hit: the path leaves the scene */
+    lp->beta = medium_grey_event_beta(m, lp->beta);
+    return medium_event(lp, m, t, 0);
+}
+
+/* A medium event at distance t of the current ray: the vertex, a classic photon, the next direction. */
+static int medium_event(light_path *lp, const medium *m, double t, int darts)
+{
+    const photon_pass_input *in = lp->in;
+    const darts_guide *g = lp->g;
     lp->o = v3_add(lp->o, v3_scale(lp->d, t));
     lp->time += m->eta * t;
     lp->bounce++;
@@ -249,12 +275,16 @@ static void trace_light_path(const scene *s, const photon_pass_input *in, int vo
             return;
         }
         hit_record h;
-        int hit = scene_intersect(s, lp.o, lp.d, INFINITY, &h);
-        double tmax = hit ? h.t : INFINITY;
-        if (lp.med != MEDIUM_VACUUM) {
-            int ev = medium_segment(&lp, tmax);
-            if (ev < 0) return;
-            if (ev > 0) continue;
+        int hit = 0, ev = lp.med != MEDIUM_VACUUM ? free_flight_first(&lp, &h, &hit) : 2;
+        if (ev < 0) return;
+        if (ev == 1) continue;
+        if (ev == 2) {
+            hit = scene_intersect(s, lp.o, lp.d, INFINITY, &h);
+            if (lp.med != MEDIUM_VACUUM) {
+                ev = medium_segment(&lp, hit ? h.t : INFINITY);
+                if (ev < 0) return;
+                if (ev > 0) continue;
+            }
         }
         if (!hit) return;
         lp.time += medium_eta(s, lp.med) * h.t;

@@ -199,7 +199,7 @@ static float float_up(double v)
  * for a query whose float rounding is a away from x. */
 static double lower_bound(float df, double a)
 {
-    double e = fmin((double)df, (double)FLT_MAX) / (1.0 + RHO) - TAU;
+    double e = dp_fmin((double)df, (double)FLT_MAX) / (1.0 + RHO) - TAU;
     double s = e > 0.0 ? sqrt(e) - a : 0.0;
     return s > 0.0 ? s * s * (1.0 - 1e-12) : 0.0;
 }

@@ -355,7 +355,7 @@ static beam make_beam(vec3 o, vec3 d, double tmax, double r2)
 {
     beam q;
     double oo[3] = {o.x, o.y, o.z}, dd[3] = {d.x, d.y, d.z}, o_max = 0.0;
-    for (int a = 0; a < 3; a++) o_max = fmax(o_max, fabs(oo[a]));
+    for (int a = 0; a < 3; a++) o_max = dp_fmax(o_max, fabs(oo[a]));
     double pad = PAD_REL * o_max; /* covers the rounding of p - o for origins far from the photons */
     for (int a = 0; a < 3; a++) {
         q.o[a] = oo[a];
@@ -366,7 +366,7 @@ static beam make_beam(vec3 o, vec3 d, double tmax, double r2)
         q.far_shift[a] = q.near_hi[a] ? -oo[a] - pad : -oo[a] + pad;
     }
     q.tmax = tmax;
-    q.t_clip = fmin(tmax, DBL_MAX);
+    q.t_clip = dp_fmin(tmax, DBL_MAX);
     q.r2 = r2;
     return q;
 }
@@ -460,7 +460,7 @@ static double box_dist2(const node_box *b, const double x[3])
 {
     double s = 0.0;
     for (int a = 0; a < 3; a++) {
-        double e = fmax(fmax((double)b->lo[a] - x[a], x[a] - (double)b->hi[a]), 0.0);
+        double e = dp_fmax(dp_fmax((double)b->lo[a] - x[a], x[a] - (double)b->hi[a]), 0.0);
         s += e * e;
     }
     return s;

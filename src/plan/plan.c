@@ -46,8 +46,8 @@ static void resolve_darts(const scene *s, render_plan *p)
     d->da_defensive = in->da_defensive;
     d->eta_lb = d->eta_ub = in->vacuum_eta;
     for (int i = 0; i < s->medium_count; i++) {
-        d->eta_lb = fmin(d->eta_lb, s->media[i].eta);
-        d->eta_ub = fmax(d->eta_ub, s->media[i].eta);
+        d->eta_lb = dp_fmin(d->eta_lb, s->media[i].eta);
+        d->eta_ub = dp_fmax(d->eta_ub, s->media[i].eta);
     }
     d->mirrors = in->darts_mirrors_straight ? DARTS_MIRRORS_STRAIGHT : DARTS_MIRRORS_FULL;
     d->mirror_defensive = in->mirror_defensive;
@@ -68,7 +68,7 @@ static void resolve_camera_side(const scene *s, render_plan *p)
     d->strict_surfaces = 0; /* a camera path behind a continued surface has no upper bound on its leg */
     if (!d->control_vertices) return;
     d->cv_multi = 1;
-    double sum = 1.0, def = fmax(d->side.other_fraction, d->mirror_defensive);
+    double sum = 1.0, def = dp_fmax(d->side.other_fraction, d->mirror_defensive);
     for (int k = 0; k < d->side.mirror_count; k++) sum += d->side.mirror_fraction[k];
     sum += def;
     d->cv_share[0] = 1.0 / sum;

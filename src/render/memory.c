@@ -33,7 +33,7 @@ static int pilot_photons_per_path(const scene *s, const render_plan *p, double *
 {
     photon_pass_input pilot;
     photon_pass_input_init(&pilot, s, p, NULL, 0x70696c6f74ULL, 0, NULL);
-    pilot.light_paths = fmin(p->light_paths, PHOTON_PASS_BATCH);
+    pilot.light_paths = dp_fmin(p->light_paths, PHOTON_PASS_BATCH);
     pilot.volume_budget = pilot.surface_budget = pilot.light_paths * 1e4; /* no budget cut */
     photon_set ps;
     dp_error err;
@@ -62,8 +62,8 @@ void render_memory_estimate(const scene *s, const render_plan *p, int have_refer
     add(m, "EDA tables", "integrator.eda_shape", (double)eda_set_bytes(s, p));
     double V = p->volume_budget, S = p->surface_budget, ph = sizeof(photon), rate_v = 1, rate_s = 1;
     if (pilot_photons_per_path(s, p, &rate_v, &rate_s)) { /* the budgets cap what the light paths store */
-        V = fmin(V, rate_v * p->light_paths);
-        S = fmin(S, rate_s * p->light_paths);
+        V = dp_fmin(V, rate_v * p->light_paths);
+        S = dp_fmin(S, rate_s * p->light_paths);
     }
     /* volume_map_bytes is about (16 + 48) B a photon plus the nodes; in double for huge budgets */
     double per_mapped = (double)volume_map_bytes(1 << 20) / (1 << 20);
@@ -72,7 +72,7 @@ void render_memory_estimate(const scene *s, const render_plan *p, int have_refer
     if (volume) add(m, "primary lines of the sensor pass", "camera.resolution", (double)sensor_pass_bytes(1, 1) * px);
     if (p->include_surfaces || !volume)
         add(m, "surface photons and their map", "integrator.photon_count", S * (ph + per_mapped));
-    add(m, "photon batch buffers", NULL, PHOTON_PASS_BATCH * fmax(rate_v + rate_s, 1.0) * ph);
+    add(m, "photon batch buffers", NULL, PHOTON_PASS_BATCH * dp_fmax(rate_v + rate_s, 1.0) * ph);
 }
 
 const memory_item *memory_largest(const memory_estimate *m)

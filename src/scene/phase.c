@@ -21,14 +21,14 @@ static double hg_sample_mu(double g, double u)
     if (fabs(g) < 1e-3) return 1.0 - 2.0 * u;
     double sq = (1.0 - g * g) / (1.0 + g - 2.0 * g * u);
     double mu = (1.0 + g * g - sq * sq) / (2.0 * g);
-    return fmin(1.0, fmax(-1.0, mu));
+    return dp_fmin(1.0, dp_fmax(-1.0, mu));
 }
 
 vec3 phase_sample(const phase_function *pf, vec3 w_in, double u1, double u2)
 {
     if (pf->type == PHASE_ISOTROPIC || pf->g == 0.0) return sample_uniform_sphere(u1, u2);
     double mu = hg_sample_mu(pf->g, u1);
-    double sin_t = sqrt(fmax(0.0, 1.0 - mu * mu)), phi = 2.0 * M_PI * u2;
+    double sin_t = sqrt(dp_fmax(0.0, 1.0 - mu * mu)), phi = 2.0 * M_PI * u2;
     vec3 s, t;
     v3_basis(w_in, &s, &t);
     return v3_norm(v3_add(v3_scale(w_in, mu), v3_add(v3_scale(s, sin_t * cos(phi)), v3_scale(t, sin_t * sin(phi)))));
