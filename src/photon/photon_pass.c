@@ -62,6 +62,7 @@ typedef struct {
     dp_rng *rng;
     int volume_open;       /* the volume budget still has room (decided per batch, in path order) */
     darts_bin bin;         /* target bin; gate mode: the gate with pdf 1 */
+    darts_bin reach;       /* the bin widened by the surface slack: the early exit's bound */
     ellipse_record rec;    /* of the current vertex (DARTS, in a medium) */
     cv_techniques cvt;     /* g->cv_multi: the records of every focus at the current vertex (cvt.rec[0] = rec) */
     vec3 o, d, beta;
@@ -171,18 +172,37 @@ static int medium_segment(light_path *lp, double tmax)
     return medium_event(lp, m, t, darts);
 }
 
+/* DARTS early exit along the current ray: the distance h past which a vertex at o + h·d could no longer
+ * reach the bin, τ + η·h + η·|o + h·d − cam| = end (the bound darts_can_reach tests at each vertex), when
+ * the segment's η is the scene's least (then the left side grows with h and this is linear in h);
+ * INFINITY where there is no early exit. */
+static double reach_distance(const light_path *lp, double eta)
+{
+    const darts_guide *g = lp->g;
+    if (!g->active || !g->early_exit || eta != g->eta_lb) return INFINITY;
+    vec3 w = v3_sub(lp->o, g->cam);
+    double E = lp->reach.end - lp->time, a = v3_dot(lp->d, w), c = v3_dot(w, w);
+    double den = 2.0 * eta * (E + eta * a); /* > 0 while the vertex itself can reach: E > η|w| >= −η·a */
+    return den > 0.0 ? (E * E - eta * eta * c) / den : 0.0;
+}
+
 /* The plain free-flight segment (no DARTS sampler: the volume budget is full, or DARTS is off) in a grey
- * medium, with the distance drawn before the ray is traced and the ray traced only that far: the same
- * draws and the same path as medium_segment, at less traversal. Returns 1 for a medium event (lp advanced,
- * as medium_segment), 0 with *h the surface before it (*hit), -1 to end the path; 2 when it does not apply
- * (the caller traces the full ray). */
+ * medium, with the distance drawn before the ray is traced and the ray traced only that far, and no
+ * farther than the early exit's reach: the same draws and the same photons as medium_segment, at less
+ * traversal. Returns 1 for a medium event (lp advanced, as medium_segment), 0 with *h the surface before
+ * it (*hit), -1 to end the path; 2 when it does not apply (the caller traces the full ray). */
 static int free_flight_first(light_path *lp, hit_record *h, int *hit)
 {
     const medium *m = &lp->s->media[lp->med];
     double t;
     if ((aims_at_volume(lp) && medium_scatters(m)) || !medium_free_flight_grey(m, lp->rng, &t)) return 2;
-    *hit = scene_intersect(lp->s, lp->o, lp->d, t, h);
+    double reach = reach_distance(lp, m->eta);
+    *hit = scene_intersect(lp->s, lp->o, lp->d, t < reach ? t : reach, h);
     if (*hit) return 0;
+    if (reach <= t) { /* the next vertex, surface or medium, is out of reach */
+        lp->pc->early_exit = 1;
+        return -1;
+    }
     if (t == INFINITY) return -1; /* nothing scatters and nothing is hit: the path leaves the scene */
     lp->beta = medium_grey_event_beta(m, lp->beta);
     return medium_event(lp, m, t, 0);
@@ -263,14 +283,14 @@ static void trace_light_path(const scene *s, const photon_pass_input *in, int vo
                      .volume_open = volume_open,
                      .bin = {.start = -INFINITY, .end = INFINITY, .pdf = 1.0, .frame = -1}};
     if (g->active && !darts_sample_bin(g, L->pos, rng_uniform(rng), &lp.bin)) return;
-    darts_bin reach = lp.bin; /* the early exit keeps every path whose surface photons could still count */
-    reach.end += in->surface_slack;
+    lp.reach = lp.bin; /* the early exit keeps every path whose surface photons could still count */
+    lp.reach.end += in->surface_slack;
     double u1 = rng_uniform(rng), u2 = rng_uniform(rng);
     lp.d = sample_uniform_sphere(u1, u2);
     lp.beta = v3_scale(L->intensity, 4.0 * M_PI * s->light_count);
     new_vertex(&lp);
     while (lp.bounce + 1 < in->max_bounces && lp.time < in->t_end && !v3_is_zero(lp.beta)) {
-        if (g->active && g->early_exit && !darts_can_reach(g, &reach, lp.o, lp.time)) {
+        if (g->active && g->early_exit && !darts_can_reach(g, &lp.reach, lp.o, lp.time)) {
             pc->early_exit = 1;
             return;
         }
