@@ -46,5 +46,8 @@ void primary_line_gather_beam(const scene *s, const gather_input *g, film_pixel 
  * segments. Both gathers (beam queries and the splat) use it. */
 void volume_photon_splat(const gather_input *g, film_pixel *pix, const medium *m, vec3 o, vec3 d, vec3 thr,
                          double t_cam, int b_cam, const photon *p, double t, double d2);
+/* Its second half, once the bounce count and the path time (counted by the film) are known. */
+void volume_photon_splat_timed(const gather_input *g, film_pixel *pix, const medium *m, vec3 d, vec3 thr,
+                               const photon *p, double t, double d2, double time);
 
 #endif

@@ -31,6 +31,12 @@ void volume_photon_splat(const gather_input *g, film_pixel *pix, const medium *m
     double leg = g->camera_leg_projected ? t : v3_len(v3_sub(photon_vec(p->pos), o));
     double time = t_cam + p->time + m->eta * leg;
     if (!film_counts_time(pix->f, time, p->frame)) return; /* before the kernel, phase and exponentials */
+    volume_photon_splat_timed(g, pix, m, d, thr, p, t, d2, time);
+}
+
+void volume_photon_splat_timed(const gather_input *g, film_pixel *pix, const medium *m, vec3 d, vec3 thr,
+                               const photon *p, double t, double d2, double time)
+{
     double r2 = g->r_vol * g->r_vol;
     double u = 1.0 - d2 / r2;
     double K = 3.0 / (M_PI * r2) * u * u;

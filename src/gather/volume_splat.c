@@ -129,9 +129,30 @@ static int tile_bins_build(tile_bins *b, const camera *c, const photon *ph, size
     return 0;
 }
 
+/* What a photon's estimate on a line segment that starts at the camera does not owe to the pixel: with
+ * the Euclidean camera leg, the leg |x − camera| and so the path time and whether the film counts it
+ * (volume_photon_splat, computed the same way: the segment origin is the camera itself). */
+typedef struct {
+    int valid;   /* the camera sits in a medium and the leg is Euclidean */
+    int counts;  /* the bounce count and the time are counted */
+    double time;
+} camera_leg_time;
+
+static camera_leg_time photon_camera_time(const scene *s, const gather_input *g, const film *f, const photon *p)
+{
+    camera_leg_time c = {0};
+    if (s->cam.medium == MEDIUM_VACUUM || g->camera_leg_projected) return c;
+    vec3 x = v3(p->pos[0], p->pos[1], p->pos[2]);
+    double leg = v3_len(v3_sub(x, s->cam.pos));
+    c.valid = 1;
+    c.time = 0.0 + p->time + s->media[s->cam.medium].eta * leg;
+    c.counts = bounces_count(&g->bounces, p->bounce + 1) && film_counts_time(f, c.time, p->frame);
+    return c;
+}
+
 /* Photon p against one pixel's line: the segment holding its projection, if within r (the beam test). */
 static void splat_photon_on_line(const scene *s, const gather_input *g, film_pixel *pix, const primary_line *L,
-                                 const photon *p, vec3 w)
+                                 const photon *p, vec3 w, const camera_leg_time *ct)
 {
     double t = w.x * L->d[0] + w.y * L->d[1] + w.z * L->d[2];
     double vx = w.x - t * L->d[0], vy = w.y - t * L->d[1], vz = w.z - t * L->d[2];
@@ -141,6 +162,12 @@ static void splat_photon_on_line(const scene *s, const gather_input *g, film_pix
         const line_segment *sg = &L->seg[k];
         if (t < sg->t0 || t > sg->t1) continue;
         vec3 d = v3(L->d[0], L->d[1], L->d[2]);
+        if (ct->valid && sg->t0 == 0.0 && sg->t_cam == 0.0 && sg->medium == s->cam.medium) { /* from the camera */
+            if (ct->counts)
+                volume_photon_splat_timed(g, pix, &s->media[sg->medium], d, v3(sg->thr[0], sg->thr[1], sg->thr[2]), p,
+                                          t, d2, ct->time);
+            return;
+        }
         vec3 o = v3_add(s->cam.pos, v3_scale(d, sg->t0));
         volume_photon_splat(g, pix, &s->media[sg->medium], o, d, v3(sg->thr[0], sg->thr[1], sg->thr[2]), sg->t_cam, 1,
                             p, t - sg->t0, d2);
@@ -159,6 +186,7 @@ static void splat_tile(const scene *s, const gather_input *g, film *f, const pri
         const photon *p = &g->vol_photons[i];
         const footprint *fp = &b->fp[i];
         vec3 w = v3_sub(v3(p->pos[0], p->pos[1], p->pos[2]), c->pos);
+        camera_leg_time ct = photon_camera_time(s, g, f, p);
         int x0 = fp->x0 > X0 ? fp->x0 : X0, x1 = fp->x1 < X1 ? fp->x1 : X1;
         int y0 = fp->y0 > Y0 ? fp->y0 : Y0, y1 = fp->y1 < Y1 ? fp->y1 : Y1;
         for (int y = y0; y <= y1; y++)
@@ -166,7 +194,7 @@ static void splat_tile(const scene *s, const gather_input *g, film *f, const pri
                 size_t px = (size_t)y * c->width + x;
                 if (lines[px].n == 0) continue;
                 film_pixel pix = {.f = f, .px = px};
-                splat_photon_on_line(s, g, &pix, &lines[px], p, w);
+                splat_photon_on_line(s, g, &pix, &lines[px], p, w, &ct);
                 *nonfinite += pix.nonfinite;
             }
     }
