@@ -25,6 +25,56 @@ typedef struct {
 
 int film_init(film *f, int width, int height, const time_window *tw, dp_error *err);
 void film_free(film *f);
+/* Where a contribution arriving at path time t (tagged with frame, as film_splat) lands: decided once, so
+ * that an estimator adding many contributions of one time (a photon splatted into many pixels) divides
+ * once. */
+typedef struct {
+    int counts;        /* inside the window (and in its frame, for a frame-tagged one) */
+    int gated;
+    double wg;         /* gate image weight 1/(width · frames) */
+    double wf;         /* frame weight 1/width */
+    long k;            /* frame index, or -1 without frames */
+} film_slot;
+
+static inline film_slot film_time_slot(const film *f, double t, int frame)
+{
+    const time_window *tw = &f->window;
+    film_slot s = {.counts = 1, .gated = tw->gated, .k = -1};
+    if (!tw->gated) return s;
+    double rel = (t - tw->start) / tw->width;
+    int frames = tw->frame_count > 0 ? tw->frame_count : 1;
+    s.counts = rel >= 0.0 && rel < frames && (frame < 0 || (int)rel == frame); /* frame: DESIGN §5.22 */
+    if (!s.counts) return s;
+    s.wg = 1.0 / (tw->width * frames);
+    s.wf = 1.0 / tw->width;
+    if (tw->frame_count > 0) {
+        size_t k = (size_t)rel;
+        s.k = k >= (size_t)tw->frame_count ? tw->frame_count - 1 : (long)k;
+    }
+    return s;
+}
+
+/* Adds a finite c to pixel px in a slot that counts (not thread-safe for one pixel). */
+static inline void film_slot_add(film *f, size_t px, const film_slot *s, vec3 c)
+{
+    double *p = &f->pass[3 * px];
+    if (!s->gated) {
+        p[0] += c.x;
+        p[1] += c.y;
+        p[2] += c.z;
+        return;
+    }
+    p[0] += c.x * s->wg;
+    p[1] += c.y * s->wg;
+    p[2] += c.z * s->wg;
+    if (s->k >= 0) {
+        float *fs = &f->frame_pass[3 * ((size_t)f->width * f->height * (size_t)s->k + px)];
+        fs[0] += (float)(c.x * s->wf);
+        fs[1] += (float)(c.y * s->wf);
+        fs[2] += (float)(c.z * s->wf);
+    }
+}
+
 /* Adds contribution c arriving at path time t to pixel index px (not thread-safe for one pixel).
  * frame >= 0 (DARTS frame mode): c counts only if t falls in that frame, in the frames and the gate image.
  * Returns 0 when c was non-finite and was dropped (the caller counts it). */
@@ -48,15 +98,7 @@ typedef struct {
 
 /* Whether a contribution at path time t (tagged with frame, as film_splat) would be counted: estimators test
  * this first and skip the work of one that falls outside the window. */
-static inline int film_counts_time(const film *f, double t, int frame)
-{
-    const time_window *tw = &f->window;
-    if (!tw->gated) return 1;
-    double rel = (t - tw->start) / tw->width;
-    int frames = tw->frame_count > 0 ? tw->frame_count : 1;
-    if (!(rel >= 0.0 && rel < frames)) return 0;
-    return frame < 0 || (int)rel == frame;
-}
+static inline int film_counts_time(const film *f, double t, int frame) { return film_time_slot(f, t, frame).counts; }
 
 /* Adds a contribution arriving at path time t to the pixel (frame: as film_splat), counting a non-finite one. */
 static inline void film_pixel_splat(film_pixel *p, double t, vec3 c, int frame)

@@ -37,31 +37,8 @@ void film_free(film *f)
 int film_splat(film *f, size_t px, double t, vec3 c, int frame)
 {
     if (!v3_is_finite(c)) return 0;
-    const time_window *tw = &f->window;
-    double *s = &f->pass[3 * px];
-    if (!tw->gated) {
-        s[0] += c.x;
-        s[1] += c.y;
-        s[2] += c.z;
-        return 1;
-    }
-    double rel = (t - tw->start) / tw->width;
-    int frames = tw->frame_count > 0 ? tw->frame_count : 1;
-    if (!(rel >= 0.0 && rel < frames)) return 1;
-    if (frame >= 0 && (int)rel != frame) return 1; /* aimed at another frame (DESIGN §5.22) */
-    double wg = 1.0 / (tw->width * frames);
-    s[0] += c.x * wg;
-    s[1] += c.y * wg;
-    s[2] += c.z * wg;
-    if (tw->frame_count > 0) {
-        size_t k = (size_t)rel;
-        if (k >= (size_t)tw->frame_count) k = (size_t)tw->frame_count - 1;
-        float *fs = &f->frame_pass[3 * ((size_t)f->width * f->height * k + px)];
-        double wf = 1.0 / tw->width;
-        fs[0] += (float)(c.x * wf);
-        fs[1] += (float)(c.y * wf);
-        fs[2] += (float)(c.z * wf);
-    }
+    film_slot s = film_time_slot(f, t, frame);
+    if (s.counts) film_slot_add(f, px, &s, c);
     return 1;
 }
 

@@ -46,8 +46,22 @@ void primary_line_gather_beam(const scene *s, const gather_input *g, film_pixel 
  * segments. Both gathers (beam queries and the splat) use it. */
 void volume_photon_splat(const gather_input *g, film_pixel *pix, const medium *m, vec3 o, vec3 d, vec3 thr,
                          double t_cam, int b_cam, const photon *p, double t, double d2);
-/* Its second half, once the bounce count and the path time (counted by the film) are known. */
-void volume_photon_splat_timed(const gather_input *g, film_pixel *pix, const medium *m, vec3 d, vec3 thr,
-                               const photon *p, double t, double d2, double time);
+/* Its second half, once the bounce count is checked and the film slot of the path time is known to
+ * count: inline, as the splat calls it for every pixel a photon covers. */
+static inline void volume_photon_splat_slot(const gather_input *g, film_pixel *pix, const medium *m, vec3 d, vec3 thr,
+                                            const photon *p, double t, double d2, const film_slot *slot)
+{
+    double r2 = g->r_vol * g->r_vol;
+    double u = 1.0 - d2 / r2;
+    double K = 3.0 / (M_PI * r2) * u * u;
+    vec3 wp = v3(p->dir[0], p->dir[1], p->dir[2]);
+    double f = K * (m->phase.type == PHASE_ISOTROPIC || m->phase.g == 0.0 ? DP_INV_4PI : phase_eval(&m->phase, wp, v3_neg(d)));
+    vec3 tr = m->sigma_t.x == m->sigma_t.y && m->sigma_t.y == m->sigma_t.z ? v3s(exp(-m->sigma_t.x * t))
+                                                                            : v3_exp_neg(v3_scale(m->sigma_t, t));
+    vec3 c = v3_scale(v3_mul(v3_mul(thr, tr), v3(p->power[0], p->power[1], p->power[2])), f);
+    if (v3_is_zero(c)) return;
+    if (!v3_is_finite(c)) pix->nonfinite++;
+    else film_slot_add(pix->f, pix->px, slot, c);
+}
 
 #endif

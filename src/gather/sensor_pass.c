@@ -29,21 +29,8 @@ void volume_photon_splat(const gather_input *g, film_pixel *pix, const medium *m
 {
     if (!bounces_count(&g->bounces, p->bounce + b_cam)) return;
     double leg = g->camera_leg_projected ? t : v3_len(v3_sub(photon_vec(p->pos), o));
-    double time = t_cam + p->time + m->eta * leg;
-    if (!film_counts_time(pix->f, time, p->frame)) return; /* before the kernel, phase and exponentials */
-    volume_photon_splat_timed(g, pix, m, d, thr, p, t, d2, time);
-}
-
-void volume_photon_splat_timed(const gather_input *g, film_pixel *pix, const medium *m, vec3 d, vec3 thr,
-                               const photon *p, double t, double d2, double time)
-{
-    double r2 = g->r_vol * g->r_vol;
-    double u = 1.0 - d2 / r2;
-    double K = 3.0 / (M_PI * r2) * u * u;
-    double f = K * phase_eval(&m->phase, photon_vec(p->dir), v3_neg(d));
-    vec3 tr = m->sigma_t.x == m->sigma_t.y && m->sigma_t.y == m->sigma_t.z ? v3s(exp(-m->sigma_t.x * t))
-                                                                            : v3_exp_neg(v3_scale(m->sigma_t, t));
-    film_pixel_splat(pix, time, v3_scale(v3_mul(v3_mul(thr, tr), photon_vec(p->power)), f), p->frame);
+    film_slot slot = film_time_slot(pix->f, t_cam + p->time + m->eta * leg, p->frame);
+    if (slot.counts) volume_photon_splat_slot(g, pix, m, d, thr, p, t, d2, &slot); /* before the kernel and exp */
 }
 
 static void visit_volume_photon(void *ctx, const photon *p, double t, double d2)

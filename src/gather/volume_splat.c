@@ -133,9 +133,8 @@ static int tile_bins_build(tile_bins *b, const camera *c, const photon *ph, size
  * the Euclidean camera leg, the leg |x − camera| and so the path time and whether the film counts it
  * (volume_photon_splat, computed the same way: the segment origin is the camera itself). */
 typedef struct {
-    int valid;   /* the camera sits in a medium and the leg is Euclidean */
-    int counts;  /* the bounce count and the time are counted */
-    double time;
+    int valid;        /* the camera sits in a medium and the leg is Euclidean */
+    film_slot slot;   /* slot.counts: the bounce count and the path time are counted */
 } camera_leg_time;
 
 static camera_leg_time photon_camera_time(const scene *s, const gather_input *g, const film *f, const photon *p)
@@ -145,8 +144,8 @@ static camera_leg_time photon_camera_time(const scene *s, const gather_input *g,
     vec3 x = v3(p->pos[0], p->pos[1], p->pos[2]);
     double leg = v3_len(v3_sub(x, s->cam.pos));
     c.valid = 1;
-    c.time = 0.0 + p->time + s->media[s->cam.medium].eta * leg;
-    c.counts = bounces_count(&g->bounces, p->bounce + 1) && film_counts_time(f, c.time, p->frame);
+    c.slot = film_time_slot(f, 0.0 + p->time + s->media[s->cam.medium].eta * leg, p->frame);
+    c.slot.counts = c.slot.counts && bounces_count(&g->bounces, p->bounce + 1);
     return c;
 }
 
@@ -163,9 +162,9 @@ static void splat_photon_on_line(const scene *s, const gather_input *g, film_pix
         if (t < sg->t0 || t > sg->t1) continue;
         vec3 d = v3(L->d[0], L->d[1], L->d[2]);
         if (ct->valid && sg->t0 == 0.0 && sg->t_cam == 0.0 && sg->medium == s->cam.medium) { /* from the camera */
-            if (ct->counts)
-                volume_photon_splat_timed(g, pix, &s->media[sg->medium], d, v3(sg->thr[0], sg->thr[1], sg->thr[2]), p,
-                                          t, d2, ct->time);
+            if (ct->slot.counts)
+                volume_photon_splat_slot(g, pix, &s->media[sg->medium], d, v3(sg->thr[0], sg->thr[1], sg->thr[2]), p,
+                                         t, d2, &ct->slot);
             return;
         }
         vec3 o = v3_add(s->cam.pos, v3_scale(d, sg->t0));
