@@ -6,10 +6,12 @@
 # For each renderer: iterations, s/iteration, photon paths/s, camera rays/s (both per run), the image mean,
 # the seed variance (half the mean MSE between two seeds' images) and the MSE of each run against the
 # reference, and that MSE minus the reference's own noise (REF_NOISE, default 0.0003: see
-# ../shared/references/README.md). Without PEER_TUNGSTEN it runs dartspp alone and says so.
+# ../shared/references/README.md). Without PEER_TUNGSTEN it runs dartspp alone and says so. REFERENCE
+# "none" (a scene without an unbiased reference, e.g. the dragon) leaves the MSE columns out.
 # Seeds are 1..SEEDS for both (seed 99 made the authors' 40-minute image; use other seeds against it).
 # Our extra options go in DARTSPP_ARGS (e.g. "--set volume_gather=beam"). Output: out/peer/<stem>-<s>s<TAG>/
-# (TAG from PEER_TAG, so that variants do not overwrite each other).
+# (TAG from PEER_TAG, so that variants do not overwrite each other). PEER_TABLE_ONLY=1 prints the table of
+# an earlier run in that folder again without rendering.
 set -eu
 scene=${1:?scene file}; secs=${2:-90}; seeds=${3:-3}; ref=${4:?reference image}; threads=${5:-2}
 bin=${DARTSPP:-build/dartspp}
@@ -18,11 +20,17 @@ noise=${REF_NOISE:-0.0003}
 [ -x "$bin" ] || make build/dartspp >&2
 [ -f "$scene" ] || { echo "$0: no scene $scene" >&2; exit 2; }
 scene_abs=$(cd "$(dirname "$scene")" && pwd)/$(basename "$scene") # the peer runs in the output folder
-[ -f "$ref" ] || { echo "$0: no reference image $ref" >&2; exit 2; }
+[ "$ref" = none ] || [ -f "$ref" ] || { echo "$0: no reference image $ref" >&2; exit 2; }
 if [ -n "$peer" ] && [ ! -x "$peer" ]; then echo "$0: PEER_TUNGSTEN=$peer is not an executable" >&2; exit 2; fi
 stem=$(basename "$scene" .json)
 o=out/peer/$stem-${secs}s${PEER_TAG:-}
-rm -rf "$o" && mkdir -p "$o" && o=$(cd "$o" && pwd) # absolute: the peer resolves paths against its scene
+if [ -n "${PEER_TABLE_ONLY:-}" ]; then
+    [ -f "$o/runs.txt" ] || { echo "$0: no earlier run in $o" >&2; exit 2; }
+else
+    rm -rf "$o" && mkdir -p "$o"
+fi
+o=$(cd "$o" && pwd) # absolute: the peer resolves paths against its scene
+rm -f "$o/summary.txt"
 # image size and photon paths per iteration, from the scene file
 wh=$(python3 -c "import json,sys; d=json.load(open(sys.argv[1])); r=d['camera']['resolution']; r=r if isinstance(r,list) else [r,r]; print(r[0], r[1], int(d['integrator'].get('photon_count', 0)))" "$scene")
 w=${wh%% *}; rest=${wh#* }; h=${rest%% *}; paths=${rest#* }
@@ -34,6 +42,7 @@ echo "dartspp options: ${DARTSPP_ARGS:-(the scene file as it is)}"
 echo
 
 s=1
+[ -z "${PEER_TABLE_ONLY:-}" ] || s=$((seeds + 1))
 while [ "$s" -le "$seeds" ]; do
     # shellcheck disable=SC2086
     "$bin" render "$scene" --threads "$threads" --seed "$s" --time "$secs" ${DARTSPP_ARGS:-} --output "$o/ours-s$s.pfm" \
@@ -70,9 +79,11 @@ for who in ours theirs; do
         pps="$pps${pps:+, }$(awk -v n="$n" -v t="$t" -v p="$paths" 'BEGIN { printf "%.2fM", n * p / t / 1e6 }')"
         crs="$crs${crs:+, }$(awk -v n="$n" -v t="$t" -v w="$w" -v h="$h" 'BEGIN { printf "%.2fM", n * w * h / t / 1e6 }')"
         means="$means${means:+, }$("$bin" patch-mean "$o/$who-s$s.pfm" 0 0 "$w" "$h" | awk '{ printf "%.4f", $1 }')"
-        m=$(mse "$o/$who-s$s.pfm" "$ref")
-        mses="$mses${mses:+, }$(awk -v m="$m" 'BEGIN { printf "%.4g", m }')"
-        msum=$(awk -v a="$msum" -v m="$m" 'BEGIN { print a + m }')
+        if [ "$ref" != none ]; then
+            m=$(mse "$o/$who-s$s.pfm" "$ref")
+            mses="$mses${mses:+, }$(awk -v m="$m" 'BEGIN { printf "%.4g", m }')"
+            msum=$(awk -v a="$msum" -v m="$m" 'BEGIN { print a + m }')
+        fi
         s=$((s + 1))
     done
     var=$(s=1; while [ "$s" -le "$seeds" ]; do k=$((s + 1)); while [ "$k" -le "$seeds" ]; do
@@ -81,9 +92,15 @@ for who in ours theirs; do
     mean_mse=$(awk -v a="$msum" -v n="$seeds" 'BEGIN { printf "%.4g", a / n }')
     net=$(awk -v a="$msum" -v n="$seeds" -v z="$noise" 'BEGIN { printf "%.4g", a / n - z }')
     name=$([ "$who" = ours ] && echo "dartspp" || echo "authors' renderer")
-    echo "| $name | $its | $spi | $pps | $crs | $means | $var | $mses (mean $mean_mse) | $net |"
+    if [ "$ref" = none ]; then mse_cols="— | —"; else mse_cols="$mses (mean $mean_mse) | $net"; fi
+    echo "| $name | $its | $spi | $pps | $crs | $means | $var | $mse_cols |"
+    echo "$who $mean_mse $net $var" >> "$o/summary.txt"
 done
 if grep -q '^theirs ' "$o/runs.txt"; then
     awk '$1 == "ours" { o += $3; to += $4 } $1 == "theirs" { t += $3; tt += $4 }
          END { printf "\niterations per second, ours ÷ theirs: %.2f\n", (o / to) / (t / tt) }' "$o/runs.txt"
+    awk -v none="$([ "$ref" = none ] && echo 1 || echo 0)" '{ m[$1] = $2; n[$1] = $3; v[$1] = $4 }
+         END { if (("ours" in v) && ("theirs" in v) && v["ours"] > 0) printf "seed variance, theirs ÷ ours: %.2f\n", v["theirs"] / v["ours"]
+               if (!none && ("ours" in m) && ("theirs" in m) && m["ours"] > 0 && n["ours"] > 0)
+                   printf "MSE, theirs ÷ ours: %.2f (minus the reference noise: %.2f)\n", m["theirs"] / m["ours"], n["theirs"] / n["ours"] }' "$o/summary.txt"
 fi

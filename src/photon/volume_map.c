@@ -460,7 +460,9 @@ static double box_dist2(const node_box *b, const double x[3])
 {
     double s = 0.0;
     for (int a = 0; a < 3; a++) {
-        double e = dp_fmax(dp_fmax((double)b->lo[a] - x[a], x[a] - (double)b->hi[a]), 0.0);
+        double lo = (double)b->lo[a] - x[a], hi = x[a] - (double)b->hi[a]; /* x is finite: no NaN rule needed */
+        double e = lo > hi ? lo : hi;
+        e = e > 0.0 ? e : 0.0;
         s += e * e;
     }
     return s;
