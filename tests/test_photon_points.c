@@ -227,6 +227,17 @@ static void box_scene_text(char *text, size_t len, int res, const char *integrat
     box_scene_text_cam(text, len, res, integrator, 0.3, 1);
 }
 
+/* The box's fog made grey (σs 0.45, σa 0.05 in every channel; σt as the coloured fog's green-ish mean), in
+ * place: the photon pass traces free flight distance-first only in grey media (free_flight_first). */
+static void box_scene_make_grey(char *text)
+{
+    char *a = strstr(text, "[0.45, 0.4, 0.5]"), *b = strstr(text, "[0.05, 0.08, 0.03]");
+    assert_non_null(a);
+    assert_non_null(b);
+    memcpy(a, "[0.45,0.45,0.45]", 16);
+    memcpy(b, "[0.05, 0.05, 0.05]", 18);
+}
+
 /* ---------------------------------------------------------------------------------------------------- */
 /* 1. radius schedule                                                                                    */
 
@@ -451,10 +462,11 @@ static double surface_power_total(const photon_set *p)
  * budget that fills in the first batch of 8192 paths (the other 24576 take the fast path). Per iteration,
  * the difference of their surface totals comes only from those paths; over 48 iterations its mean must be
  * within 4 standard errors of 0. The pairing makes it sharp: the standard error is ~0.15 % of the total, so
- * a fast path that weighted each scattering event 1 % too high gives z ~ 2, and 3 % fails. */
-static void test_surface_photons_after_volume_budget_full(void **state)
+ * a fast path that weighted each scattering event 1 % too high gives z ~ 2, and 3 % fails. In the grey
+ * fog the fast path draws the distance before tracing (free_flight_first); without its σs/σt weight at a
+ * medium event (albedo 0.9) it fails. */
+static void surface_photons_after_budget(int grey)
 {
-    (void)state;
     char text[8192];
     box_scene_text(text, sizeof text, 16,
                    "\"type\": \"progressive_transient_photon_map\", \"volume_photon_type\": \"points\","
@@ -462,6 +474,7 @@ static void test_surface_photons_after_volume_budget_full(void **state)
                    " \"gather_radius\": 0.15, \"volume_gather_radius\": 0.08, \"max_bounces\": 12,"
                    " \"transient_time_center\": 4.5, \"transient_time_width\": 0.5, \"enable_guiding\": true,"
                    " \"enable_elliptical\": true, \"strict_time_width\": true");
+    if (grey) box_scene_make_grey(text);
     tmp_scene t;
     tmp_scene_write(&t, text);
     scene sa, sb;
@@ -492,13 +505,84 @@ static void test_surface_photons_after_volume_budget_full(void **state)
     }
     for (int i = 0; i < ITERS; i++) var += (diff[i] - mean) * (diff[i] - mean) / (ITERS - 1);
     double se = sqrt(var / ITERS);
-    print_message("  surface total %.5g; fast minus aimed %.3g (se %.2g, z = %.2f) over %ld fast paths\n", total_a, mean,
-                  se, mean / se, fast_paths);
+    print_message("  %s fog: surface total %.5g; fast minus aimed %.3g (se %.2g, z = %.2f) over %ld fast paths\n",
+                  grey ? "grey" : "coloured", total_a, mean, se, mean / se, fast_paths);
     assert_true(se > 0.0);
     assert_true(se < 0.05 * total_a); /* the comparison can see a bias of a few percent */
     assert_true(fabs(mean) < 4.0 * se);
     scene_free(&sa);
     scene_free(&sb);
+    tmp_scene_remove(&t);
+}
+
+static void test_surface_photons_after_volume_budget_full(void **state)
+{
+    (void)state;
+    surface_photons_after_budget(0);
+}
+
+static void test_surface_photons_after_volume_budget_full_grey(void **state)
+{
+    (void)state;
+    surface_photons_after_budget(1);
+}
+
+/* The DARTS early exit ends a light path once no later vertex can reach its bin, and the fast path stops
+ * a free-flight ray where a vertex would no longer reach it (photon_pass.c, reach_distance). Neither may
+ * lose a photon: every stored photon passed the same reachability test at its own vertex, and by the
+ * triangle inequality so did every vertex before it. So with the early exit on and off, the same seeds
+ * must store exactly the same photons — same positions, times and powers, in the same order — while the
+ * early exit ends most paths. Grey fog, so that the reach applies. A reach cut 20 % short loses photons
+ * and fails here. */
+static int photons_equal(const photon *a, const photon *b) /* field by field: the padding is not set */
+{
+    return !memcmp(a->pos, b->pos, sizeof a->pos) && !memcmp(a->dir, b->dir, sizeof a->dir) &&
+           !memcmp(a->power, b->power, sizeof a->power) && a->bounce == b->bounce && a->frame == b->frame &&
+           a->time == b->time;
+}
+
+static void test_early_exit_keeps_every_photon(void **state)
+{
+    (void)state;
+    char text[8192];
+    box_scene_text(text, sizeof text, 16,
+                   "\"type\": \"progressive_transient_photon_map\", \"volume_photon_type\": \"points\","
+                   " \"photon_count\": 32768, \"volume_photon_count\": 2000, \"gather_photon_count\": 16,"
+                   " \"gather_radius\": 0.15, \"volume_gather_radius\": 0.08, \"max_bounces\": 40,"
+                   " \"transient_time_center\": 4.5, \"transient_time_width\": 0.5, \"enable_guiding\": true,"
+                   " \"enable_elliptical\": true, \"strict_time_width\": true");
+    box_scene_make_grey(text);
+    tmp_scene t;
+    tmp_scene_write(&t, text);
+    scene son, soff;
+    load_scene(t.path, NULL, 0, &son);
+    const char *sets[] = {"early_exit=false"};
+    load_scene(t.path, sets, 1, &soff);
+    long exits = 0, paths = 0;
+    size_t surf = 0;
+    for (int i = 0; i < 3; i++) {
+        dp_error err;
+        photon_set a, b;
+        if (run_photon_pass(&son, 5, i, 0.05, &a, &err) || run_photon_pass(&soff, 5, i, 0.05, &b, &err))
+            fail_msg("%s", err.msg);
+        assert_int_equal(a.paths, b.paths);
+        assert_int_equal(b.early_exits, 0);
+        assert_int_equal(a.n_surf, b.n_surf);
+        assert_int_equal(a.n_vol, b.n_vol);
+        for (size_t k = 0; k < a.n_surf; k++) assert_true(photons_equal(&a.surf[k], &b.surf[k]));
+        for (size_t k = 0; k < a.n_vol; k++) assert_true(photons_equal(&a.vol[k], &b.vol[k]));
+        exits += a.early_exits;
+        paths += a.paths;
+        surf += a.n_surf;
+        photon_set_free(&a);
+        photon_set_free(&b);
+    }
+    print_message("  %zu surface photons, the same with and without the early exit, which ended %.1f %% of %ld paths\n",
+                  surf, 100.0 * exits / paths, paths);
+    assert_true(surf > 1000);
+    assert_true(exits > paths / 2); /* the early exit and its reach were exercised */
+    scene_free(&son);
+    scene_free(&soff);
     tmp_scene_remove(&t);
 }
 
@@ -1382,6 +1466,8 @@ int main(void)
         cmocka_unit_test(test_radius_schedule_used_by_integrator),
         cmocka_unit_test(test_threads_bit_identical),
         cmocka_unit_test(test_surface_photons_after_volume_budget_full),
+        cmocka_unit_test(test_surface_photons_after_volume_budget_full_grey),
+        cmocka_unit_test(test_early_exit_keeps_every_photon),
         cmocka_unit_test(test_darts_surface_band_edges),
         cmocka_unit_test(test_single_scatter_total),
         cmocka_unit_test(test_darts_single_scatter_total),

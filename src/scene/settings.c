@@ -158,7 +158,7 @@ static int parse_integrator_type(json_ctx *c, const cJSON *v, integrator_setting
 
 static int parse_photon_keys(json_ctx *c, const cJSON *v, integrator_settings *in)
 {
-    long k;
+    long k = 0;
     const char *w = "integrator";
     if (jget_number_range(c, v, w, "photon_count", 1e6, 0, 0, &in->photon_count) ||
         jget_number_range(c, v, w, "volume_photon_count", 1e6, 0, 0, &in->volume_photon_count) ||
@@ -241,7 +241,7 @@ static int parse_integrator(json_ctx *c, const cJSON *root, integrator_settings 
     const cJSON *v = cJSON_GetObjectItemCaseSensitive(root, "integrator");
     if (v && !cJSON_IsObject(v)) return jfail(c, "integrator", NULL, "expected an object");
     jnote_unknown_keys(c, v, "integrator", integrator_keys);
-    long minb, maxb;
+    long minb = 0, maxb = 64; /* set by jget_int; initialised for the compiler's flow analysis under LTO */
     double vac_speed;
     if (parse_integrator_type(c, v, in) || jget_int(c, v, "integrator", "min_bounces", 0, &minb) ||
         jget_int(c, v, "integrator", "max_bounces", 64, &maxb) ||
