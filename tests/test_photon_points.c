@@ -534,13 +534,6 @@ static void test_surface_photons_after_volume_budget_full_grey(void **state)
  * must store exactly the same photons — same positions, times and powers, in the same order — while the
  * early exit ends most paths. Grey fog, so that the reach applies. A reach cut 20 % short loses photons
  * and fails here. */
-static int photons_equal(const photon *a, const photon *b) /* field by field: the padding is not set */
-{
-    return !memcmp(a->pos, b->pos, sizeof a->pos) && !memcmp(a->dir, b->dir, sizeof a->dir) &&
-           !memcmp(a->power, b->power, sizeof a->power) && a->bounce == b->bounce && a->frame == b->frame &&
-           a->time == b->time;
-}
-
 static void test_early_exit_keeps_every_photon(void **state)
 {
     (void)state;
@@ -569,8 +562,8 @@ static void test_early_exit_keeps_every_photon(void **state)
         assert_int_equal(b.early_exits, 0);
         assert_int_equal(a.n_surf, b.n_surf);
         assert_int_equal(a.n_vol, b.n_vol);
-        for (size_t k = 0; k < a.n_surf; k++) assert_true(photons_equal(&a.surf[k], &b.surf[k]));
-        for (size_t k = 0; k < a.n_vol; k++) assert_true(photons_equal(&a.vol[k], &b.vol[k]));
+        for (size_t k = 0; k < a.n_surf; k++) assert_photon_identical(&a.surf[k], &b.surf[k]);
+        for (size_t k = 0; k < a.n_vol; k++) assert_photon_identical(&a.vol[k], &b.vol[k]);
         exits += a.early_exits;
         paths += a.paths;
         surf += a.n_surf;

@@ -83,6 +83,14 @@ void ellipse_record_init(ellipse_record *r, const darts_guide *g, const darts_bi
 /* Whether any later photon of a path at this vertex can still land in its bin (time only grows):
  * τ + η_lb·C < bin end. */
 int darts_can_reach(const darts_guide *g, const darts_bin *b, vec3 x, double tau);
+/* Where the reachable set ends along a ray from x: the distance t with t + |x + t·d − cam| = S (in units of
+ * η_lb time), an ellipsoid with foci x and the camera, for C = |x − cam| and cos θ = d·(cam − x)/C; 0 when
+ * S <= C (nothing on the ray can reach). A vertex farther along the ray cannot reach the bin. */
+static inline double darts_reach_along(double S, double C, double cos_theta)
+{
+    if (!(S > C)) return 0.0;
+    return 0.5 * (S - C) * (S + C) / (S - C * cos_theta);
+}
 
 /* ---- elliptical control vertex (reference §6; paper eq. 19–22, supplement eq. 6–12) ----
  * The point at distance t along unit d from r->x with t + |x + t·d − cam| = T, t = (T² − C²)/(2(T − C·cosθ)).

@@ -2,13 +2,10 @@
  * free flight (darts.h, cv_techniques). Ours: the reference assumes a straight camera leg everywhere. */
 #include "dartspp/darts.h"
 
-/* Where the reachable set ends along d: t + |x + t·d − cam| < S_reach, an ellipsoid with foci x and the
- * camera (0 when the set is empty). */
+/* Where the reachable set ends along d (0 when it is empty). */
 static double reach_distance(const ellipse_record *r0, vec3 d)
 {
-    if (!(r0->S_reach > r0->C)) return 0.0;
-    double S = r0->S_reach, cos_theta = v3_dot(d, r0->e);
-    return 0.5 * (S - r0->C) * (S + r0->C) / (S - r0->C * cos_theta);
+    return darts_reach_along(r0->S_reach, r0->C, v3_dot(d, r0->e));
 }
 
 /* The defensive technique's interval [0, t_d) and its σ-exponential density. */

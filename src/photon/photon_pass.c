@@ -172,18 +172,16 @@ static int medium_segment(light_path *lp, double tmax)
     return medium_event(lp, m, t, darts);
 }
 
-/* DARTS early exit along the current ray: the distance h past which a vertex at o + h·d could no longer
- * reach the bin, τ + η·h + η·|o + h·d − cam| = end (the bound darts_can_reach tests at each vertex), when
- * the segment's η is the scene's least (then the left side grows with h and this is linear in h);
- * INFINITY where there is no early exit. */
-static double reach_distance(const light_path *lp, double eta)
+/* DARTS early exit along the current ray: the distance past which a vertex could no longer reach the
+ * bin, τ + η_lb·(h + |o + h·d − cam|) = end (the test of darts_can_reach at each vertex, with the segment
+ * itself also taken at the least η: a bound for any η); INFINITY where there is no early exit. */
+static double reach_distance(const light_path *lp)
 {
     const darts_guide *g = lp->g;
-    if (!g->active || !g->early_exit || eta != g->eta_lb) return INFINITY;
-    vec3 w = v3_sub(lp->o, g->cam);
-    double E = lp->reach.end - lp->time, a = v3_dot(lp->d, w), c = v3_dot(w, w);
-    double den = 2.0 * eta * (E + eta * a); /* > 0 while the vertex itself can reach: E > η|w| >= −η·a */
-    return den > 0.0 ? (E * E - eta * eta * c) / den : 0.0;
+    if (!g->active || !g->early_exit) return INFINITY;
+    vec3 to_cam = v3_sub(g->cam, lp->o);
+    double C = v3_len(to_cam);
+    return darts_reach_along((lp->reach.end - lp->time) / g->eta_lb, C, C > 0.0 ? v3_dot(lp->d, to_cam) / C : 0.0);
 }
 
 /* The plain free-flight segment (no DARTS sampler: the volume budget is full, or DARTS is off) in a grey
@@ -196,7 +194,7 @@ static int free_flight_first(light_path *lp, hit_record *h, int *hit)
     const medium *m = &lp->s->media[lp->med];
     double t;
     if ((aims_at_volume(lp) && medium_scatters(m)) || !medium_free_flight_grey(m, lp->rng, &t)) return 2;
-    double reach = reach_distance(lp, m->eta);
+    double reach = reach_distance(lp);
     *hit = scene_intersect(lp->s, lp->o, lp->d, t < reach ? t : reach, h);
     if (*hit) return 0;
     if (reach <= t) { /* the next vertex, surface or medium, is out of reach */
