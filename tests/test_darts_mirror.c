@@ -271,7 +271,7 @@ static int tile_probe(void *ctx, const film *f, const render_stats *st, dp_error
             for (int c = 0; c < 3; c++)
                 v[(y * TILES / f->height) * TILES + x * TILES / f->width] += f->sum[3 * ((size_t)y * f->width + x) + c];
     for (int i = 0; i < NT; i++) {
-        t->x[(size_t)t->n * NT + i] = v[i] - t->last[i];
+        t->x[(size_t)t->n * NT + i] = (v[i] - t->last[i]) / f->last_weight; /* this pass's estimate */
         t->last[i] = v[i];
     }
     t->n++;

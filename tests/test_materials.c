@@ -137,7 +137,7 @@ static int tile_probe_after(void *ctx, const film *f, const render_stats *st, dp
     double v[NV];
     film_values(f, v);
     for (int i = 0; i < NV; i++) {
-        t->x[(size_t)t->n * NV + i] = v[i] - t->last[i];
+        t->x[(size_t)t->n * NV + i] = (v[i] - t->last[i]) / f->last_weight; /* this pass's estimate */
         t->last[i] = v[i];
     }
     t->n++;
@@ -172,7 +172,7 @@ static void render_tiles(const scene *s, uint64_t seed0, int seeds, long passes,
         if (render_scene(s, &ro, &f, &st, &err)) fail_msg("%s", err.msg);
         assert_int_equal(st.passes, passes);
         assert_int_equal(st.nonfinite, 0);
-        for (size_t i = 0; img && i < n; i++) img[i] += f.sum[i] / (double)f.passes / seeds;
+        for (size_t i = 0; img && i < n; i++) img[i] += f.sum[i] / f.weight_sum / seeds;
         if (last) *last = st;
         film_free(&f);
     }

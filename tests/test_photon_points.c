@@ -103,7 +103,7 @@ static int pass_probe_after(void *ctx, const film *f, const render_stats *st, dp
     pass_probe *pr = ctx;
     size_t npx = (size_t)f->width * f->height;
     if (pr->snap && st->passes == pr->snap_pass)
-        for (size_t i = 0; i < 3 * npx; i++) pr->snap[i] = f->sum[i] / (double)f->passes;
+        for (size_t i = 0; i < 3 * npx; i++) pr->snap[i] = f->sum[i] / f->weight_sum;
     pass_totals *t = pr->t;
     if (!t) return 0;
     assert_int_equal(t->images, 1 + f->window.frame_count);
@@ -120,7 +120,7 @@ static int pass_probe_after(void *ctx, const film *f, const render_stats *st, dp
             for (int c = 0; c < 3; c++)
                 tot[c] += m == 0 ? f->sum[3 * p + c] : (double)f->frame_sum[3 * (npx * (size_t)(m - 1) + p) + c];
         for (int c = 0; c < 3; c++) {
-            row[3 * m + c] = tot[c] - t->last[3 * m + c]; /* this pass's estimate: the increment of the sum */
+            row[3 * m + c] = (tot[c] - t->last[3 * m + c]) / f->last_weight; /* this pass's estimate: the increment of the weighted sum */
             t->last[3 * m + c] = tot[c];
         }
     }
@@ -128,7 +128,7 @@ static int pass_probe_after(void *ctx, const film *f, const render_stats *st, dp
     return 0;
 }
 
-/* Mean image of a render as doubles (film sum / passes), 3 values per pixel; with probe, its per-pass
+/* Mean image of a render as doubles (film sum / weight sum), 3 values per pixel; with probe, its per-pass
  * totals and snapshot are recorded too. */
 static double *render_probe(const scene *s, int threads, uint64_t seed, long passes, pass_probe *probe)
 {
@@ -143,7 +143,7 @@ static double *render_probe(const scene *s, int threads, uint64_t seed, long pas
     size_t n = (size_t)s->cam.width * s->cam.height * 3;
     double *m = malloc(n * sizeof(double));
     assert_non_null(m);
-    for (size_t i = 0; i < n; i++) m[i] = f.sum[i] / (double)f.passes;
+    for (size_t i = 0; i < n; i++) m[i] = f.sum[i] / f.weight_sum;
     film_free(&f);
     return m;
 }
@@ -157,7 +157,7 @@ static void render_passes(const scene *s, int threads, uint64_t seed, long passe
     assert_int_equal(st->nonfinite, 0);
 }
 
-/* Mean image of a render as doubles (film sum / passes), 3 values per pixel. */
+/* Mean image of a render as doubles (film sum / weight sum), 3 values per pixel. */
 static double *render_mean(const scene *s, int threads, uint64_t seed, long passes)
 {
     return render_probe(s, threads, seed, passes, NULL);

@@ -111,6 +111,69 @@ static void test_frames_sum_to_union_gate(void **state)
     assert_true(max_rel1 < 1e-5);
 }
 
+/* The film's weighted mean, against values worked by hand: pixel 0 gets 2 then 5 (gate) with weights 1 and
+ * 3, so (1·2 + 3·5)/4 = 4.25; frame 1 gets only the second pass's 8: 3·8/4 = 6. Broken variants (dividing
+ * by the pass count, or dropping the weight of the frames) give 8.5 and 2.5. */
+static void test_film_weighted_mean(void **state)
+{
+    (void)state;
+    film *f = &fx.films[0];
+    dp_error err;
+    time_window tw = {.gated = 1, .start = 0.0, .width = 1.0, .frame_count = 2};
+    if (film_init(f, 2, 1, &tw, &err)) fail_msg("%s", err.msg);
+    /* gate image weight 1/(width·frames) = 1/2, frame weight 1/width = 1: splat 2·value into frame 0's
+     * window for the gate, and value into frame 1's window */
+    assert_true(film_splat(f, 0, 0.5, v3s(4.0), -1));
+    film_commit_pass(f, 1.0);
+    assert_true(film_splat(f, 0, 1.5, v3s(10.0), -1));
+    film_commit_pass(f, 3.0);
+    assert_int_equal(f->passes, 2);
+    image_rgb *gate = &fx.images[0], *fr1 = &fx.images[1];
+    assert_int_equal(film_image(f, -1, gate, &err), 0);
+    assert_int_equal(film_image(f, 1, fr1, &err), 0);
+    assert_float_equal(gate->rgb[0], (1.0 * 2.0 + 3.0 * 5.0) / 4.0, 1e-6);
+    assert_float_equal(fr1->rgb[0], 3.0 * 10.0 / 4.0, 1e-6);
+    assert_float_equal(gate->rgb[3], 0.0, 0.0); /* pixel 1 saw nothing */
+}
+
+/* plan_pass_weight: the path tracer and pass_weights "equal" weigh 1; photon points weigh iteration i by its
+ * kernel area relative to iteration 0, (Π_{j=1..i} (j+α)/(j+1)) for the surface kernel (written here as
+ * Γ(i+1+α)/(Γ(1+α)Γ(i+2)), not with the schedule's own product), and the volume kernel's area when no
+ * surfaces are gathered (the 3-D schedule: area ∝ γ^{2/3}). */
+static void test_pass_weights(void **state)
+{
+    (void)state;
+    const char *pp[] = {"type=progressive_transient_photon_map", "alpha=0.7", "volume_alpha=0.8", "volume_gather_radius=0.1",
+                        "gather_radius=0.05"};
+    const char *vol[] = {"type=progressive_transient_photon_map", "alpha=0.7", "volume_alpha=0.8", "volume_gather_radius=0.1",
+                         "include_surfaces=false", "radius_schedule=3d"};
+    const char *eq[] = {"type=progressive_transient_photon_map", "pass_weights=equal"};
+    const char *pt[] = {"type=path_tracer"};
+    load("scenes/fogbox/fogbox.json", pp, 5, &fx.scenes[0]);
+    load("scenes/fogbox/fogbox.json", vol, 6, &fx.scenes[1]);
+    load("scenes/fogbox/fogbox.json", eq, 2, &fx.scenes[2]);
+    render_plan p[3], q;
+    dp_error err;
+    for (int k = 0; k < 3; k++)
+        if (plan_resolve(&fx.scenes[k], &p[k], &err)) fail_msg("%s", err.msg);
+    const long its[] = {0, 1, 2, 9, 200};
+    for (size_t k = 0; k < sizeof its / sizeof *its; k++) {
+        long i = its[k];
+        double g_s = exp(lgamma(i + 1.7) - lgamma(1.7) - lgamma(i + 2.0));
+        double g_v = exp(lgamma(i + 1.8) - lgamma(1.8) - lgamma(i + 2.0));
+        assert_float_equal(plan_pass_weight(&p[0], i), g_s, 1e-12 * g_s + 1e-15);
+        assert_float_equal(plan_pass_weight(&p[1], i), pow(g_v, 2.0 / 3.0), 1e-12);
+        assert_float_equal(plan_pass_weight(&p[2], i), 1.0, 0.0);
+    }
+    assert_true(plan_pass_weight(&p[0], 200) < 0.25); /* the weights do fall */
+    scene_free(&fx.scenes[2]);
+    load("scenes/fogbox/fogbox.json", pt, 1, &fx.scenes[2]);
+    if (plan_resolve(&fx.scenes[2], &q, &err)) fail_msg("%s", err.msg);
+    assert_float_equal(plan_pass_weight(&q, 50), 1.0, 0.0);
+    for (int k = 0; k < 3; k++) plan_free(&p[k]);
+    plan_free(&q);
+}
+
 /* Reads into the fixture's last image slot (freed by the teardown if an assertion fails). */
 static void assert_all_finite(const char *path)
 {
@@ -166,6 +229,8 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test_teardown(test_threads_bit_identical, teardown_fx),
+        cmocka_unit_test_teardown(test_film_weighted_mean, teardown_fx),
+        cmocka_unit_test_teardown(test_pass_weights, teardown_fx),
         cmocka_unit_test_teardown(test_frames_sum_to_union_gate, teardown_fx),
         cmocka_unit_test_teardown(test_cli_outputs_finite, teardown_fx),
     };

@@ -120,7 +120,7 @@ static void check_against_quadrature(const char *phase, double g, double speed, 
         assert_int_equal(render_scene(&s, &ro, &f, &st, &err), 0);
         assert_int_equal(st.nonfinite, 0);
         for (int i = 0; i < n; i++) {
-            double v = f.sum[i] / f.passes;
+            double v = f.sum[i] / f.weight_sum;
             sum[i] += v;
             sq[i] += v * v;
         }

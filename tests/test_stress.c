@@ -564,7 +564,7 @@ static void region_means(const film *f, double out[N_REGIONS])
         for (int x = 0; x < f->width; x++) {
             size_t p = (size_t)y * f->width + x;
             double v = 0;
-            for (int ch = 0; ch < 3; ch++) v += f->sum[3 * p + ch] / (double)f->passes / 3.0;
+            for (int ch = 0; ch < 3; ch++) v += f->sum[3 * p + ch] / f->weight_sum / 3.0;
             int q = 1 + (y >= hh ? 2 : 0) + (x >= hw ? 1 : 0);
             sum[0] += v, cnt[0]++;
             sum[q] += v, cnt[q]++;

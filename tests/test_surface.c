@@ -212,7 +212,7 @@ static void glass_totals(const char *glass, const char *integrator, int runs, lo
         for (int y = 0; y < f.height; y++)
             for (int x = 0; x < f.width; x++)
                 for (int c = 0; c < 3; c++) {
-                    double v = f.sum[3 * ((size_t)y * f.width + x) + c] / (double)f.passes;
+                    double v = f.sum[3 * ((size_t)y * f.width + x) + c] / f.weight_sum;
                     t[0] += v;
                     if (y >= f.height - 4) t[1] += v;
                 }

@@ -77,7 +77,7 @@ static double *render_mean(const scene *s, int threads, long passes, long *nonfi
     size_t n = (size_t)s->cam.width * s->cam.height * 3;
     double *m = malloc(n * sizeof(double));
     assert_non_null(m);
-    for (size_t i = 0; i < n; i++) m[i] = f.sum[i] / (double)f.passes;
+    for (size_t i = 0; i < n; i++) m[i] = f.sum[i] / f.weight_sum;
     film_free(&f);
     return m;
 }

@@ -7,7 +7,8 @@
 #include "dartspp/io.h"
 #include "dartspp/scene.h"
 
-/* Sums of per-pass pixel estimates; the image is sum / passes. Gate image: contributions weighted by
+/* Weighted sums of per-pass pixel estimates; the image is sum / weight_sum (pass i weighted by the w_i given
+ * at its commit: 1 for the equal mean). Gate image: contributions weighted by
  * 1/width inside [start, end) (steady state: weight 1, no test). Frame k: 1/w inside its own window, so a
  * frame is exactly the gate image of its window (DESIGN §4). In frame mode the gate image is the image of
  * the union window. A pass splats into the pass layer, which joins the sums at film_commit_pass; an
@@ -20,6 +21,8 @@ typedef struct {
     double *pass;      /* the pass in progress, same layout as sum */
     float *frame_pass; /* the pass in progress, same layout as frame_sum */
     long passes;       /* completed passes */
+    double weight_sum; /* Σ of their weights */
+    double last_weight;/* the weight of the last completed pass (its estimate is the sums' increment / this) */
     long nonfinite;    /* non-finite contributions suppressed (never written into an image) */
 } film;
 
@@ -79,10 +82,10 @@ static inline void film_slot_add(film *f, size_t px, const film_slot *s, vec3 c)
  * frame >= 0 (DARTS frame mode): c counts only if t falls in that frame, in the frames and the gate image.
  * Returns 0 when c was non-finite and was dropped (the caller counts it). */
 int film_splat(film *f, size_t px, double t, vec3 c, int frame);
-/* The pass layer joins the sums (passes + 1), or is cleared. */
-void film_commit_pass(film *f);
+/* The pass layer joins the sums with weight w > 0 (passes + 1), or is cleared. */
+void film_commit_pass(film *f, double w);
 void film_drop_pass(film *f);
-/* Gate image (k < 0) or frame k, as the mean over passes. */
+/* Gate image (k < 0) or frame k, as the weighted mean over passes. */
 int film_image(const film *f, int k, image_rgb *img, dp_error *err);
 
 /* ---- the pixels of one pass ----

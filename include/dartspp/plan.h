@@ -111,6 +111,7 @@ typedef struct render_plan {
     int camera_leg_projected;
     int volume_splat;               /* primary lines gathered photon by photon (volume_gather "splat") */
     int include_surfaces, low_order_scattering;
+    int pass_weights_equal;          /* pass_weights "equal": every iteration weighs 1 in the image */
     darts_plan darts;
     int medium_count;
     eda_plan *eda;                   /* medium_count entries */
@@ -129,6 +130,13 @@ void plan_free(render_plan *p);
 /* Widening of the DARTS surface time tests in iteration i: η_ub × the surface gather radius (the camera leg
  * changes by up to that much across the gather disc); 0 without DARTS or surface photons. */
 double plan_surface_slack(const render_plan *p, long iteration);
+
+/* The weight of iteration i in the image (film_commit_pass): 1 for the path tracer and with pass_weights
+ * "equal"; for photon points by default the kernel area of iteration i relative to iteration 0 — the
+ * surface kernel's πR_i² when surfaces are gathered, else the volume kernel's πr_i². An iteration's
+ * estimate has variance about ∝ 1/area (fresh photons, a 2-D kernel), so this is the inverse-variance
+ * mean; it stays consistent (every weight > 0, and Σ_i w_i diverges for α > 0: w_i ~ i^{α−1}). */
+double plan_pass_weight(const render_plan *p, long iteration);
 
 /* The plan as one line of JSON (for --verbose, the run summary and the EXR header); returns 0, or -1 when n
  * is too small. */

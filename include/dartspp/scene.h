@@ -127,6 +127,7 @@ typedef struct {
     int camera_leg_projected;       /* camera_leg: "euclidean" (reference, default) or "projected" */
     int volume_gather_beam;         /* volume_gather: "splat" (default) or "beam" (a query per camera segment) */
     int radius_schedule_3d;         /* radius_schedule: "2d" (default) or "3d" (reference cube root) */
+    int pass_weights_equal;         /* pass_weights: "kernel_area" (default) or "equal" (reference) */
     int eda;                        /* eda: EDA direction sampling in every medium (default false) */
     double eda_alpha;               /* eda_alpha: α of the EDA/phase selection (default 0.5) */
     char eda_table_dir[512];        /* eda_table_dir: the EDA table cache (default "tables") */

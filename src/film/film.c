@@ -42,21 +42,24 @@ int film_splat(film *f, size_t px, double t, vec3 c, int frame)
     return 1;
 }
 
-/* Adds the pass layer to the sums (and clears it): the pass counts. */
-void film_commit_pass(film *f)
+/* Adds the pass layer to the sums with weight w (and clears it): the pass counts. */
+void film_commit_pass(film *f, double w)
 {
     size_t n = (size_t)f->width * f->height * 3, nf = n * (size_t)f->window.frame_count;
 #pragma omp parallel for schedule(static)
     for (size_t i = 0; i < n; i++) {
-        f->sum[i] += f->pass[i];
+        f->sum[i] += w * f->pass[i];
         f->pass[i] = 0.0;
     }
+    float wf = (float)w;
 #pragma omp parallel for schedule(static)
     for (size_t i = 0; i < nf; i++) {
-        f->frame_sum[i] += f->frame_pass[i];
+        f->frame_sum[i] += wf * f->frame_pass[i];
         f->frame_pass[i] = 0.0f;
     }
     f->passes++;
+    f->weight_sum += w;
+    f->last_weight = w;
 }
 
 /* Clears the pass layer: an unfinished pass leaves no trace. */
@@ -71,7 +74,7 @@ int film_image(const film *f, int k, image_rgb *img, dp_error *err)
 {
     if (image_alloc(img, f->width, f->height, err)) return -1;
     size_t n = (size_t)f->width * f->height * 3;
-    double inv = f->passes > 0 ? 1.0 / f->passes : 0.0;
+    double inv = f->weight_sum > 0.0 ? 1.0 / f->weight_sum : 0.0;
     if (k < 0) {
         for (size_t i = 0; i < n; i++) img->rgb[i] = (float)(f->sum[i] * inv);
     } else {

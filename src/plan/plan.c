@@ -97,6 +97,7 @@ int plan_resolve(const scene *s, render_plan *p, dp_error *err)
     p->camera_leg_projected = in->camera_leg_projected;
     p->volume_splat = !in->volume_gather_beam;
     p->include_surfaces = in->include_surfaces;
+    p->pass_weights_equal = in->pass_weights_equal;
     p->low_order_scattering = in->low_order_scattering;
     p->medium_count = s->medium_count;
     if (s->medium_count > 0 && !(p->eda = calloc((size_t)s->medium_count, sizeof *p->eda)))
@@ -122,6 +123,14 @@ double plan_surface_slack(const render_plan *p, long iteration)
 {
     if (!p->include_surfaces) return 0.0;
     return p->darts.eta_ub * schedule_radius(&p->r_surf, iteration);
+}
+
+double plan_pass_weight(const render_plan *p, long iteration)
+{
+    if (p->type != INTEGRATOR_PHOTON_POINTS || p->pass_weights_equal) return 1.0;
+    const radius_schedule *r = p->include_surfaces ? &p->r_surf : &p->r_vol;
+    double q = schedule_radius(r, iteration) / r->r0;
+    return q * q;
 }
 
 /* Appends printf-style text; keeps track of overflow. */
@@ -159,6 +168,7 @@ int plan_json(const render_plan *p, const scene *s, char *out, size_t n)
         p->r_surf.alpha, p->k_surf, p->camera_leg_projected ? "projected" : "euclidean",
         p->volume_splat ? "splat" : "beam", p->include_surfaces ? "true" : "false", p->low_order_scattering ? "true" : "false",
         p->shading.glossy_gather_alpha);
+    put(out, n, &len, ",\"pass_weights\":\"%s\"", p->pass_weights_equal ? "equal" : "kernel_area");
     put(out, n, &len, ",\"darts\":{\"active\":%s", d->active ? "true" : "false");
     if (d->active)
         put(out, n, &len,

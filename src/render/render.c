@@ -83,7 +83,7 @@ static int render_passes(const scene *s, const render_plan *p, const render_opti
             film_drop_pass(f);
             break;
         }
-        film_commit_pass(f);
+        film_commit_pass(f, plan_pass_weight(p, f->passes));
         st->camera_rays += (double)s->cam.width * s->cam.height;
         st->passes = f->passes;
         st->seconds = dp_seconds() - t0;

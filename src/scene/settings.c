@@ -11,7 +11,7 @@ static const char *const integrator_keys[] = {
     "enable_volume_light_sampling", "photon_count", "volume_photon_count", "gather_photon_count",
     "gather_radius", "volume_gather_radius", "volume_photon_type", "alpha", "volume_alpha",
     "fixed_volume_radius", "include_surfaces", "low_order_scattering", "enable_guiding", "enable_elliptical",
-    "strict_time_width", "camera_leg", "volume_gather", "radius_schedule", "ellipse_residual", "control_vertex_mis", "early_exit", "da_defensive", "darts_mirrors", "mirror_defensive", "eda", "eda_alpha", "eda_table_dir", "eda_shape", "enable_consistency_checks", "enable_two_sided_shading", "glossy_gather_alpha", "exclude_non_mis", "use_grid",
+    "strict_time_width", "camera_leg", "volume_gather", "radius_schedule", "pass_weights", "ellipse_residual", "control_vertex_mis", "early_exit", "da_defensive", "darts_mirrors", "mirror_defensive", "eda", "eda_alpha", "eda_table_dir", "eda_shape", "enable_consistency_checks", "enable_two_sided_shading", "glossy_gather_alpha", "exclude_non_mis", "use_grid",
     NULL};
 static const char *const renderer_keys[] = {"spp", "spp_step", "timeout", "checkpoint_interval", "output_file",
                                             "hdr_output_file", "output_buffers", "overwrite_output_files",
@@ -184,7 +184,7 @@ static int parse_photon_keys(json_ctx *c, const cJSON *v, integrator_settings *i
     if (!in->fixed_volume_radius && cJSON_GetObjectItemCaseSensitive(v, "fixed_volume_radius"))
         jwarn(c, "integrator.fixed_volume_radius: false (k-NN radii) is not supported; every volume photon "
                  "gets the progressive radius from volume_gather_radius");
-    const char *leg = "euclidean", *sched = "2d", *resid = "uniform", *tdir = "tables", *mirrors = "full", *vgather = "splat";
+    const char *leg = "euclidean", *sched = "2d", *weights = "kernel_area", *resid = "uniform", *tdir = "tables", *mirrors = "full", *vgather = "splat";
     vec3 shape;
     if (jget_string(c, v, w, "eda_table_dir", &tdir) < 0 || jget_vec3(c, v, w, "eda_shape", v3(128, 128, 256), &shape))
         return -1;
@@ -197,6 +197,7 @@ static int parse_photon_keys(json_ctx *c, const cJSON *v, integrator_settings *i
     if (strlen(tdir) >= sizeof in->eda_table_dir) return jfail(c, w, "eda_table_dir", "path too long");
     snprintf(in->eda_table_dir, sizeof in->eda_table_dir, "%s", tdir);
     if (jget_string(c, v, w, "camera_leg", &leg) < 0 || jget_string(c, v, w, "radius_schedule", &sched) < 0 ||
+        jget_string(c, v, w, "pass_weights", &weights) < 0 ||
         jget_string(c, v, w, "ellipse_residual", &resid) < 0 || jget_string(c, v, w, "darts_mirrors", &mirrors) < 0 ||
         jget_string(c, v, w, "volume_gather", &vgather) < 0)
         return -1;
@@ -215,6 +216,9 @@ static int parse_photon_keys(json_ctx *c, const cJSON *v, integrator_settings *i
         return jfail(c, w, "radius_schedule", "'%s' is not one of 2d, 3d", sched);
     in->camera_leg_projected = !strcmp(leg, "projected");
     in->radius_schedule_3d = !strcmp(sched, "3d");
+    if (strcmp(weights, "kernel_area") && strcmp(weights, "equal"))
+        return jfail(c, w, "pass_weights", "'%s' is not one of kernel_area, equal", weights);
+    in->pass_weights_equal = !strcmp(weights, "equal");
     if (in->type == INTEGRATOR_PHOTON_POINTS && !(in->volume_gather_radius > 0 && in->volume_gather_radius < 1e29))
         return jfail(c, w, "volume_gather_radius", "photon points need a finite radius > 0 (got %g)", in->volume_gather_radius);
     if (in->type == INTEGRATOR_PHOTON_POINTS && !(in->photon_count >= 1))
