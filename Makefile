@@ -12,10 +12,13 @@ CFLAGS   += -std=c11 -D_GNU_SOURCE $(OPT) $(if $(ARCH),-march=$(ARCH)) -g -Wall 
             -I/usr/include/OpenEXR $(EXTRA_CFLAGS)
 LDLIBS   += -lembree3 -lOpenEXRCore-3_1 -lcjson -lpng -lstb -lflann -lm -fopenmp
 
-DEB_PACKAGES = libembree-dev libopenexr-dev libflann-dev libcjson-dev libcmocka-dev libpng-dev libstb-dev pkg-config
+DEB_PACKAGES = libembree-dev libopenexr-dev libflann-dev libcjson-dev libcmocka-dev libpng-dev libstb-dev pkg-config \
+               libopenmpi-dev openmpi-bin
 DEPS_STAMP   = build/.deps-ok
 
-LIB_SRC  = $(filter-out src/cli/main.c,$(wildcard src/*/*.c))
+LIB_SRC  = $(filter-out src/cli/main.c src/cluster/%,$(wildcard src/*/*.c))
+MPI_SRC  = src/cluster/cluster_mpi.c
+MPICC   ?= mpicc
 CLI_SRC  = src/cli/main.c
 TEST_SRC = $(wildcard tests/test_*.c)
 
@@ -27,10 +30,10 @@ SAN_OBJ  = $(LIB_SRC:src/%.c=build/san/obj/%.o)
 TEST_BIN = $(TEST_SRC:tests/%.c=build/san/tests/%)
 
 .PHONY: all deps test run clean stress reference bench-quick
-all: build/dartspp
+all: build/dartspp build/dartspp-mpi
 
 deps: $(DEPS_STAMP)
-$(DEPS_STAMP):
+$(DEPS_STAMP): Makefile
 	@missing=""; for p in $(DEB_PACKAGES); do \
 	  dpkg-query -W -f='$${Status}' $$p 2>/dev/null | grep -q "install ok installed" || missing="$$missing $$p"; \
 	done; \
@@ -51,6 +54,10 @@ build/libdartspp.a: $(OBJ)
 build/dartspp: $(CLI_SRC) build/libdartspp.a
 	$(CC) $(CFLAGS) $(LTO) $< build/libdartspp.a $(LDLIBS) -o $@
 
+# dartspp-mpi: the same program with the render shared by MPI ranks (include/dartspp/cluster.h)
+build/dartspp-mpi: $(CLI_SRC) $(MPI_SRC) build/libdartspp.a
+	OMPI_CC=$(CC) $(MPICC) $(CFLAGS) $(LTO) -DDARTSPP_MPI $(CLI_SRC) $(MPI_SRC) build/libdartspp.a $(LDLIBS) -o $@
+
 build/san/obj/%.o: src/%.c $(wildcard include/dartspp/*.h src/*/*.h) | $(DEPS_STAMP)
 	@mkdir -p $(dir $@)
 	$(CC) $(CFLAGS) $(SAN_FLAGS) -c $< -o $@
@@ -66,7 +73,7 @@ build/san/tests/%: tests/%.c tests/test_util.h build/san/libdartspp.a
 	$(CC) $(CFLAGS) $(SAN_FLAGS) $< build/san/libdartspp.a $(LDLIBS) -lcmocka -o $@
 
 # The README's test command. Unit, estimator and end-to-end tests, all under ASan + UBSan.
-test: build/dartspp build/san/dartspp $(TEST_BIN)
+test: build/dartspp build/dartspp-mpi build/san/dartspp $(TEST_BIN)
 	@tests/run_tests.sh build/san/tests
 
 # The whole stress matrix (extreme media, anisotropy, gates, scales, geometry): the estimator-level cases of

@@ -137,8 +137,11 @@ static void test_exr_roundtrip_bitexact_and_attributes(void **state)
     image_rgb img, back;
     dp_error err;
     fill(&img, 3, 2, special);
-    image_meta meta = {"optical path length in scene units (c = 1)", 1, 2.5, 3.75, 1, 4, "path_tracer", "{\"x\":1}"};
+    image_meta meta = {"optical path length in scene units (c = 1)", 1, 2.5, 3.75, 1, 4, "path_tracer", "{\"x\":1}", 7};
     assert_int_equal(exr_write(path, &img, &meta, &err), 0);
+    int passes = 0;
+    assert_int_equal(exr_read_int_attribute(path, "dartspp.passes", &passes, &err), 0); /* the pass count round trip */
+    assert_int_equal(passes, 7);
     assert_int_equal(exr_read(path, &back, &err), 0);
     assert_int_equal(back.width, 3);
     assert_int_equal(back.height, 2);
@@ -183,8 +186,11 @@ static void test_exr_steady_state_and_null_meta(void **state)
     image_rgb img;
     dp_error err;
     fill(&img, 3, 2, special);
-    image_meta meta = {"t", 0, 9.0, 10.0, 0, -1, NULL, NULL};
+    image_meta meta = {"t", 0, 9.0, 10.0, 0, -1, NULL, NULL, 0};
     assert_int_equal(exr_write(a, &img, &meta, &err), 0);
+    int passes = -1;
+    assert_int_equal(exr_read_int_attribute(a, "dartspp.passes", &passes, &err), -1); /* 0 passes: not written */
+    assert_non_null(strstr(err.msg, "dartspp.passes"));
     assert_int_equal(exr_write(b, &img, NULL, &err), 0);
     exr_context_t ctx = NULL;
     double d;

@@ -81,7 +81,7 @@ static inline void test_write_file(const char *path, const char *text)
 /* Runs a shell command and returns its exit status (0..255), capturing stderr+stdout into out. */
 static inline int test_run(const char *cmd, char *out, size_t out_len)
 {
-    char full[4096];
+    char full[4224];
     snprintf(full, sizeof full, "%s 2>&1", cmd);
     FILE *p = popen(full, "r");
     if (!p) return -1;

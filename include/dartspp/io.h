@@ -26,6 +26,7 @@ typedef struct {
     int frame_index;         /* -1 for a gate image, k for frame k */
     const char *integrator;  /* e.g. "path_tracer" (may be NULL) */
     const char *plan;        /* the render plan as JSON (plan.h; may be NULL) */
+    long passes;             /* completed passes (iterations) in the image; 0: not recorded */
 } image_meta;
 
 /* Atomic writes: write to "<path>.tmp.<pid>" in the same folder, then rename over <path>. */
@@ -52,10 +53,14 @@ void atomic_fabort(atomic_file *af);
 
 /* Float32 RGB EXR (channels R, G, B, ZIP compression) with the metadata as header attributes
  * `dartspp.timeUnit`, `dartspp.gateStart`/`dartspp.gateEnd` (gated images only), `dartspp.cameraWarped`,
- * `dartspp.frame` (-1 for a gate image) and `dartspp.integrator` (when not NULL); none when meta is NULL. */
+ * `dartspp.frame` (-1 for a gate image), `dartspp.passes` (when > 0), `dartspp.integrator` and `dartspp.plan`
+ * (when not NULL); none when meta is NULL. */
 int exr_write(const char *path, const image_rgb *img, const image_meta *meta, dp_error *err);
 /* Reads R,G,B (or Y as grey) of any pixel type into float; other channels ignored. */
 int exr_read(const char *path, image_rgb *img, dp_error *err);
+/* The int header attribute `name` of part 0 (e.g. "dartspp.passes"): 0, or -1 with err (no such file,
+ * attribute or type). */
+int exr_read_int_attribute(const char *path, const char *name, int *value, dp_error *err);
 
 /* PFM: "PF\n<w> <h>\n-1\n", little-endian float32 RGB, rows bottom to top. Reader also takes "Pf" (grey)
  * and big-endian (positive scale). */

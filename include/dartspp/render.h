@@ -5,6 +5,7 @@
 
 #include <signal.h>
 
+#include "dartspp/cluster.h"
 #include "dartspp/film.h"
 #include "dartspp/io.h"
 #include "dartspp/plan.h"
@@ -30,6 +31,12 @@ typedef struct {
      * A non-zero return stops the render with that error. May be NULL. */
     int (*after_pass)(void *ctx, const film *f, const struct render_stats *st, dp_error *err);
     void *after_pass_ctx;
+    /* Several processes as one render (include/dartspp/cluster.h); NULL: this process alone. With a cluster
+     * the film and statistics returned are the sums of all ranks on rank 0 (other ranks: their own), and
+     * after_pass runs on rank 0 only, with the summed film, after the rounds where the films were summed:
+     * every gather_every seconds (0: only at the end). */
+    const render_cluster *cluster;
+    double gather_every;
 } render_options;
 
 typedef struct render_stats {
@@ -45,6 +52,8 @@ typedef struct render_stats {
     double early_exits;     /* light paths ended by the DARTS early exit */
     double aimed_paths;     /* light paths traced with the DARTS samplers (the rest: surface photons only) */
     double t_photon, t_maps, t_gather; /* seconds spent in the photon pass, map builds, sensor pass */
+    double t_cluster;       /* several ranks: rank 0's seconds in the rounds' agreement and the reductions */
+    long reductions;        /* several ranks: film reductions onto rank 0 (checkpoints, log rows, the end) */
 } render_stats;
 
 /* Renders the scene with its integrator into f (initialised here). On return, also with an error or an

@@ -19,6 +19,29 @@ static void usage(FILE *f)
             "See README.md for the scene keys, outputs and units.\n");
 }
 
+#ifdef DARTSPP_MPI
+/* dartspp-mpi: `mpirun -np N dartspp-mpi render SCENE.json [the options of dartspp render]`; the other
+ * commands need no cluster and stay in dartspp. */
+int main(int argc, char **argv)
+{
+    render_cluster c;
+    if (cluster_mpi_start(&argc, &argv, &c)) {
+        fprintf(stderr, "dartspp-mpi: MPI did not start\n");
+        return 1;
+    }
+    int rc;
+    if (argc >= 2 && !strcmp(argv[1], "render")) rc = cli_render_cluster(argc - 2, argv + 2, &c);
+    else {
+        if (c.rank == 0) {
+            fprintf(stderr, "dartspp-mpi: only 'render' runs on a cluster (the other commands: dartspp)\n");
+            usage(stderr);
+        }
+        rc = 2;
+    }
+    cluster_mpi_stop();
+    return rc;
+}
+#else
 int main(int argc, char **argv)
 {
     if (argc < 2 || !strcmp(argv[1], "-h") || !strcmp(argv[1], "--help")) {
@@ -34,3 +57,4 @@ int main(int argc, char **argv)
     usage(stderr);
     return 2;
 }
+#endif

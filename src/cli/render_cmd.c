@@ -289,6 +289,15 @@ static void print_summary(const scene *s, const render_plan *p, const render_sta
                "time in photon pass %.2f s, map builds %.2f s, sensor pass %.2f s; last radii r_vol %.4g, R_surf %.4g\n",
                st->photon_paths, st->t_photon > 0 ? st->photon_paths / st->t_photon * 1e-6 : 0.0, st->stored_photons,
                st->t_photon, st->t_maps, st->t_gather, st->r_vol, st->r_surf);
+    if (st->reductions > 0) {
+        double px = (double)s->cam.width * s->cam.height;
+        char each[32];
+        memory_format_bytes(px * 3 * sizeof(double) + px * 3 * sizeof(float) * tw->frame_count + 12 * sizeof(double), each,
+                            sizeof each);
+        printf("cluster: %ld film reductions of %s from each rank; rank 0 spent %.3f s in the rounds' agreement and "
+               "the reductions (%.2f%% of the render); photon-pass and sensor-pass times above are summed over the ranks\n",
+               st->reductions, each, st->t_cluster, st->seconds > 0 ? 100.0 * st->t_cluster / st->seconds : 0.0);
+    }
 }
 
 /* The memory guard (before any work): the plan's estimate against the limit; exit 2 naming the key that
@@ -305,18 +314,20 @@ typedef struct {
 
 /* The memory guard (before any work): the plan's estimate against the limit; exit 2 naming the key that
  * drives it when it does not fit. */
-static int check_memory(render_job *j, const render_args *a)
+static int check_memory(render_job *j, const render_args *a, int ranks_on_node)
 {
     render_memory_estimate(&j->s, &j->p, a->reference != NULL, &j->mem);
     const memory_estimate *m = &j->mem;
     double limit = a->max_memory > 0 ? a->max_memory : memory_available();
+    if (ranks_on_node > 1 && limit > 0) limit /= ranks_on_node; /* every rank on this machine needs as much */
     if (!(limit > 0) || m->total <= limit) return 0;
     const memory_item *big = memory_largest(m);
     char need[32], have[32], item[32];
     memory_format_bytes(m->total, need, sizeof need);
     memory_format_bytes(limit, have, sizeof have);
-    fprintf(stderr, "dartspp render: %s: the render needs about %s of memory, more than the %s %s", j->s.path, need,
-            have, a->max_memory > 0 ? "allowed by --max-memory" : "available");
+    fprintf(stderr, "dartspp render: %s: the render needs about %s of memory, more than the %s %s%s", j->s.path, need,
+            have, a->max_memory > 0 ? "allowed by --max-memory" : "available",
+            ranks_on_node > 1 ? " to each of the ranks on this machine" : "");
     if (big) {
         memory_format_bytes(big->bytes, item, sizeof item);
         fprintf(stderr, "; %s drives it (%s: %s)", big->key, big->what, item);
@@ -352,7 +363,7 @@ static int write_outputs(const render_job *j, const film *f)
 
 /* Loads the scene, resolves its plan and checks the outputs and the memory: everything that can refuse the
  * render before any work is spent (exit 2). On success the job holds the scene and the plan. */
-static int prepare(const render_args *a, render_job *j)
+static int prepare(const render_args *a, render_job *j, int check_outputs, int ranks_on_node)
 {
     dp_error err;
     scene_load_options lo = {.sets = a->sets, .set_count = a->set_count, .verbose = a->verbose};
@@ -369,11 +380,11 @@ static int prepare(const render_args *a, render_job *j)
         rc = 2;
     }
     output_path(a, &j->s, j->out, sizeof j->out);
-    if (!rc && render_outputs_check(j->out, j->s.cam.width, j->s.cam.height, j->p.window.frame_count, &err)) {
+    if (!rc && check_outputs && render_outputs_check(j->out, j->s.cam.width, j->s.cam.height, j->p.window.frame_count, &err)) {
         fprintf(stderr, "dartspp render: %s\n", err.msg);
         rc = 2;
     }
-    if (!rc) rc = check_memory(j, a);
+    if (!rc) rc = check_memory(j, a, ranks_on_node);
     if (rc) {
         plan_free(&j->p);
         scene_free(&j->s);
@@ -381,22 +392,51 @@ static int prepare(const render_args *a, render_job *j)
     return rc;
 }
 
-int cli_render(int argc, char **argv)
+int cli_render(int argc, char **argv) { return cli_render_cluster(argc, argv, NULL); }
+
+/* Rank 0's seed, pass count and time budget on every rank: the ranks render one job whatever their own
+ * command lines say (the seed as two 32-bit halves, exact in doubles). */
+static int share_options(const render_cluster *c, render_args *a)
 {
+    double v[4] = {(double)(a->ro.seed >> 32), (double)(a->ro.seed & 0xffffffffu), (double)a->ro.spp, a->ro.time_limit};
+    if (c->share(c, v, 4)) return -1;
+    a->ro.seed = ((uint64_t)v[0] << 32) | (uint64_t)v[1];
+    a->ro.spp = (long)v[2];
+    a->ro.time_limit = v[3];
+    return 0;
+}
+
+int cli_render_cluster(int argc, char **argv, const render_cluster *cluster)
+{
+    const render_cluster *cl = cluster && cluster->size > 1 ? cluster : NULL;
+    int rank = cl ? cl->rank : 0;
     render_args a = {0};
     int rc = parse_args(argc, argv, &a);
+    if (rank != 0) a.quiet = 1; /* rank 0 speaks for the job */
     /* Interrupts count from here: while loading, an interrupt exits at once (nothing to keep yet). */
     signal(SIGINT, on_signal);
     signal(SIGTERM, on_signal);
     static render_job j; /* large (the plan's JSON, paths): not on the stack */
-    if (rc || (rc = prepare(&a, &j))) {
+    if (!rc) rc = prepare(&a, &j, rank == 0, cl ? cl->ranks_on_node : 1);
+    if (cl) { /* every rank is ready, or none renders */
+        int all = cl->agree_rc(cl, rc);
+        if (all && !rc) {
+            if (rank == 0) fprintf(stderr, "dartspp render: another rank could not start the render (its message is above)\n");
+            plan_free(&j.p);
+            scene_free(&j.s);
+        }
+        rc = all;
+        if (!rc && share_options(cl, &a)) rc = 1;
+    }
+    if (rc) {
         free(a.sets);
         return rc;
     }
     dp_error err;
     after_pass_ctx cp = {.p = &j.p, .plan_json = j.plan_json, .out = j.out, .quiet = a.quiet,
                          .every = a.checkpoint >= 0 ? a.checkpoint : j.p.checkpoint_seconds};
-    if (a.log && !(cp.log = error_log_open(a.log, a.reference, j.s.cam.width, j.s.cam.height, j.p.window.frame_count,
+    if (rank != 0) cp.every = 0; /* rank 0 writes checkpoints and logs */
+    if (rank == 0 && a.log && !(cp.log = error_log_open(a.log, a.reference, j.s.cam.width, j.s.cam.height, j.p.window.frame_count,
                                            a.log_every, &err))) {
         fprintf(stderr, "dartspp render: %s\n", err.msg);
         plan_free(&j.p);
@@ -404,32 +444,43 @@ int cli_render(int argc, char **argv)
         free(a.sets);
         return 2;
     }
-    if (j.s.notes) fputs(j.s.notes, stderr);
-    if (a.verbose) fprintf(stderr, "plan: %s\n", j.plan_json);
-    warn_mirrors(&j.s, &j.p);
-    warn_mixed_eta(&j.s, &j.p);
+    if (rank == 0) {
+        if (j.s.notes) fputs(j.s.notes, stderr);
+        if (a.verbose) fprintf(stderr, "plan: %s\n", j.plan_json);
+        warn_mirrors(&j.s, &j.p);
+        warn_mixed_eta(&j.s, &j.p);
+        if (cl && !a.quiet) fprintf(stderr, "cluster: %d ranks (%d on this machine); iteration i runs on rank i mod %d\n",
+                                    cl->size, cl->ranks_on_node, cl->size);
+    }
     a.ro.plan = &j.p;
     a.ro.progress = !a.quiet;
     a.ro.stop = &stop_requested;
     a.ro.passes_started = &passes_started;
     a.ro.after_pass = after_pass;
     a.ro.after_pass_ctx = &cp;
+    a.ro.cluster = cl;
+    /* with several ranks the films are summed for checkpoints and log rows only when one is due */
+    a.ro.gather_every = cp.every > 0 ? cp.every : 0.0;
+    if (cp.log && (a.ro.gather_every == 0.0 || a.log_every < a.ro.gather_every))
+        a.ro.gather_every = a.log_every > 0 ? a.log_every : 1e-9;
     film f;
     render_stats st;
     int failed = render_scene(&j.s, &a.ro, &f, &st, &err) != 0;
-    if (failed) fprintf(stderr, "dartspp render: %s\n", err.msg);
+    if (failed && (rank == 0 || strncmp(err.msg, "another rank", 12))) fprintf(stderr, "dartspp render: %s%s\n", err.msg, cl && rank ? " (a rank other than 0)" : "");
     else if (cp.log && error_log_pass(cp.log, &f, &st, 1, &err)) {
         fprintf(stderr, "dartspp render: %s\n", err.msg);
         failed = 1;
     }
-    if (!failed) {
+    if (!failed && rank == 0) {
         print_summary(&j.s, &j.p, &st, j.load_seconds);
         print_memory(&j.mem);
         if (cp.log)
             printf("error log: %s (%.3f s spent logging, %.2f%% of the render)\n", a.log, error_log_overhead(cp.log),
                    st.seconds > 0 ? 100.0 * error_log_overhead(cp.log) / st.seconds : 0.0);
     }
-    if (f.passes > 0) failed |= write_outputs(&j, &f);
+    if (rank != 0) {
+        /* nothing to write here: rank 0 holds the summed film */
+    } else if (f.passes > 0) failed |= write_outputs(&j, &f);
     else if (st.interrupted) fprintf(stderr, "dartspp render: interrupted before the first pass completed: nothing written\n");
     rc = failed ? 1 : st.interrupted ? EXIT_INTERRUPTED : 0;
     error_log_close(cp.log);

@@ -128,6 +128,8 @@ static exr_result_t write_meta(exr_context_t ctx, int part, const image_meta *m)
     if (rv == EXR_OK && m->integrator)
         rv = exr_attr_set_string(ctx, part, "dartspp.integrator", m->integrator);
     if (rv == EXR_OK && m->plan) rv = exr_attr_set_string(ctx, part, "dartspp.plan", m->plan);
+    if (rv == EXR_OK && m->passes > 0)
+        rv = exr_attr_set_int(ctx, part, "dartspp.passes", m->passes > INT32_MAX ? INT32_MAX : (int32_t)m->passes);
     return rv;
 }
 
@@ -356,5 +358,30 @@ int exr_read(const char *path, image_rgb *img, dp_error *err)
     if (ctx) exr_finish(&ctx);
     close(s.fd);
     if (rc != 0) image_free(img);
+    return rc;
+}
+
+int exr_read_int_attribute(const char *path, const char *name, int *value, dp_error *err)
+{
+    struct stat st;
+    exr_stream s = {.fd = open(path, O_RDONLY | O_CLOEXEC)};
+    if (s.fd < 0) return dp_fail(err, "%s: cannot open: %s", path, strerror(errno));
+    if (fstat(s.fd, &st) != 0 || !S_ISREG(st.st_mode)) {
+        close(s.fd);
+        return dp_fail(err, "%s: not a regular file", path);
+    }
+    exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
+    init.error_handler_fn = on_read_error;
+    init.user_data = &s;
+    init.read_fn = stream_read;
+    init.size_fn = stream_size;
+    exr_context_t ctx = NULL;
+    exr_result_t rv = exr_start_read(&ctx, path, &init);
+    int32_t v = 0;
+    if (rv == EXR_OK) rv = exr_attr_get_int(ctx, 0, name, &v);
+    int rc = rv == EXR_OK ? 0 : dp_fail(err, "%s: no int attribute %s (OpenEXR: %s)", path, name, exr_get_default_error_message(rv));
+    if (ctx) exr_finish(&ctx);
+    close(s.fd);
+    if (!rc) *value = v;
     return rc;
 }

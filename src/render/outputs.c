@@ -73,7 +73,7 @@ int render_write_outputs(const film *f, const char *path, const char *integrator
     const time_window *tw = &f->window;
     image_meta meta = {.time_unit = TIME_UNIT, .gated = tw->gated, .gate_start = tw->start,
                        .gate_end = time_window_end(tw), .camera_warped = 1, .frame_index = -1,
-                       .integrator = integrator, .plan = plan};
+                       .integrator = integrator, .plan = plan, .passes = f->passes};
     image_rgb img = {0};
     if (film_image(f, -1, &img, err)) return -1;
     char png[OUTPUT_PATH_MAX + 64];

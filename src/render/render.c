@@ -1,5 +1,7 @@
 /* The progressive driver: passes until the pass count or the time budget is reached (or an interrupt),
- * with a progress line on stderr. Passes are independent draws; the film holds their running mean. */
+ * with a progress line on stderr. Passes are independent draws; the film holds their weighted mean
+ * (plan_pass_weight). With a cluster (include/dartspp/cluster.h) the ranks render them in rounds and the
+ * films are summed onto rank 0. */
 #include "dartspp/darts.h"
 #include "dartspp/render.h"
 
@@ -50,15 +52,112 @@ static int keep_going(const render_stats *st, long spp, double limit, const dp_s
     return 1;
 }
 
-/* One pass of the plan's integrator into the film's pass layer. */
+/* Iteration `iteration` of the plan's integrator into the film's pass layer. */
 static int render_pass(const scene *s, const render_plan *p, const eda_set *eda, const render_options *opt, film *f,
-                       render_stats *st, dp_error *err)
+                       long iteration, render_stats *st, dp_error *err)
 {
     if (p->type == INTEGRATOR_PATH_TRACER) {
-        st->rays += path_tracer_pass(s, p, f, opt->seed, st->passes, opt->stop);
+        st->rays += path_tracer_pass(s, p, f, opt->seed, iteration, opt->stop);
         return 0;
     }
-    return photon_points_pass(s, p, eda, f, opt->seed, st->passes, opt->stop, st, err);
+    return photon_points_pass(s, p, eda, f, opt->seed, iteration, opt->stop, st, err);
+}
+
+/* Commits the pass layer as iteration i: the film's weighted sums and the statistics. */
+static void commit_iteration(const scene *s, const render_plan *p, film *f, long i, render_stats *st)
+{
+    film_commit_pass(f, plan_pass_weight(p, i));
+    st->camera_rays += (double)s->cam.width * s->cam.height;
+    st->passes = f->passes;
+}
+
+/* Several ranks (include/dartspp/cluster.h): in round k this rank renders iteration k·size + rank (while
+ * below spp), then rank 0 decides for all whether another round starts and whether the films are summed
+ * now for after_pass (checkpoints, error logs); at the end the films and statistics are summed onto rank 0.
+ * A rank that fails or is interrupted says so at the round's end and every rank stops there; the completed
+ * passes of all ranks are summed even then. */
+static int render_rounds(const scene *s, const render_plan *p, const eda_set *eda, const render_options *opt,
+                         film *f, render_stats *st, long spp, double limit, dp_error *err)
+{
+    const render_cluster *c = opt->cluster;
+    progress_line pl = {.tty = isatty(2), .last_print = -1e9};
+    double t0 = dp_seconds(), last_gather = 0.0;
+    int failed = 0, comm = 0, go = 1;
+    long done = 0;
+    for (long k = 0; go; k++) {
+        long i = k * c->size + c->rank;
+        if ((spp <= 0 || i < spp) && !failed) {
+            if (render_pass(s, p, eda, opt, f, i, st, err)) {
+                failed = 1;
+                film_drop_pass(f);
+            } else if (dp_stopped(opt->stop)) {
+                film_drop_pass(f); /* interrupted inside the pass: it is incomplete */
+            } else {
+                commit_iteration(s, p, f, i, st);
+            }
+        }
+        st->seconds = dp_seconds() - t0;
+        done = (k + 1) * c->size;
+        if (spp > 0 && done > spp) done = spp;
+        go = !failed && !dp_stopped(opt->stop);
+        if (c->rank == 0 && go && ((spp > 0 && done >= spp) || (limit > 0 && st->seconds + 0.5 * st->seconds / (k + 1) >= limit)))
+            go = 0;
+        int gather = c->rank == 0 && go && opt->after_pass && opt->gather_every > 0 && st->seconds - last_gather >= opt->gather_every;
+        double tc = dp_seconds();
+        comm = c->round(c, &go, &gather);
+        st->t_cluster += dp_seconds() - tc;
+        if (comm) break;
+        if (gather) {
+            last_gather = st->seconds;
+            film total;
+            render_stats all = *st;
+            tc = dp_seconds();
+            if (film_init(&total, f->width, f->height, &f->window, err) || c->reduce(c, f, &total, st, &all, err)) {
+                film_free(&total);
+                comm = 1;
+                break;
+            }
+            st->t_cluster += dp_seconds() - tc;
+            st->reductions++;
+            all.seconds = st->seconds;
+            if (c->rank == 0 && opt->after_pass && opt->after_pass(opt->after_pass_ctx, &total, &all, err)) failed = 1;
+            film_free(&total);
+        }
+        if (c->rank == 0 && opt->progress) {
+            render_stats est = *st; /* the whole job, from this rank's share */
+            est.passes = done;
+            est.camera_rays *= c->size;
+            est.rays *= c->size;
+            est.photon_paths *= c->size;
+            progress_print(&pl, &est, spp, limit, 0);
+        }
+    }
+    if (comm) return dp_fail(err, "the ranks lost contact (MPI)");
+    int any_failed = c->agree_rc(c, failed);
+    film total;
+    double tc = dp_seconds();
+    if (film_init(&total, f->width, f->height, &f->window, err)) return -1;
+    render_stats all = *st;
+    if (c->reduce(c, f, &total, st, &all, err)) {
+        film_free(&total);
+        return -1;
+    }
+    if (c->rank == 0) {
+        film_free(f);
+        *f = total;
+        all.seconds = dp_seconds() - t0;
+        all.t_cluster = st->t_cluster + (dp_seconds() - tc);
+        all.reductions = st->reductions + 1;
+        if (p->type == INTEGRATOR_PHOTON_POINTS && all.passes > 0) {
+            all.r_vol = schedule_radius(&p->r_vol, all.passes - 1);
+            all.r_surf = schedule_radius(&p->r_surf, all.passes - 1);
+        }
+        *st = all;
+    } else {
+        film_free(&total);
+    }
+    if (any_failed && !failed) return dp_fail(err, "another rank failed (its message is above); the completed passes are kept");
+    return failed ? -1 : 0;
 }
 
 /* The passes, with the plan resolved and the film initialised. */
@@ -77,15 +176,21 @@ static int render_passes(const scene *s, const render_plan *p, const render_opti
     double t0 = dp_seconds();
     int rc = 0;
     if (opt->passes_started) *opt->passes_started = 1;
+    if (opt->cluster && opt->cluster->size > 1) {
+        rc = render_rounds(s, p, &eda, opt, f, st, spp, limit, err);
+        eda_set_free(&eda);
+        st->nonfinite = f->nonfinite;
+        st->interrupted = st->interrupted || dp_stopped(opt->stop);
+        if (opt->progress && opt->cluster->rank == 0) progress_print(&pl, st, spp, limit, 1);
+        return rc ? -1 : 0;
+    }
     while (!rc && keep_going(st, spp, limit, opt->stop)) {
-        if ((rc = render_pass(s, p, &eda, opt, f, st, err))) break;
+        if ((rc = render_pass(s, p, &eda, opt, f, st->passes, st, err))) break;
         if (dp_stopped(opt->stop)) { /* interrupted inside the pass: it is incomplete */
             film_drop_pass(f);
             break;
         }
-        film_commit_pass(f, plan_pass_weight(p, f->passes));
-        st->camera_rays += (double)s->cam.width * s->cam.height;
-        st->passes = f->passes;
+        commit_iteration(s, p, f, st->passes, st);
         st->seconds = dp_seconds() - t0;
         if (opt->progress) progress_print(&pl, st, spp, limit, 0);
         if (opt->after_pass) rc = opt->after_pass(opt->after_pass_ctx, f, st, err);

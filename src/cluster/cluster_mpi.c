@@ -1,0 +1,105 @@
+/* The render_cluster operations over MPI (Open MPI from Debian; any MPI-3 library): one collective per
+ * round (MPI_Allreduce of the go flags and rank 0's gather wish), MPI_Reduce of the films and statistics onto
+ * rank 0. Linked into dartspp-mpi only (Makefile): the library never calls MPI itself. */
+#include <mpi.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "dartspp/cluster.h"
+#include "dartspp/render.h"
+
+static int mpi_round(const render_cluster *c, int *go, int *gather)
+{
+    (void)c;
+    /* MIN of the go flags; MIN of −gather is −1 exactly when rank 0 (the only one that may ask) asks */
+    int in[2] = {*go ? 1 : 0, *gather && c->rank == 0 ? -1 : 0}, out[2];
+    if (MPI_Allreduce(in, out, 2, MPI_INT, MPI_MIN, MPI_COMM_WORLD) != MPI_SUCCESS) return -1;
+    *go = out[0];
+    *gather = out[1] < 0;
+    return 0;
+}
+
+/* Reduces n values of a type onto rank 0 in chunks (MPI counts are int). */
+static int reduce_chunks(const void *mine, void *total, size_t n, MPI_Datatype type, size_t elem, int rank)
+{
+    const size_t chunk = (size_t)1 << 24;
+    for (size_t off = 0; off < n; off += chunk) {
+        int k = (int)(n - off < chunk ? n - off : chunk);
+        const char *src = (const char *)mine + off * elem;
+        char *dst = rank == 0 ? (char *)total + off * elem : NULL;
+        if (MPI_Reduce(src, dst, k, type, MPI_SUM, 0, MPI_COMM_WORLD) != MPI_SUCCESS) return -1;
+    }
+    return 0;
+}
+
+static int mpi_reduce(const render_cluster *c, const film *mine, film *total, const render_stats *st_mine,
+                      render_stats *st_total, dp_error *err)
+{
+    size_t n = (size_t)mine->width * mine->height * 3, nf = n * (size_t)mine->window.frame_count;
+    if (reduce_chunks(mine->sum, total->sum, n, MPI_DOUBLE, sizeof(double), c->rank) ||
+        (nf > 0 && reduce_chunks(mine->frame_sum, total->frame_sum, nf, MPI_FLOAT, sizeof(float), c->rank)))
+        return dp_fail(err, "MPI: the reduction of the films failed");
+    /* the scalars: the counts, the weight sum and the statistics that add up */
+    double v[12] = {(double)mine->passes,    mine->weight_sum,        (double)mine->nonfinite, st_mine->camera_rays,
+                    st_mine->rays,           st_mine->photon_paths,   st_mine->stored_photons, st_mine->early_exits,
+                    st_mine->aimed_paths,    st_mine->t_photon,       st_mine->t_maps,         st_mine->t_gather};
+    double w[12];
+    int intr = st_mine->interrupted, intr_all = 0;
+    if (MPI_Reduce(v, w, 12, MPI_DOUBLE, MPI_SUM, 0, MPI_COMM_WORLD) != MPI_SUCCESS ||
+        MPI_Reduce(&intr, &intr_all, 1, MPI_INT, MPI_MAX, 0, MPI_COMM_WORLD) != MPI_SUCCESS)
+        return dp_fail(err, "MPI: the reduction of the statistics failed");
+    if (c->rank != 0) return 0;
+    total->passes = (long)w[0];
+    total->weight_sum = w[1];
+    total->nonfinite = (long)w[2];
+    *st_total = *st_mine;
+    st_total->passes = total->passes;
+    st_total->nonfinite = total->nonfinite;
+    st_total->camera_rays = w[3];
+    st_total->rays = w[4];
+    st_total->photon_paths = w[5];
+    st_total->stored_photons = w[6];
+    st_total->early_exits = w[7];
+    st_total->aimed_paths = w[8];
+    st_total->t_photon = w[9];
+    st_total->t_maps = w[10];
+    st_total->t_gather = w[11];
+    st_total->interrupted = intr_all;
+    return 0;
+}
+
+static int mpi_agree_rc(const render_cluster *c, int rc)
+{
+    (void)c;
+    int all = rc;
+    if (MPI_Allreduce(&rc, &all, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD) != MPI_SUCCESS) return rc ? rc : 1;
+    return all;
+}
+
+static int mpi_share(const render_cluster *c, double *v, int n)
+{
+    (void)c;
+    return MPI_Bcast(v, n, MPI_DOUBLE, 0, MPI_COMM_WORLD) == MPI_SUCCESS ? 0 : -1;
+}
+
+int cluster_mpi_start(int *argc, char ***argv, render_cluster *c)
+{
+    int provided = 0;
+    if (MPI_Init_thread(argc, argv, MPI_THREAD_FUNNELED, &provided) != MPI_SUCCESS) return -1;
+    memset(c, 0, sizeof *c);
+    MPI_Comm_rank(MPI_COMM_WORLD, &c->rank);
+    MPI_Comm_size(MPI_COMM_WORLD, &c->size);
+    MPI_Comm node;
+    c->ranks_on_node = 1;
+    if (MPI_Comm_split_type(MPI_COMM_WORLD, MPI_COMM_TYPE_SHARED, 0, MPI_INFO_NULL, &node) == MPI_SUCCESS) {
+        MPI_Comm_size(node, &c->ranks_on_node);
+        MPI_Comm_free(&node);
+    }
+    c->round = mpi_round;
+    c->reduce = mpi_reduce;
+    c->agree_rc = mpi_agree_rc;
+    c->share = mpi_share;
+    return 0;
+}
+
+void cluster_mpi_stop(void) { MPI_Finalize(); }

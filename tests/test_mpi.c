@@ -1,0 +1,205 @@
+/* dartspp-mpi against one process (`mpirun --oversubscribe`, Open MPI): the same image for the same seed and
+ * pass count (photon points with and without DARTS, the path tracer, gate and frames) within the bound the
+ * accumulation allows, --time with 2 ranks, Ctrl-C on mpirun, and a rank that cannot read its scene.
+ * Both binaries are the release build (the same objects, so the same arithmetic). */
+#include "test_util.h"
+
+#include <sys/time.h>
+
+#include "dartspp/io.h"
+
+#define MPI_BIN "build/dartspp-mpi"
+#define ONE_BIN "build/dartspp"
+/* as root in a container: no ssh needed for one machine, more ranks than cores allowed */
+#define MPIRUN "mpirun --allow-run-as-root --oversubscribe --mca plm_rsh_agent false --mca btl_vader_single_copy_mechanism none"
+
+static char *dir;
+
+static int setup(void **state)
+{
+    (void)state;
+    dir = test_tmpdir();
+    if (!dir) return -1;
+    /* our fog Cornell box at 40×40 pixels */
+    FILE *in = fopen(CBOX_FOG "/transient.json", "rb");
+    if (!in) return -1;
+    static char text[1 << 16];
+    size_t n = fread(text, 1, sizeof text - 1, in);
+    fclose(in);
+    text[n] = 0;
+    char *r = strstr(text, "[512, 512]");
+    if (!r) return -1;
+    memcpy(r, "[40,   40]", 10);
+    char path[1024];
+    snprintf(path, sizeof path, "%s/box.json", dir);
+    test_write_file(path, text);
+    return 0;
+}
+
+static int teardown(void **state)
+{
+    (void)state;
+    char cmd[1200];
+    snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir);
+    (void)!system(cmd);
+    free(dir);
+    return 0;
+}
+
+static double now(void)
+{
+    struct timeval tv;
+    gettimeofday(&tv, NULL);
+    return tv.tv_sec + 1e-6 * tv.tv_usec;
+}
+
+static long passes_in(const char *path)
+{
+    int v = -1;
+    dp_error err;
+    if (exr_read_int_attribute(path, "dartspp.passes", &v, &err)) fail_msg("%s", err.msg);
+    return v;
+}
+
+/* Largest |a − b| / (|b| + tiny) over two images of the same size. */
+static double max_rel_diff(const char *a_path, const char *b_path)
+{
+    image_rgb a = {0}, b = {0};
+    dp_error err;
+    if (image_read(a_path, &a, &err) || image_read(b_path, &b, &err)) fail_msg("%s", err.msg);
+    assert_int_equal(a.width, b.width);
+    assert_int_equal(a.height, b.height);
+    double m = 0.0, total = 0.0;
+    for (size_t i = 0; i < (size_t)a.width * a.height * 3; i++) {
+        assert_true(isfinite(a.rgb[i]) && isfinite(b.rgb[i]));
+        m = fmax(m, fabs((double)a.rgb[i] - b.rgb[i]) / (fabs((double)b.rgb[i]) + 1e-30));
+        total += b.rgb[i];
+    }
+    assert_true(total > 0.0); /* the comparison saw light */
+    image_free(&a);
+    image_free(&b);
+    return m;
+}
+
+/* `sets` rendered by one process and by 3 ranks, K passes, the same seed: the gate image within 2 float
+ * ulps (its sums are doubles, added in another order: about 1e-16 relative before the float cast) and each
+ * frame within 2K float ulps (frame sums are floats: K additions in a different order). */
+static void one_vs_three(const char *name, const char *sets, int frames)
+{
+    const long K = 5;
+    char cmd[4096], out[16384], a[1100], b[1100];
+    snprintf(a, sizeof a, "%s/%s-one.exr", dir, name);
+    snprintf(b, sizeof b, "%s/%s-mpi.exr", dir, name);
+    snprintf(cmd, sizeof cmd, ONE_BIN " render %s/box.json --threads 1 --spp %ld --seed 9 %s --quiet --output %s", dir, K,
+             sets, a);
+    if (test_run(cmd, out, sizeof out) != 0) fail_msg("%s: %s", cmd, out);
+    snprintf(cmd, sizeof cmd, MPIRUN " -np 3 " MPI_BIN " render %s/box.json --threads 1 --spp %ld --seed 9 %s --quiet --output %s",
+             dir, K, sets, b);
+    if (test_run(cmd, out, sizeof out) != 0) fail_msg("%s: %s", cmd, out);
+    assert_int_equal(passes_in(a), K);
+    assert_int_equal(passes_in(b), K);
+    double gate = max_rel_diff(b, a);
+    print_message("  %-26s gate image: largest relative difference %.3g (bound %.3g)\n", name, gate, 2 * 0x1p-24);
+    assert_true(gate <= 2 * 0x1p-24);
+    for (int k = 0; k < frames; k++) {
+        char fa[1200], fb[1200];
+        snprintf(fa, sizeof fa, "%s/%s-one_%04d.exr", dir, name, k);
+        snprintf(fb, sizeof fb, "%s/%s-mpi_%04d.exr", dir, name, k);
+        double d = max_rel_diff(fb, fa);
+        print_message("  %-26s frame %d: %.3g (bound %.3g)\n", name, k, d, 2.0 * K * 0x1p-24);
+        assert_true(d <= 2.0 * K * 0x1p-24);
+    }
+}
+
+static void test_same_image_as_one_process(void **state)
+{
+    (void)state;
+    const char *small = "--set photon_count=20000 --set volume_photon_count=3000";
+    char sets[1024];
+    snprintf(sets, sizeof sets, "%s", small);
+    one_vs_three("darts-gate", sets, 0);
+    snprintf(sets, sizeof sets, "%s --set enable_guiding=false --set enable_elliptical=false", small);
+    one_vs_three("baseline-gate", sets, 0);
+    snprintf(sets, sizeof sets, "%s --set frame_num=3 --set start_time=15.95 --set transient_time_width=0.1", small);
+    one_vs_three("darts-frames", sets, 3);
+    one_vs_three("path-tracer-frames", "--set type=path_tracer --set frame_num=2 --set start_time=14 --set transient_time_width=2", 2);
+}
+
+/* --time 3 with 2 ranks: every rank stops after the same round, within a pass of the budget; the pass
+ * count reported is the sum over the ranks (even: each round adds one pass per rank) and is the image's. */
+static void test_time_budget_two_ranks(void **state)
+{
+    (void)state;
+    char cmd[4096], out[16384], img[1100];
+    snprintf(img, sizeof img, "%s/timed.exr", dir);
+    snprintf(cmd, sizeof cmd,
+             MPIRUN " -np 2 " MPI_BIN " render %s/box.json --threads 1 --time 3 --seed 4 --set photon_count=20000 "
+                    "--set volume_photon_count=3000 --quiet --output %s",
+             dir, img);
+    double t0 = now();
+    if (test_run(cmd, out, sizeof out) != 0) fail_msg("%s: %s", cmd, out);
+    double wall = now() - t0;
+    long reported = -1;
+    double secs = -1;
+    const char *r = strstr(out, "rendered ");
+    assert_non_null(r);
+    assert_int_equal(sscanf(r, "rendered %ld passes in %lf s", &reported, &secs), 2);
+    print_message("  2 ranks, --time 3: %ld passes in %.2f s of rendering, %.2f s in all\n", reported, secs, wall);
+    assert_true(reported >= 2 && reported % 2 == 0);
+    assert_int_equal(passes_in(img), reported);
+    double per_round = secs / (reported / 2);
+    assert_true(secs <= 3.0 + per_round + 0.5);
+    assert_true(secs >= 3.0 - 1.5 * per_round);
+}
+
+/* Ctrl-C on mpirun while rendering: the image written holds the passes reported. */
+static void test_interrupt_writes_completed_passes(void **state)
+{
+    (void)state;
+    char cmd[4096], out[16384], img[1100];
+    snprintf(img, sizeof img, "%s/interrupted.exr", dir);
+    snprintf(cmd, sizeof cmd,
+             "sh -c '" MPIRUN " -np 2 " MPI_BIN " render %s/box.json --threads 1 --time 60 --seed 5 --set photon_count=20000 "
+             "--set volume_photon_count=3000 --output %s & pid=$!; sleep 4; kill -INT $pid; wait $pid; echo exit=$?'",
+             dir, img);
+    double t0 = now();
+    test_run(cmd, out, sizeof out);
+    double wall = now() - t0;
+    const char *r = strstr(out, "rendered ");
+    if (!r) fail_msg("no summary after the interrupt:\n%s", out);
+    long reported = -1;
+    assert_int_equal(sscanf(r, "rendered %ld passes", &reported), 1);
+    print_message("  interrupted after 4 s: %ld passes reported, %.1f s in all\n", reported, wall);
+    assert_true(reported >= 2);
+    assert_int_equal(passes_in(img), reported);
+    assert_true(wall < 20.0);
+    assert_non_null(strstr(out, "exit="));
+}
+
+/* mpirun's multiple-program form: rank 1 is given a scene that does not exist; the job ends with exit 2,
+ * the message names the file, and nothing is written. */
+static void test_rank_without_scene(void **state)
+{
+    (void)state;
+    char cmd[4096], out[16384], img[1100];
+    snprintf(img, sizeof img, "%s/never.exr", dir);
+    snprintf(cmd, sizeof cmd,
+             MPIRUN " -np 1 " MPI_BIN " render %s/box.json --spp 2 --quiet --output %s : -np 1 " MPI_BIN
+                    " render %s/missing.json --spp 2 --quiet --output %s",
+             dir, img, dir, img);
+    int rc = test_run(cmd, out, sizeof out);
+    if (rc != 2) fail_msg("exit %d, expected 2:\n%s", rc, out);
+    assert_non_null(strstr(out, "missing.json"));
+    assert_int_equal(access(img, F_OK), -1);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_same_image_as_one_process),
+        cmocka_unit_test(test_time_budget_two_ranks),
+        cmocka_unit_test(test_interrupt_writes_completed_passes),
+        cmocka_unit_test(test_rank_without_scene),
+    };
+    return cmocka_run_group_tests(tests, setup, teardown);
+}
