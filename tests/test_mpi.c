@@ -126,7 +126,8 @@ static void test_same_image_as_one_process(void **state)
 }
 
 /* --time 3 with 2 ranks: every rank stops after the same round, within a pass of the budget; the pass
- * count reported is the sum over the ranks (even: each round adds one pass per rank) and is the image's. */
+ * count reported is the sum over the ranks (even: each round adds one pass per rank) and is the image's.
+ * With --checkpoint 1 rank 0 writes checkpoints of the films summed over both ranks (even pass counts). */
 static void test_time_budget_two_ranks(void **state)
 {
     (void)state;
@@ -134,7 +135,7 @@ static void test_time_budget_two_ranks(void **state)
     snprintf(img, sizeof img, "%s/timed.exr", dir);
     snprintf(cmd, sizeof cmd,
              MPIRUN " -np 2 " MPI_BIN " render %s/box.json --threads 1 --time 3 --seed 4 --set photon_count=20000 "
-                    "--set volume_photon_count=3000 --quiet --output %s",
+                    "--set volume_photon_count=3000 --checkpoint 1 --output %s",
              dir, img);
     double t0 = now();
     if (test_run(cmd, out, sizeof out) != 0) fail_msg("%s: %s", cmd, out);
@@ -150,6 +151,15 @@ static void test_time_budget_two_ranks(void **state)
     double per_round = secs / (reported / 2);
     assert_true(secs <= 3.0 + per_round + 0.5);
     assert_true(secs >= 3.0 - 1.5 * per_round);
+    int checkpoints = 0;
+    for (const char *c = strstr(out, "checkpoint: "); c; c = strstr(c + 1, "checkpoint: ")) {
+        long n = -1;
+        assert_int_equal(sscanf(c, "checkpoint: %ld passes", &n), 1);
+        assert_true(n >= 2 && n % 2 == 0 && n <= reported);
+        checkpoints++;
+    }
+    print_message("  %d checkpoints\n", checkpoints);
+    assert_true(checkpoints >= 1);
 }
 
 /* Ctrl-C on mpirun while rendering: the image written holds the passes reported. */
@@ -176,6 +186,32 @@ static void test_interrupt_writes_completed_passes(void **state)
     assert_non_null(strstr(out, "exit="));
 }
 
+/* The memory guard counts the ranks sharing the machine: a --max-memory that holds one process's estimate
+ * 1.5 times over lets one process render and refuses 2 ranks (exit 2) before any work. */
+static void test_memory_guard_counts_ranks(void **state)
+{
+    (void)state;
+    char cmd[4096], out[16384], img[1100];
+    snprintf(img, sizeof img, "%s/mem.exr", dir);
+    snprintf(cmd, sizeof cmd, ONE_BIN " render %s/box.json --threads 1 --spp 1 --output %s", dir, img);
+    if (test_run(cmd, out, sizeof out) != 0) fail_msg("%s: %s", cmd, out);
+    const char *m = strstr(out, "memory: estimated ");
+    assert_non_null(m);
+    double v = 0;
+    char unit[8] = "";
+    assert_int_equal(sscanf(m, "memory: estimated %lf %7s", &v, unit), 2);
+    double bytes = v * (!strcmp(unit, "GiB") ? 1073741824.0 : !strcmp(unit, "MiB") ? 1048576.0 : 1024.0);
+    long limit = (long)(1.5 * bytes);
+    snprintf(cmd, sizeof cmd, ONE_BIN " render %s/box.json --threads 1 --spp 1 --max-memory %ld --quiet --output %s", dir,
+             limit, img);
+    if (test_run(cmd, out, sizeof out) != 0) fail_msg("one process under --max-memory %ld: %s", limit, out);
+    snprintf(cmd, sizeof cmd, MPIRUN " -np 2 " MPI_BIN " render %s/box.json --threads 1 --spp 1 --max-memory %ld --quiet --output %s",
+             dir, limit, img);
+    int rc = test_run(cmd, out, sizeof out);
+    if (rc != 2) fail_msg("2 ranks under --max-memory %ld: exit %d, expected 2:\n%s", limit, rc, out);
+    assert_non_null(strstr(out, "each of the ranks on this machine"));
+}
+
 /* mpirun's multiple-program form: rank 1 is given a scene that does not exist; the job ends with exit 2,
  * the message names the file, and nothing is written. */
 static void test_rank_without_scene(void **state)
@@ -199,6 +235,7 @@ int main(void)
         cmocka_unit_test(test_same_image_as_one_process),
         cmocka_unit_test(test_time_budget_two_ranks),
         cmocka_unit_test(test_interrupt_writes_completed_passes),
+        cmocka_unit_test(test_memory_guard_counts_ranks),
         cmocka_unit_test(test_rank_without_scene),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
