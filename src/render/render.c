@@ -71,6 +71,40 @@ static void commit_iteration(const scene *s, const render_plan *p, film *f, long
     st->passes = f->passes;
 }
 
+/* The films and statistics of every rank summed into *total and *all on rank 0 (collective; elsewhere
+ * *total is freed again). 0, or -1 with err. */
+static int sum_onto_rank0(const render_cluster *c, const film *f, const render_stats *st, film *total,
+                          render_stats *all, dp_error *err)
+{
+    *all = *st;
+    if (film_init(total, f->width, f->height, &f->window, err)) return -1;
+    if (c->reduce(c, f, total, st, all, err)) {
+        film_free(total);
+        return -1;
+    }
+    if (c->rank != 0) film_free(total);
+    return 0;
+}
+
+/* Rank 0's verdict after round k: another round fits the pass count and, as keep_going judges one process's
+ * passes, the time budget. */
+static int another_round(long k, long done, long spp, double seconds, double limit)
+{
+    if (spp > 0 && done >= spp) return 0;
+    return !(limit > 0 && seconds + 0.5 * seconds / (k + 1) >= limit);
+}
+
+/* The progress line of the whole job, estimated on rank 0 from its own share. */
+static void progress_print_job(progress_line *pl, const render_stats *st, int ranks, long done, long spp, double limit)
+{
+    render_stats est = *st;
+    est.passes = done;
+    est.camera_rays *= ranks;
+    est.rays *= ranks;
+    est.photon_paths *= ranks;
+    progress_print(pl, &est, spp, limit, 0);
+}
+
 /* Several ranks (include/dartspp/cluster.h): in round k this rank renders iteration k·size + rank (while
  * below spp), then rank 0 decides for all whether another round starts and whether the films are summed
  * now for after_pass (checkpoints, error logs); at the end the films and statistics are summed onto rank 0.
@@ -82,66 +116,41 @@ static int render_rounds(const scene *s, const render_plan *p, const eda_set *ed
     const render_cluster *c = opt->cluster;
     progress_line pl = {.tty = isatty(2), .last_print = -1e9};
     double t0 = dp_seconds(), last_gather = 0.0;
-    int failed = 0, comm = 0, go = 1;
-    long done = 0;
+    int failed = 0, go = 1;
     for (long k = 0; go; k++) {
-        long i = k * c->size + c->rank;
+        long i = k * c->size + c->rank, done = (k + 1) * c->size;
         if ((spp <= 0 || i < spp) && !failed) {
-            if (render_pass(s, p, eda, opt, f, i, st, err)) {
-                failed = 1;
-                film_drop_pass(f);
-            } else if (dp_stopped(opt->stop)) {
-                film_drop_pass(f); /* interrupted inside the pass: it is incomplete */
-            } else {
+            if ((failed = render_pass(s, p, eda, opt, f, i, st, err) != 0) || dp_stopped(opt->stop))
+                film_drop_pass(f); /* failed, or interrupted inside the pass: it is incomplete */
+            else
                 commit_iteration(s, p, f, i, st);
-            }
         }
         st->seconds = dp_seconds() - t0;
-        done = (k + 1) * c->size;
         if (spp > 0 && done > spp) done = spp;
-        go = !failed && !dp_stopped(opt->stop);
-        if (c->rank == 0 && go && ((spp > 0 && done >= spp) || (limit > 0 && st->seconds + 0.5 * st->seconds / (k + 1) >= limit)))
-            go = 0;
-        int gather = c->rank == 0 && go && opt->after_pass && opt->gather_every > 0 && st->seconds - last_gather >= opt->gather_every;
+        go = !failed && !dp_stopped(opt->stop) && (c->rank != 0 || another_round(k, done, spp, st->seconds, limit));
+        int gather = c->rank == 0 && go && opt->after_pass && opt->gather_every > 0 &&
+                     st->seconds - last_gather >= opt->gather_every;
         double tc = dp_seconds();
-        comm = c->round(c, &go, &gather);
-        st->t_cluster += dp_seconds() - tc;
-        if (comm) break;
+        if (c->round(c, &go, &gather)) return dp_fail(err, "the ranks lost contact (MPI)");
         if (gather) {
-            last_gather = st->seconds;
             film total;
-            render_stats all = *st;
-            tc = dp_seconds();
-            if (film_init(&total, f->width, f->height, &f->window, err) || c->reduce(c, f, &total, st, &all, err)) {
-                film_free(&total);
-                comm = 1;
-                break;
-            }
-            st->t_cluster += dp_seconds() - tc;
+            render_stats all;
+            if (sum_onto_rank0(c, f, st, &total, &all, err)) return -1;
             st->reductions++;
-            all.seconds = st->seconds;
-            if (c->rank == 0 && opt->after_pass && opt->after_pass(opt->after_pass_ctx, &total, &all, err)) failed = 1;
-            film_free(&total);
+            last_gather = all.seconds = st->seconds;
+            if (c->rank == 0) {
+                failed |= opt->after_pass(opt->after_pass_ctx, &total, &all, err) != 0;
+                film_free(&total);
+            }
         }
-        if (c->rank == 0 && opt->progress) {
-            render_stats est = *st; /* the whole job, from this rank's share */
-            est.passes = done;
-            est.camera_rays *= c->size;
-            est.rays *= c->size;
-            est.photon_paths *= c->size;
-            progress_print(&pl, &est, spp, limit, 0);
-        }
+        st->t_cluster += dp_seconds() - tc;
+        if (c->rank == 0 && opt->progress) progress_print_job(&pl, st, c->size, done, spp, limit);
     }
-    if (comm) return dp_fail(err, "the ranks lost contact (MPI)");
     int any_failed = c->agree_rc(c, failed);
     film total;
+    render_stats all;
     double tc = dp_seconds();
-    if (film_init(&total, f->width, f->height, &f->window, err)) return -1;
-    render_stats all = *st;
-    if (c->reduce(c, f, &total, st, &all, err)) {
-        film_free(&total);
-        return -1;
-    }
+    if (sum_onto_rank0(c, f, st, &total, &all, err)) return -1;
     if (c->rank == 0) {
         film_free(f);
         *f = total;
@@ -153,8 +162,6 @@ static int render_rounds(const scene *s, const render_plan *p, const eda_set *ed
             all.r_surf = schedule_radius(&p->r_surf, all.passes - 1);
         }
         *st = all;
-    } else {
-        film_free(&total);
     }
     if (any_failed && !failed) return dp_fail(err, "another rank failed (its message is above); the completed passes are kept");
     return failed ? -1 : 0;
