@@ -427,6 +427,9 @@ int cli_render_cluster(int argc, char **argv, const render_cluster *cluster)
         }
         rc = all;
         if (!rc && share_options(cl, &a)) rc = 1;
+        /* the ranks on one machine share its cores: without --threads each takes its share */
+        long cores = sysconf(_SC_NPROCESSORS_ONLN);
+        if (!rc && a.ro.threads == 0 && cores > 0) a.ro.threads = cores / cl->ranks_on_node > 0 ? (int)(cores / cl->ranks_on_node) : 1;
     }
     if (rc) {
         free(a.sets);
@@ -449,8 +452,9 @@ int cli_render_cluster(int argc, char **argv, const render_cluster *cluster)
         if (a.verbose) fprintf(stderr, "plan: %s\n", j.plan_json);
         warn_mirrors(&j.s, &j.p);
         warn_mixed_eta(&j.s, &j.p);
-        if (cl && !a.quiet) fprintf(stderr, "cluster: %d ranks (%d on this machine); iteration i runs on rank i mod %d\n",
-                                    cl->size, cl->ranks_on_node, cl->size);
+        if (cl && !a.quiet)
+            fprintf(stderr, "cluster: %d ranks (%d on this machine, %d threads each); iteration i runs on rank i mod %d\n",
+                    cl->size, cl->ranks_on_node, a.ro.threads, cl->size);
     }
     a.ro.plan = &j.p;
     a.ro.progress = !a.quiet;
