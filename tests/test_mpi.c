@@ -213,7 +213,8 @@ static void test_memory_guard_counts_ranks(void **state)
 }
 
 /* mpirun's multiple-program form: rank 1 is given a scene that does not exist; the job ends with exit 2,
- * the message names the file, and nothing is written. */
+ * the message names the file, and nothing is written. The same when rank 0 cannot read the error log's
+ * reference. */
 static void test_rank_without_scene(void **state)
 {
     (void)state;
@@ -226,6 +227,15 @@ static void test_rank_without_scene(void **state)
     int rc = test_run(cmd, out, sizeof out);
     if (rc != 2) fail_msg("exit %d, expected 2:\n%s", rc, out);
     assert_non_null(strstr(out, "missing.json"));
+    assert_int_equal(access(img, F_OK), -1);
+    /* rank 0 alone reads the error log's reference: when it cannot, the other ranks do not start either */
+    snprintf(cmd, sizeof cmd,
+             "timeout 60 " MPIRUN " -np 2 " MPI_BIN " render %s/box.json --spp 2 --quiet --reference %s/missing.exr --log %s/log.csv "
+             "--output %s",
+             dir, dir, dir, img);
+    rc = test_run(cmd, out, sizeof out);
+    if (rc != 2) fail_msg("exit %d, expected 2 (124: the ranks waited for each other):\n%s", rc, out);
+    assert_non_null(strstr(out, "missing.exr"));
     assert_int_equal(access(img, F_OK), -1);
 }
 

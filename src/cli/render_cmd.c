@@ -417,14 +417,22 @@ int cli_render_cluster(int argc, char **argv, const render_cluster *cluster)
     signal(SIGINT, on_signal);
     signal(SIGTERM, on_signal);
     static render_job j; /* large (the plan's JSON, paths): not on the stack */
-    if (!rc) rc = prepare(&a, &j, rank == 0, cl ? cl->ranks_on_node : 1);
+    dp_error err;
+    after_pass_ctx cp = {0};
+    int prepared = !rc && !(rc = prepare(&a, &j, rank == 0, cl ? cl->ranks_on_node : 1));
+    if (prepared) {
+        cp = (after_pass_ctx){.p = &j.p, .plan_json = j.plan_json, .out = j.out, .quiet = a.quiet,
+                              .every = rank != 0 ? 0 : a.checkpoint >= 0 ? a.checkpoint : j.p.checkpoint_seconds};
+        /* the error log is rank 0's; its reference is read here, before any rank renders */
+        if (rank == 0 && a.log && !(cp.log = error_log_open(a.log, a.reference, j.s.cam.width, j.s.cam.height,
+                                                            j.p.window.frame_count, a.log_every, &err))) {
+            fprintf(stderr, "dartspp render: %s\n", err.msg);
+            rc = 2;
+        }
+    }
     if (cl) { /* every rank is ready, or none renders */
         int all = cl->agree_rc(cl, rc);
-        if (all && !rc) {
-            if (rank == 0) fprintf(stderr, "dartspp render: another rank could not start the render (its message is above)\n");
-            plan_free(&j.p);
-            scene_free(&j.s);
-        }
+        if (all && !rc && rank == 0) fprintf(stderr, "dartspp render: another rank could not start the render (its message is above)\n");
         rc = all;
         if (!rc && share_options(cl, &a)) rc = 1;
         /* the ranks on one machine share its cores: without --threads each takes its share */
@@ -432,20 +440,13 @@ int cli_render_cluster(int argc, char **argv, const render_cluster *cluster)
         if (!rc && a.ro.threads == 0 && cores > 0) a.ro.threads = cores / cl->ranks_on_node > 0 ? (int)(cores / cl->ranks_on_node) : 1;
     }
     if (rc) {
+        if (prepared) {
+            error_log_close(cp.log);
+            plan_free(&j.p);
+            scene_free(&j.s);
+        }
         free(a.sets);
         return rc;
-    }
-    dp_error err;
-    after_pass_ctx cp = {.p = &j.p, .plan_json = j.plan_json, .out = j.out, .quiet = a.quiet,
-                         .every = a.checkpoint >= 0 ? a.checkpoint : j.p.checkpoint_seconds};
-    if (rank != 0) cp.every = 0; /* rank 0 writes checkpoints and logs */
-    if (rank == 0 && a.log && !(cp.log = error_log_open(a.log, a.reference, j.s.cam.width, j.s.cam.height, j.p.window.frame_count,
-                                           a.log_every, &err))) {
-        fprintf(stderr, "dartspp render: %s\n", err.msg);
-        plan_free(&j.p);
-        scene_free(&j.s);
-        free(a.sets);
-        return 2;
     }
     if (rank == 0) {
         if (j.s.notes) fputs(j.s.notes, stderr);
