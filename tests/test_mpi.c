@@ -214,7 +214,7 @@ static void test_memory_guard_counts_ranks(void **state)
 
 /* mpirun's multiple-program form: rank 1 is given a scene that does not exist; the job ends with exit 2,
  * the message names the file, and nothing is written. The same when rank 0 cannot read the error log's
- * reference. */
+ * reference, and (exit 1) when a rank cannot store its EDA table as the render starts. */
 static void test_rank_without_scene(void **state)
 {
     (void)state;
@@ -236,6 +236,17 @@ static void test_rank_without_scene(void **state)
     rc = test_run(cmd, out, sizeof out);
     if (rc != 2) fail_msg("exit %d, expected 2 (124: the ranks waited for each other):\n%s", rc, out);
     assert_non_null(strstr(out, "missing.exr"));
+    assert_int_equal(access(img, F_OK), -1);
+    /* rank 1 cannot store its EDA table (a folder that cannot exist): it fails as the render starts, and
+     * rank 0 does not wait for it */
+    const char *eda = "--spp 2 --quiet --set eda=true --set eda_shape=[8,8,8] --set eda_table_dir=";
+    snprintf(cmd, sizeof cmd,
+             "timeout 30 " MPIRUN " -np 1 " MPI_BIN " render %s/box.json %s%s/tables --output %s : -np 1 " MPI_BIN
+             " render %s/box.json %s/proc/no-such-folder --output %s",
+             dir, eda, dir, img, dir, eda, img);
+    rc = test_run(cmd, out, sizeof out);
+    if (rc == 0 || rc == 124) fail_msg("exit %d, expected a failure (124: the ranks waited for each other):\n%s", rc, out);
+    assert_non_null(strstr(out, "/proc/no-such-folder"));
     assert_int_equal(access(img, F_OK), -1);
 }
 

@@ -172,8 +172,12 @@ static int render_passes(const scene *s, const render_plan *p, const render_opti
                          dp_error *err)
 {
     eda_set eda = {0};
-    if (p->type == INTEGRATOR_PHOTON_POINTS && eda_set_prepare(s, p, &eda, err)) return -1;
-    if (film_init(f, s->cam.width, s->cam.height, &p->window, err)) {
+    int ready = !(p->type == INTEGRATOR_PHOTON_POINTS && eda_set_prepare(s, p, &eda, err)) &&
+                !film_init(f, s->cam.width, s->cam.height, &p->window, err);
+    const render_cluster *c = opt->cluster && opt->cluster->size > 1 ? opt->cluster : NULL;
+    if (c && c->agree_rc(c, !ready) && ready) /* a rank without its EDA tables or film: none starts */
+        ready = !dp_fail(err, "another rank could not start the render (its message is above)");
+    if (!ready) {
         eda_set_free(&eda);
         return -1;
     }
@@ -183,12 +187,12 @@ static int render_passes(const scene *s, const render_plan *p, const render_opti
     double t0 = dp_seconds();
     int rc = 0;
     if (opt->passes_started) *opt->passes_started = 1;
-    if (opt->cluster && opt->cluster->size > 1) {
+    if (c) {
         rc = render_rounds(s, p, &eda, opt, f, st, spp, limit, err);
         eda_set_free(&eda);
         st->nonfinite = f->nonfinite;
         st->interrupted = st->interrupted || dp_stopped(opt->stop);
-        if (opt->progress && opt->cluster->rank == 0) progress_print(&pl, st, spp, limit, 1);
+        if (opt->progress && c->rank == 0) progress_print(&pl, st, spp, limit, 1);
         return rc ? -1 : 0;
     }
     while (!rc && keep_going(st, spp, limit, opt->stop)) {
