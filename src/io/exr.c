@@ -335,27 +335,41 @@ static int read_image(exr_context_t ctx, exr_stream *s, const char *path, image_
     return 0;
 }
 
-int exr_read(const char *path, image_rgb *img, dp_error *err)
+/* Opens path for reading through our stream (errors reported with its path): 0 with *ctx (when the header
+ * parsed; exr_finish and close(s->fd) after), or -1 with err and nothing left open. */
+static int exr_open_read(const char *path, exr_stream *s, exr_context_t *ctx, dp_error *err)
 {
     struct stat st;
-    img->width = img->height = 0;
-    img->rgb = NULL;
-    exr_stream s = {.fd = open(path, O_RDONLY | O_CLOEXEC)};
-    if (s.fd < 0) return dp_fail(err, "%s: cannot open: %s", path, strerror(errno));
-    if (fstat(s.fd, &st) != 0 || !S_ISREG(st.st_mode)) {
-        close(s.fd);
+    *ctx = NULL;
+    s->fd = open(path, O_RDONLY | O_CLOEXEC);
+    if (s->fd < 0) return dp_fail(err, "%s: cannot open: %s", path, strerror(errno));
+    if (fstat(s->fd, &st) != 0 || !S_ISREG(st.st_mode)) {
+        close(s->fd);
         return dp_fail(err, "%s: not a regular file", path);
     }
     exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
     init.error_handler_fn = on_read_error;
-    init.user_data = &s;
+    init.user_data = s;
     init.read_fn = stream_read;
     init.size_fn = stream_size;
     init.flags = EXR_CONTEXT_FLAG_DISABLE_CHUNK_RECONSTRUCTION;
-    exr_context_t ctx = NULL;
-    exr_result_t rv = exr_start_read(&ctx, path, &init);
-    int rc = rv == EXR_OK ? read_image(ctx, &s, path, img, err) : fail_exr(err, path, &s, rv);
-    if (ctx) exr_finish(&ctx);
+    exr_result_t rv = exr_start_read(ctx, path, &init);
+    if (rv == EXR_OK) return 0;
+    int rc = fail_exr(err, path, s, rv);
+    if (*ctx) exr_finish(ctx);
+    close(s->fd);
+    return rc;
+}
+
+int exr_read(const char *path, image_rgb *img, dp_error *err)
+{
+    img->width = img->height = 0;
+    img->rgb = NULL;
+    exr_stream s = {0};
+    exr_context_t ctx;
+    if (exr_open_read(path, &s, &ctx, err)) return -1;
+    int rc = read_image(ctx, &s, path, img, err);
+    exr_finish(&ctx);
     close(s.fd);
     if (rc != 0) image_free(img);
     return rc;
@@ -363,24 +377,13 @@ int exr_read(const char *path, image_rgb *img, dp_error *err)
 
 int exr_read_int_attribute(const char *path, const char *name, int *value, dp_error *err)
 {
-    struct stat st;
-    exr_stream s = {.fd = open(path, O_RDONLY | O_CLOEXEC)};
-    if (s.fd < 0) return dp_fail(err, "%s: cannot open: %s", path, strerror(errno));
-    if (fstat(s.fd, &st) != 0 || !S_ISREG(st.st_mode)) {
-        close(s.fd);
-        return dp_fail(err, "%s: not a regular file", path);
-    }
-    exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
-    init.error_handler_fn = on_read_error;
-    init.user_data = &s;
-    init.read_fn = stream_read;
-    init.size_fn = stream_size;
-    exr_context_t ctx = NULL;
-    exr_result_t rv = exr_start_read(&ctx, path, &init);
+    exr_stream s = {0};
+    exr_context_t ctx;
+    if (exr_open_read(path, &s, &ctx, err)) return -1;
     int32_t v = 0;
-    if (rv == EXR_OK) rv = exr_attr_get_int(ctx, 0, name, &v);
+    exr_result_t rv = exr_attr_get_int(ctx, 0, name, &v);
     int rc = rv == EXR_OK ? 0 : dp_fail(err, "%s: no int attribute %s (OpenEXR: %s)", path, name, exr_get_default_error_message(rv));
-    if (ctx) exr_finish(&ctx);
+    exr_finish(&ctx);
     close(s.fd);
     if (!rc) *value = v;
     return rc;
