@@ -1,5 +1,6 @@
 /* dartspp io: float32 images in and out (OpenEXR through its C API, PFM, PNG preview), frame sidecar CSV,
- * atomic file writes, and the error metrics of `dartspp compare`. */
+ * the transient cube (.npy) and its viewer page, atomic file writes, and the error metrics of
+ * `dartspp compare`. */
 #ifndef DARTSPP_IO_H
 #define DARTSPP_IO_H
 
@@ -101,6 +102,76 @@ int image_mean_of(const image_rgb *imgs, int k, image_rgb *mean, double *var_of_
 /* Frame sidecar: "index,start,end" header and one line per frame k: k, start + k*w, start + (k+1)*w,
  * written with %.17g so that the time axis is exact. Atomic. */
 int frames_csv_write(const char *path, int frame_count, double start, double width, dp_error *err);
+
+/* NumPy .npy (format 1.0) of float32 (npy.c documents the layout): header "{'descr': '<f4', 'fortran_order':
+ * False, 'shape': (d0, d1, ...), }" padded with spaces and '\n' so that the data starts at a multiple of 64
+ * bytes, then the values little-endian in C order. Streamed and atomic: npy_open writes the header to the
+ * temporary file, npy_append adds values in order, npy_close renames the file into place once exactly
+ * prod(shape) values were given. After an error from any of them the temporary file is already gone;
+ * npy_abort is for the caller's own failures between the calls. */
+#define NPY_HEADER_MAX 256
+typedef struct {
+    atomic_file af;
+    size_t left;   /* values still to come */
+} npy_file;
+
+int npy_open(npy_file *w, const char *path, const size_t *shape, int ndim, dp_error *err);
+int npy_append(npy_file *w, const float *v, size_t n, dp_error *err);
+int npy_close(npy_file *w, dp_error *err);
+void npy_abort(npy_file *w);
+/* All of an array at once. */
+int npy_write_f32(const char *path, const size_t *shape, int ndim, const float *data, dp_error *err);
+/* The header bytes (magic to '\n') of an array into out; their count (a multiple of 64), 0 if it does not
+ * fit in n or in the format. */
+size_t npy_header(unsigned char *out, size_t n, const size_t *shape, int ndim);
+
+/* ---- the frames viewer: <stem>_viewer.html (viewer_cube.c, viewer_html.c) ----
+ * One self-contained page (data, script and style embedded; nothing fetched, so it works from file://):
+ * a time slider and play button over the frames, one exposure for all of them, each frame's time interval,
+ * and a click on the image plots that pixel's transient curve. The embedded frames are the frames
+ * box-downscaled by an integer factor f (each embedded pixel the mean of an f×f block of the frame, the
+ * blocks at the right and bottom edges partial) and, when that is not enough, every s-th frame, so that the
+ * payload (float32 little-endian, base64 in the page) stays within VIEWER_PAYLOAD_MAX bytes. f grows first,
+ * as long as the longer side keeps VIEWER_MIN_SIDE pixels; then s. */
+#define VIEWER_PAYLOAD_MAX ((size_t)8 << 20)
+#define VIEWER_MIN_SIDE 128
+typedef struct {
+    int width, height, frames;   /* the full frames */
+    int factor, stride;          /* f, s */
+    int dw, dh, embedded;        /* ceil(width / f), ceil(height / f), ceil(frames / s) */
+} viewer_layout;
+
+void viewer_layout_of(int width, int height, int frames, viewer_layout *l);
+/* An upper bound of the page's size in bytes (for the check of the output folder's room). */
+double viewer_html_bytes_max(const viewer_layout *l);
+
+/* The embedded frames and a histogram of the cube, filled frame by frame. */
+#define VIEWER_HIST_BINS 32768   /* positive floats by their top 15 bits: 1/128 of an octave */
+typedef struct {
+    viewer_layout l;
+    float *data;        /* embedded × dh × dw × 3 */
+    double *hist;       /* VIEWER_HIST_BINS counts of the positive channel values of every frame */
+    double positives;   /* their count */
+} viewer_cube;
+
+int viewer_cube_init(viewer_cube *v, int width, int height, int frames, dp_error *err);
+/* Frame k (full size): into the histogram, and box-downscaled into data when k is a multiple of s. */
+void viewer_cube_add(viewer_cube *v, int k, const image_rgb *img);
+/* The q-quantile (nearest rank) of the positive channel values added, within 1/128 of an octave (the
+ * geometric middle of its histogram bin); 0 when there were none. */
+double viewer_cube_quantile(const viewer_cube *v, double q);
+void viewer_cube_free(viewer_cube *v);
+
+/* What the page says about time. Frame k covers [start + k·width, start + (k+1)·width). */
+typedef struct {
+    const char *title;      /* e.g. the output's stem */
+    const char *time_unit;  /* "optical path length in scene units (c = 1)" */
+    int camera_warped;      /* 0: camera-unwarped time */
+    double start, width;
+} viewer_time;
+
+/* The page, atomically. Its default exposure maps the 0.99 quantile of the cube's positive values to 1. */
+int viewer_html_write(const char *path, const viewer_cube *v, const viewer_time *t, dp_error *err);
 
 /* Create the parent folders of a file path (mkdir -p of dirname); 0 on success. */
 int io_make_parent_dirs(const char *path, dp_error *err);
