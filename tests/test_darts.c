@@ -5,6 +5,8 @@
  *     free-flight CDF variable), surface part against e^{−σt tmax} g(tmax), per channel, for a fresh and a
  *     fixed ellipse record; every weight finite and >= 0, fallbacks only where nothing is reachable;
  *  3. bin sampling: χ² of the drawn frames against the closed-form reachable-time fractions;
+ *  1b. control vertices with camera-unwarped time: mean weight against quadrature, χ² of t against the
+ *     truncated exponential, every time in the bin;
  *  4. time exactness of control vertices on random inputs;
  *  5. darts_can_reach against its closed form, edges included;
  *  6. sections 1 and 2 on extreme media, anisotropy and gates (fast subset; all with DARTSPP_STRESS=full).
@@ -458,6 +460,79 @@ static void test_da_refractive(void **state)
     assert_int_equal(run_da_both(&k, 100), 0);
 }
 
+/* ---------------------------------------------------------------- 1b. control vertex, unwarped time */
+
+/* sphere_control_vertex (issue 21): with the camera leg untimed, the photon at distance t along the ray from
+ * a vertex of time τ has time τ + η·t, so the places in the bin are t ∈ [(b0 − τ)/η, (b1 − τ)/η) ∩ [0, tmax).
+ * Checked per case: (1) E[W·g(x(t))] with W = σs e^{−σt t}/p(t) against the quadrature of σs e^{−σt t} g over
+ * that interval (worked out here from τ, η and the bin); (2) χ² of 20 equal-width t bins against the
+ * truncated exponential e^{−σ(t − lo)} (σ the rate the sampler is given; uniform when σ·length < 1e-6)
+ * integrated in closed form here; (3) every sample's time in the bin; (4) sphere_control_vertex_pdf at each
+ * sample equals the returned pdf. */
+typedef struct {
+    const char *name;
+    double tau, eta, b0, b1, tmax, sigma_s, sigma_t, sigma; /* sigma: the sampler's rate (mean σt) */
+    long n;
+} sphere_case;
+
+static int run_sphere_case(const sphere_case *k, uint64_t seed)
+{
+    vec3 x = X0, d = dir_at(e_axis(), 0.2);
+    darts_bin bin = {.start = k->b0, .end = k->b1, .pdf = 1.0, .frame = -1};
+    double lo = fmax(0.0, (k->b0 - k->tau) / k->eta), hi = fmin(k->tmax, (k->b1 - k->tau) / k->eta);
+    cv_quad_ctx qc = {x, d, k->sigma_s, k->sigma_t};
+    double ref = hi > lo ? integrate(cv_integrand, &qc, lo, hi, 200) : 0.0;
+    enum { NB = 20 };
+    long count[NB] = {0}, hits = 0, bad = 0;
+    dp_rng rng = rng_stream(seed, 7, 0);
+    stats s = {0};
+    for (long i = 0; i < k->n; i++) {
+        double t = 0, pdf = 0, w = 0;
+        if (sphere_control_vertex(k->tau, k->eta, &bin, k->tmax, k->sigma, rng_uniform(&rng), &t, &pdf)) {
+            double time = k->tau + k->eta * t;
+            if (!(t >= lo && t < hi && time >= k->b0 && time < k->b1 && pdf > 0.0 && isfinite(pdf))) bad++;
+            if (fabs(sphere_control_vertex_pdf(k->tau, k->eta, &bin, k->tmax, k->sigma, t) - pdf) > 1e-12 * pdf) bad++;
+            w = k->sigma_s * exp(-k->sigma_t * t) / pdf * g_pos(v3_add(x, v3_scale(d, t)));
+            int j = (int)((t - lo) / (hi - lo) * NB);
+            count[j < NB ? j : NB - 1]++;
+            hits++;
+        }
+        st_add(&s, w);
+    }
+    char what[128];
+    snprintf(what, sizeof what, "%s [t %.4g..%.4g]", k->name, lo, hi);
+    int fail = check_z(what, &s, ref);
+    if (!(hi > lo)) return fail + (hits != 0) + (bad != 0);
+    /* the truncated exponential's mass in each t bin, in closed form */
+    double L = hi - lo, a = k->sigma * L, chi2 = 0.0;
+    for (int j = 0; j < NB; j++) {
+        double u0 = (double)j / NB, u1 = (double)(j + 1) / NB;
+        double p = a > 1e-6 ? (exp(-a * u0) - exp(-a * u1)) / (1.0 - exp(-a)) : u1 - u0;
+        double ex = p * hits;
+        chi2 += (count[j] - ex) * (count[j] - ex) / ex;
+    }
+    double pval = test_gamma_q((NB - 1) / 2.0, chi2 / 2.0);
+    printf("    hits %.4f, chi2 %.2f (dof %d, p %.3g), bad %ld\n", (double)hits / k->n, chi2, NB - 1, pval, bad);
+    return fail + (pval < 1e-4) + (bad != 0) + (hits < k->n * 0.999);
+}
+
+static void test_sphere_control_vertex(void **state)
+{
+    (void)state;
+    const sphere_case cases[] = {
+        {"tau 0, eta 1, exponential", 0.0, 1.0, 1.0, 2.5, INFINITY, 0.8, 1.0, 1.0, 400000},
+        {"tau 0.5, eta 1.33, tmax cuts (1.2)", 0.5, 1.33, 1.0, 3.0, 1.2, 0.5, 0.9, 0.7, 400000},
+        {"vertex already in the bin (lo = 0)", 2.2, 1.0, 2.0, 2.4, INFINITY, 0.6, 0.7, 0.7, 400000},
+        {"thin medium: uniform", 0.0, 1.0, 3.0, 3.5, INFINITY, 1e-8, 1e-8, 1e-8, 400000},
+        {"thick medium (σL = 40)", 0.0, 1.0, 1.0, 1.5, INFINITY, 60.0, 80.0, 80.0, 400000},
+        {"bin behind the vertex: empty", 3.0, 1.0, 1.0, 2.5, INFINITY, 0.8, 1.0, 1.0, 10000},
+        {"tmax before the bin: empty", 0.0, 1.0, 2.0, 2.5, 1.5, 0.8, 1.0, 1.0, 10000},
+    };
+    int fail = 0;
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) fail += run_sphere_case(&cases[i], 300 + i);
+    assert_int_equal(fail, 0);
+}
+
 /* ---------------------------------------------------------------- 3. bin sampling */
 
 /* Wilson–Hilferty upper critical value of χ²_k at p = 1e-4 (normal quantile 3.719) */
@@ -488,7 +563,7 @@ static int run_bin_case(const char *name, int frames, double beg, double width, 
     dp_rng rng = rng_stream(seed, 3, 0);
     for (long i = 0; i < n; i++) {
         darts_bin b;
-        if (!darts_sample_bin(&g, light, rng_uniform(&rng), &b)) {
+        if (!darts_sample_bin(&g, light, 0.0, rng_uniform(&rng), &b)) {
             bad++;
             continue;
         }
@@ -552,21 +627,21 @@ static void test_bins_gate_and_unreachable(void **state)
     for (int i = 0; i < 1000; i++) {
         darts_bin b;
         double dist = 4.49 * rng_uniform(&rng); /* reachable, before or inside the gate */
-        assert_int_equal(darts_sample_bin(&gate, v3(0, dist, 0), rng_uniform(&rng), &b), 1);
+        assert_int_equal(darts_sample_bin(&gate, v3(0, dist, 0), 0.0, rng_uniform(&rng), &b), 1);
         assert_true(b.pdf == 1.0);
         assert_int_equal(b.frame, -1);
         assert_true(b.start == 4.0 && b.end == 4.5);
     }
     darts_bin b;
     /* light cannot reach the window: η_lb·|cam − x| >= end, exactly equal included */
-    assert_int_equal(darts_sample_bin(&gate, v3(3, 4, 0) /* 5 */, 0.5, &b), 0);
-    assert_int_equal(darts_sample_bin(&gate, v3(0, 4.5, 0), 0.3, &b), 0);
-    assert_int_equal(darts_sample_bin(&fr, v3(0, 0, 12.0), 0.3, &b), 0);
-    assert_int_equal(darts_sample_bin(&fr, v3(0, 0, 30.0), 0.0, &b), 0);
+    assert_int_equal(darts_sample_bin(&gate, v3(3, 4, 0) /* 5 */, 0.0, 0.5, &b), 0);
+    assert_int_equal(darts_sample_bin(&gate, v3(0, 4.5, 0), 0.0, 0.3, &b), 0);
+    assert_int_equal(darts_sample_bin(&fr, v3(0, 0, 12.0), 0.0, 0.3, &b), 0);
+    assert_int_equal(darts_sample_bin(&fr, v3(0, 0, 30.0), 0.0, 0.0, &b), 0);
     darts_guide fr_eta = fr;
     fr_eta.eta_lb = 1.5;
-    assert_int_equal(darts_sample_bin(&fr_eta, v3(0, 8, 0) /* 12 */, 0.9, &b), 0);
-    assert_int_equal(darts_sample_bin(&fr_eta, v3(0, 7.9, 0), 0.9, &b), 1);
+    assert_int_equal(darts_sample_bin(&fr_eta, v3(0, 8, 0) /* 12 */, 0.0, 0.9, &b), 0);
+    assert_int_equal(darts_sample_bin(&fr_eta, v3(0, 7.9, 0), 0.0, 0.9, &b), 1);
     printf("  gate mode: pdf 1, frame -1 on 1000 draws; unreachable lights return 0\n");
 }
 
@@ -773,6 +848,7 @@ int main(void)
         cmocka_unit_test(test_control_vertex_reference_case),
         cmocka_unit_test(test_control_vertex_cases),
         cmocka_unit_test(test_control_vertex_mis),
+        cmocka_unit_test(test_sphere_control_vertex),
         cmocka_unit_test(test_da_normal),
         cmocka_unit_test(test_da_infinite_tmax),
         cmocka_unit_test(test_da_coloured),

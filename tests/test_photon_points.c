@@ -173,7 +173,8 @@ static void render_totals(const scene *s, uint64_t seed0, int seeds, long passes
 }
 
 /* Photon-pass keys: the DARTS samplers (as the paper's scenes turn them on) or none. */
-static const char *const DARTS_KEYS = "\"enable_guiding\": true, \"enable_elliptical\": true, \"strict_time_width\": true";
+#define DARTS_KEYS_TEXT "\"enable_guiding\": true, \"enable_elliptical\": true, \"strict_time_width\": true"
+static const char *const DARTS_KEYS = DARTS_KEYS_TEXT;
 static const char *const BASELINE_KEYS = "\"enable_guiding\": false, \"enable_elliptical\": false";
 
 /* A fog box open towards the camera: Lambertian floor, ceiling, back and side walls (2 × 2 × 2), fog
@@ -644,6 +645,7 @@ typedef struct {
     double g, eta, g0, g1; /* HG asymmetry, refractive index, gate [g0, g1) */
     double x[16], w[16];   /* Gauss–Legendre rule along the ray */
     int nodes, panels;
+    int unwarp;            /* camera-unwarped time: the path time is η·R, the light leg alone */
 } ss_case;
 
 /* Camera at the origin. Along direction psi, distance s, the light is at R(s) = |s psi - l| and the path
@@ -656,11 +658,25 @@ static double ss_distance_at_time(const ss_case *a, vec3 psi, double t)
     return (tau * tau - D2) / (2 * (tau - v3_dot(psi, a->light)));
 }
 
+/* Unwarped, the path time is η·R(s): the distances with η·R in [g0, g1) are the ray's chord through the
+ * spherical shell g0/η <= R < g1/η around the light, R(s)² = s² − 2 s psi.l + |l|². The part of it beyond
+ * the inner sphere's far side, [b + r0, b + r1] with b = psi.l, r_k = sqrt(b² − |l|² + (g_k/η)²); the test
+ * scene's camera is inside the inner sphere (asserted), so the near part is behind the camera. */
+static void ss_unwarped_chord(const ss_case *a, vec3 psi, double *s0, double *s1)
+{
+    double b = v3_dot(psi, a->light), D2 = v3_dot(a->light, a->light);
+    double r0 = a->g0 / a->eta, r1 = a->g1 / a->eta;
+    assert_true(D2 < r0 * r0);
+    *s0 = b + sqrt(b * b - D2 + r0 * r0);
+    *s1 = b + sqrt(b * b - D2 + r1 * r1);
+}
+
 /* Along psi, over the distances s whose path time is in the gate, the single-scattered radiance integrand
  * l(s) (gate-averaged, per channel): m[k] = ∫ l(s) s^-k ds for k = 0, 1, 2 (k = 0 is the radiance). */
 static void ss_ray_moments(const ss_case *a, vec3 psi, vec3 m[3])
 {
     double s0 = ss_distance_at_time(a, psi, a->g0), s1 = ss_distance_at_time(a, psi, a->g1);
+    if (a->unwarp) ss_unwarped_chord(a, psi, &s0, &s1);
     double h = (s1 - s0) / a->panels, acc[3][3] = {{0}};
     for (int p = 0; p < a->panels; p++)
         for (int k = 0; k < a->nodes; k++) {
@@ -791,10 +807,13 @@ static void ss_scene_text(char *text, size_t len, const char *keys)
  * which the assertions on the loaded scene confirm). */
 static const ss_expectation *ss_reference(const scene *s)
 {
-    static ss_expectation e;
-    static int done;
+    static ss_expectation cache[2];
+    static int cached[2];
+    int unwarp = s->integrator.window.camera_unwarp;
+    ss_expectation *e = &cache[unwarp];
     ss_case a = {.cam = &s->cam, .light = s->lights[0].pos, .I = s->lights[0].intensity, .ss = s->media[0].sigma_s,
-                 .st = s->media[0].sigma_t, .g = 0.3, .eta = 1.0 / 0.8, .g0 = 3.0, .g1 = 4.0, .nodes = 8, .panels = 8};
+                 .st = s->media[0].sigma_t, .g = 0.3, .eta = 1.0 / 0.8, .g0 = 3.0, .g1 = 4.0, .nodes = 8, .panels = 8,
+                 .unwarp = unwarp};
     /* the scene as loaded is the one the quadrature assumes */
     assert_int_equal(s->light_count, 1);
     assert_float_equal(v3_len(v3_sub(s->lights[0].pos, v3(0.4, 0.25, 1.8))), 0, 1e-15);
@@ -805,9 +824,9 @@ static const ss_expectation *ss_reference(const scene *s)
     assert_float_equal(s->integrator.window.width, a.g1 - a.g0, 1e-12);
     assert_float_equal(s->cam.pos.x, 0, 0);
     assert_float_equal(v3_len(s->cam.pos), 0, 0);
-    if (done) return &e;
+    if (cached[unwarp]) return e;
     gauss_legendre(a.nodes, a.x, a.w);
-    e = ss_expected(&a, 4);
+    *e = ss_expected(&a, 4);
     /* the quadrature is converged: a finer rule agrees to 1e-7 (measured: 10 digits) */
     ss_case fine = a;
     fine.nodes = 12;
@@ -815,9 +834,9 @@ static const ss_expectation *ss_reference(const scene *s)
     gauss_legendre(fine.nodes, fine.x, fine.w);
     ss_expectation ef = ss_expected(&fine, 6);
     for (int ch = 0; ch < 3; ch++)
-        assert_float_equal(v3_comp(e.total, ch), v3_comp(ef.total, ch), 1e-7 * v3_comp(e.total, ch));
-    done = 1;
-    return &e;
+        assert_float_equal(v3_comp(e->total, ch), v3_comp(ef.total, ch), 1e-7 * v3_comp(e->total, ch));
+    cached[unwarp] = 1;
+    return e;
 }
 
 /* Point light in an infinite fog (HG g = 0.3, coloured σs and σa, η = 1.25), camera in the fog, gate
@@ -891,6 +910,21 @@ static void test_single_scatter_total(void **state)
 {
     (void)state;
     ss_total_check("baseline photon points", "", SS_SEEDS);
+}
+
+/* Camera-unwarped time (issue 21): the same scene and gate [3, 4) with only the light leg timed, i.e. the
+ * photons in the shell 2.4 <= R < 3.2 around the light, against the quadrature over the rays' chords through
+ * that shell (ss_unwarped_chord), the bias allowance from the same moments. Baseline photon points, and
+ * DARTS, whose control vertices are then drawn on each ray's chord through the shell of in-bin times around
+ * the vertex (sphere_control_vertex), DA distance sampling off. The baseline needs 24 seeds for a standard
+ * error under 0.5 % (few of its photons reach the shell). Checked against broken variants (2026-11-25): the
+ * sensor pass and the splat timing the sensor's own segment anyway: baseline +9242 % (491 se); sphere control
+ * vertices drawn with η = 1 instead of the medium's 1.25: DARTS −86 % (784 se). */
+static void test_unwarped_single_scatter_total(void **state)
+{
+    (void)state;
+    ss_total_check("unwarped, baseline photon points", "\"camera_unwarp\": true", 24);
+    ss_total_check("unwarped, DARTS (sphere control vertices)", "\"camera_unwarp\": true, " DARTS_KEYS_TEXT, 4);
 }
 
 /* The same for the DARTS photon pass: (1) DA distance sampling, elliptical control vertices and strict time
@@ -1179,7 +1213,11 @@ static void eta_box_scene_text(char *text, size_t len, double speed, const char 
  * (the path tracer's next-event estimation never comes closer to the light than 1), and no volume photon
  * near the camera. The slab is wider than the view (fov 30°), so the image border cuts through the fog and
  * rays leave through the back face. `time` holds the time keys, `darts` the photon-pass keys. */
-static void slab_scene_text(char *text, size_t len, double speed, const char *type, const char *time, const char *darts)
+/* The light of slab_scene_text; two pulsed lights for the transient tests (issue 21). */
+#define SLAB_LIGHT "{ \"type\": \"point\", \"emission\": [4, 4, 4], \"transform\": { \"position\": [0.6, 0.4, -2.5] } }"
+
+static void slab_scene_text_lights(char *text, size_t len, double speed, const char *type, const char *time,
+                                   const char *darts, const char *lights)
 {
     snprintf(text, len,
              "{ \"media\": [ { \"name\": \"fog\", \"type\": \"homogeneous\", \"sigma_s\": [0.45, 0.4, 0.5],"
@@ -1188,14 +1226,19 @@ static void slab_scene_text(char *text, size_t len, double speed, const char *ty
              "  \"primitives\": ["
              "    { \"type\": \"cube\", \"bsdf\": { \"type\": \"forward\" }, \"int_medium\": \"fog\","
              "      \"transform\": { \"position\": [0, 0, 0], \"scale\": [6, 6, 3] } },"
-             "    { \"type\": \"point\", \"emission\": [4, 4, 4], \"transform\": { \"position\": [0.6, 0.4, -2.5] } } ],"
+             "    %s ],"
              "  \"camera\": { \"type\": \"pinhole\", \"resolution\": [16, 16], \"fov\": 30,"
              "    \"transform\": { \"position\": [0, 0, -3], \"look_at\": [0, 0, 0], \"up\": [0, 1, 0] } },"
              "  \"integrator\": { \"type\": \"%s\", \"volume_photon_type\": \"points\","
              "    \"photon_count\": 10000, \"volume_photon_count\": 1e6, \"volume_gather_radius\": 0.06,"
              "    \"volume_alpha\": 0.7, \"max_bounces\": 4, %s%s%s },"
              "  \"renderer\": { \"spp\": 1 } }",
-             speed, type, time, darts[0] ? ", " : "", darts);
+             speed, lights, type, time, darts[0] ? ", " : "", darts);
+}
+
+static void slab_scene_text(char *text, size_t len, double speed, const char *type, const char *time, const char *darts)
+{
+    slab_scene_text_lights(text, len, speed, type, time, darts, SLAB_LIGHT);
 }
 
 /* DARTS against baseline photon points on one scene with the same radii: both estimate the same
@@ -1370,12 +1413,20 @@ static void add_mean_covariance(const pass_totals *t, double *C)
 #define FR_PP_SEEDS 12
 #define FR_PT_CHUNKS 8
 
-/* Frame mode: the fog slab (slab_scene_text) in 8 frames of 0.3 from 3.5 (the fog in view lights up at 2.6,
- * so every frame holds light that has spread into the fog), rendered by DARTS photon points (DA distance
- * sampling, control vertices, strict; each path aims at one frame: its photons are divided by that frame's
- * probability and gathered only there; 12 seeds × 64 iterations) and by the path tracer (8 × 1024 passes).
- * Compared: the per-frame image totals, per channel, with standard errors and covariances from the per-pass
- * totals (768 and 8192 passes).
+/* Two pulsed emitters (issue 21): the light of slab_scene_text firing at 0, and a second one, lower left,
+ * with a box pulse over [0.45, 0.75): the frames hold the first light's wave and, 0.45-0.75 later, the
+ * second's. */
+#define FR_LIGHTS                                                                                              \
+    SLAB_LIGHT ", { \"type\": \"point\", \"emission\": [3, 2, 4], \"pulse_start\": 0.45, \"pulse_width\": 0.3," \
+               " \"transform\": { \"position\": [-0.7, -0.5, -2.5] } }"
+
+/* Frame mode with two pulsed emitters: the fog slab (slab_scene_text, the lights of FR_LIGHTS) in 8 frames of
+ * 0.3 from 3.5 (the fog in view lights up at 2.6, so every frame holds light that has spread into the fog),
+ * rendered by DARTS photon points (DA distance sampling, control vertices, strict; each path aims at one frame
+ * of the window seen from its own emission time: its photons are divided by that frame's probability and
+ * gathered only there), by baseline photon points (12 seeds × 64 iterations each) and by the path tracer
+ * (8 × 1024 passes). Compared: the per-frame image totals, per channel, with standard errors and covariances
+ * from the per-pass totals (768 and 8192 passes).
  * Bias allowance b = 1 % of each frame's total (the path tracer's): volume photons carry their own path time,
  * so the kernel blurs space, not time, and each frame total has the kernel bias of a total: interior terms
  * (test_single_scatter_total) below (10 + σt s)·r²/(8s²) = 0.12 % at the nearest fog (s = 1.5) for the mean
@@ -1383,73 +1434,145 @@ static void add_mean_covariance(const pass_totals *t, double *C)
  * second-order flux, ~0.1 %); photons within r·sin 21° of the front or back face lose part of their kernel
  * (first order in r, a few tenths of a percent while the light in a frame is spread through the slab: in
  * frames nearer the onset it is concentrated at the front face, -2.5 % at 0.3 after the onset, offline).
- * Offline with 32 seeds all 8 frames agreed with the path tracer within 1.8 standard errors (at most 1.8 %).
  * Checks:
- * (1) every frame and channel: |T_darts - T_pt| < 4·se + b (24 checks at two-sided 6.3e-5: 1.5e-3);
- * (2) jointly: Q = min over biases β within ±b of (d - β)ᵀ C⁻¹ (d - β), d the 24 differences, C the
- *     covariance of d (sum of the two methods' covariances of the mean: the channels of a frame are strongly
- *     correlated, so Σ z² over channels would not follow χ²). Q is at most the χ² statistic of the true
- *     bias, χ² with 24 degrees of freedom; C is estimated from 768 DARTS passes, which inflates Q's mean by
- *     (n - 1)/(n - p - 2) = 3.4 %, corrected for. Required: χ² survival of Q above 1e-3.
- * Checked against broken variants: DARTS's frame-k contributions written to frame k + 1: all 24 checks fail
- * (frame 0 -100 %, frames 1-6 +13 to +22 %, frame 7 +117 %), Q = 1.2e5; photon powers not divided by the
- * frame probability (1/8 here): -87.5 % in every frame, Q = 4.5e5. */
-static void test_darts_frames_vs_path_tracer(void **state)
+ * (1) every frame and channel, each photon pass: |T_pp - T_pt| < 4·se + b (48 checks at two-sided 6.3e-5: 3e-3);
+ * (2) jointly, one test over both photon passes: Q = min over biases β within ±b of (d - β)ᵀ C⁻¹ (d - β), d
+ *     the 48 differences (DARTS − path tracer, then baseline − path tracer), C their covariance: the sum of the
+ *     covariances of the means, the path tracer's in both blocks and across them (the two differences share
+ *     its noise; the channels of a frame are strongly correlated, so Σ z² would not follow χ²). Q is at most the
+ *     χ² statistic of the true bias, χ² with 48 degrees of freedom; C is estimated from 768 passes per photon
+ *     pass, which inflates Q's mean by (n - 1)/(n - p - 2), corrected for. Required: χ² survival above 1e-3.
+ * Checked against a broken variant (2026-11-25): the photon pass starting every light path at time 0 (the
+ * second light's pulse ignored there, not in the path tracer): all 48 checks fail (DARTS and baseline −8 to
+ * −20 % per frame), Q = 2001. */
+static void test_frames_two_pulsed_emitters(void **state)
 {
     (void)state;
     char text[8192], time[256];
     snprintf(time, sizeof time, "\"frame_num\": %d, \"start_time\": 3.5, \"transient_time_width\": 0.3", FR_FRAMES);
-    pass_totals t[2];
-    const int runs[2] = {FR_PP_SEEDS, FR_PT_CHUNKS};
-    const long passes[2] = {64, 1024};
-    for (int m = 0; m < 2; m++) {
-        slab_scene_text(text, sizeof text, 1.0, m ? "path_tracer" : "progressive_transient_photon_map", time,
-                        m ? "" : DARTS_KEYS);
+    enum { DARTS, BASE, PT, METHODS };
+    pass_totals t[METHODS];
+    const int runs[METHODS] = {FR_PP_SEEDS, FR_PP_SEEDS, FR_PT_CHUNKS};
+    const long passes[METHODS] = {64, 64, 1024};
+    for (int m = 0; m < METHODS; m++) {
+        slab_scene_text_lights(text, sizeof text, 1.0, m == PT ? "path_tracer" : "progressive_transient_photon_map", time,
+                               m == DARTS ? DARTS_KEYS : m == BASE ? BASELINE_KEYS : "", FR_LIGHTS);
         tmp_scene ts;
         tmp_scene_write(&ts, text);
         scene s;
         load_scene(ts.path, NULL, 0, &s);
         assert_int_equal(s.integrator.window.frame_count, FR_FRAMES);
-        if (!m) {
-            darts_guide g;
-            scene_guide(&s, &g);
-            assert_true(g.active && g.control_vertices && g.frames == FR_FRAMES);
-        }
-        render_totals(&s, m ? 900 : 800, runs[m], passes[m], &t[m]);
+        assert_int_equal(s.light_count, 2);
+        assert_true(s.lights[1].pulse_start == 0.45 && s.lights[1].pulse_width == 0.3 && s.lights[0].pulse_start == 0);
+        darts_guide g;
+        scene_guide(&s, &g);
+        if (m == DARTS) assert_true(g.active && g.control_vertices && g.frames == FR_FRAMES);
+        else assert_false(g.active);
+        render_totals(&s, 800 + 100 * m, runs[m], passes[m], &t[m]);
         scene_free(&s);
         tmp_scene_remove(&ts);
     }
-    enum { P = 3 * FR_FRAMES };
-    double d[P], b[P], *C = calloc(P * P, sizeof(double));
+    enum { F3 = 3 * FR_FRAMES, P = 2 * F3 };
+    double d[P], b[P], *C = calloc(P * P, sizeof(double)), *Cm[METHODS];
     assert_non_null(C);
     int failed = 0;
-    for (int k = 0; k < FR_FRAMES; k++)
-        for (int c = 0; c < 3; c++) {
-            double m, se, mr, ser;
-            pass_totals_mean_se(&t[0], 1 + k, c, &m, &se);
-            pass_totals_mean_se(&t[1], 1 + k, c, &mr, &ser);
-            double sd = sqrt(se * se + ser * ser);
-            d[3 * k + c] = m - mr;
-            b[3 * k + c] = 0.01 * mr;
-            int bad = !(fabs(m - mr) < 4 * sd + b[3 * k + c]);
-            failed += bad;
-            if (c == 0 || bad)
-                print_message("  frame %d channel %d: DARTS %.5g (se %.2g), path tracer %.5g (se %.2g): %+.2f %%,"
-                              " bound %.2f %%%s\n", k, c, m, se, mr, ser, 100 * (m - mr) / mr,
-                              100 * (4 * sd + b[3 * k + c]) / mr, bad ? "  FAIL" : "");
-            assert_true(mr > 0 && ser > 0);
+    for (int m = 0; m < PT; m++)
+        for (int k = 0; k < FR_FRAMES; k++)
+            for (int c = 0; c < 3; c++) {
+                double v, se, vr, ser;
+                pass_totals_mean_se(&t[m], 1 + k, c, &v, &se);
+                pass_totals_mean_se(&t[PT], 1 + k, c, &vr, &ser);
+                double sd = sqrt(se * se + ser * ser);
+                int i = m * F3 + 3 * k + c;
+                d[i] = v - vr;
+                b[i] = 0.01 * vr;
+                int bad = !(fabs(v - vr) < 4 * sd + b[i]);
+                failed += bad;
+                if (c == 0 || bad)
+                    print_message("  %s frame %d channel %d: %.5g (se %.2g), path tracer %.5g (se %.2g): %+.2f %%,"
+                                  " bound %.2f %%%s\n", m == DARTS ? "DARTS" : "baseline", k, c, v, se, vr, ser,
+                                  100 * (v - vr) / vr, 100 * (4 * sd + b[i]) / vr, bad ? "  FAIL" : "");
+                assert_true(vr > 0 && ser > 0);
+            }
+    for (int m = 0; m < METHODS; m++) {
+        Cm[m] = calloc(F3 * F3, sizeof(double));
+        assert_non_null(Cm[m]);
+        add_mean_covariance(&t[m], Cm[m]);
+    }
+    for (int i = 0; i < P; i++)
+        for (int j = 0; j < P; j++) {
+            int bi = i / F3, bj = j / F3, ii = i % F3, jj = j % F3;
+            C[i * P + j] = Cm[PT][ii * F3 + jj] + (bi == bj ? Cm[bi][ii * F3 + jj] : 0.0);
         }
-    add_mean_covariance(&t[0], C);
-    add_mean_covariance(&t[1], C);
     assert_true(spd_inverse(C, P));
-    double Q = box_mahalanobis(C, d, b, P) * (t[0].n - P - 2.0) / (t[0].n - 1.0);
+    long n = t[DARTS].n < t[BASE].n ? t[DARTS].n : t[BASE].n;
+    double Q = box_mahalanobis(C, d, b, P) * (n - P - 2.0) / (n - 1.0);
     double pval = test_gamma_q(P / 2.0, Q / 2.0);
     print_message("  joint: Q = %.2f for %d degrees of freedom, chi-square survival %.3g (required > 1e-3)\n", Q, P, pval);
     assert_int_equal(failed, 0);
     assert_true(pval > 1e-3);
     free(C);
-    pass_totals_free(&t[0]);
-    pass_totals_free(&t[1]);
+    for (int m = 0; m < METHODS; m++) {
+        free(Cm[m]);
+        pass_totals_free(&t[m]);
+    }
+}
+
+/* A pulse that starts k frame widths later moves every frame by exactly k frames: the slab in 6 frames of
+ * 0.3 from 3.5 with the light's pulse_start 0 and 0.6 (k = 2), the same seed. The path tracer and baseline
+ * photon points draw the same random numbers either way (a delta pulse draws none), so frame j of the
+ * later pulse is frame j − 2 of the first, contribution for contribution: the only differences allowed are
+ * those of float summation order (a path cut at the window's end stores fewer photons beyond it, which
+ * can reorder the film's additions): 1e-5 relative. Frames 0 and 1 of the later pulse have no counterpart.
+ * Checked against broken variants (2026-11-25): the path tracer's light connections without the emission
+ * time, and the photon pass's emission time doubled (frames moved by 4): both fail (lit pixels against dark
+ * ones: largest relative differences 8e28 and 2e29). Unbroken, the path tracer's frames agree exactly (0). */
+static void test_pulse_start_moves_frames(void **state)
+{
+    (void)state;
+    const char *time = "\"frame_num\": 6, \"start_time\": 3.5, \"transient_time_width\": 0.3";
+    const char *types[2] = {"path_tracer", "progressive_transient_photon_map"};
+    for (int m = 0; m < 2; m++) {
+        float *frames[2];
+        size_t npx = 0;
+        for (int shifted = 0; shifted < 2; shifted++) {
+            char text[8192], light[512];
+            snprintf(light, sizeof light, "{ \"type\": \"point\", \"emission\": [4, 4, 4], \"pulse_start\": %s,"
+                     " \"transform\": { \"position\": [0.6, 0.4, -2.5] } }", shifted ? "0.6" : "0");
+            slab_scene_text_lights(text, sizeof text, 1.0, types[m], time, m ? BASELINE_KEYS : "", light);
+            tmp_scene ts;
+            tmp_scene_write(&ts, text);
+            scene s;
+            load_scene(ts.path, NULL, 0, &s);
+            film f;
+            render_stats st;
+            render_passes(&s, 2, 31, m ? 3 : 16, &f, &st);
+            npx = (size_t)f.width * f.height;
+            frames[shifted] = malloc(6 * npx * 3 * sizeof(float));
+            assert_non_null(frames[shifted]);
+            for (size_t i = 0; i < 6 * npx * 3; i++) frames[shifted][i] = (float)(f.frame_sum[i] / f.weight_sum);
+            film_free(&f);
+            scene_free(&s);
+            tmp_scene_remove(&ts);
+        }
+        double worst = 0, lit = 0, moved_by_one = 0;
+        for (int j = 2; j < 6; j++)
+            for (size_t i = 0; i < npx * 3; i++) {
+                double a = frames[1][(size_t)j * npx * 3 + i], r = frames[0][(size_t)(j - 2) * npx * 3 + i];
+                double one = frames[0][(size_t)(j - 1) * npx * 3 + i];
+                worst = fmax(worst, fabs(a - r) / fmax(fabs(r), 1e-30));
+                lit += r;
+                moved_by_one += fabs(one - r);
+            }
+        print_message("  %s: frames 2-5 of pulse_start 0.6 against frames 0-3 of pulse_start 0: largest relative"
+                      " difference %.3g (sum %.4g; adjacent frames differ by %.4g in all)\n", types[m], worst, lit,
+                      moved_by_one);
+        assert_true(lit > 0);
+        assert_true(moved_by_one > 0.1 * lit); /* the frames differ: a shift by the wrong count would show */
+        assert_true(worst < 1e-5);
+        free(frames[0]);
+        free(frames[1]);
+    }
 }
 
 int main(void)
@@ -1463,11 +1586,13 @@ int main(void)
         cmocka_unit_test(test_early_exit_keeps_every_photon),
         cmocka_unit_test(test_darts_surface_band_edges),
         cmocka_unit_test(test_single_scatter_total),
+        cmocka_unit_test(test_unwarped_single_scatter_total),
         cmocka_unit_test(test_darts_single_scatter_total),
         cmocka_unit_test(test_consistency_vs_path_tracer),
         cmocka_unit_test(test_eda_consistency_anisotropic),
         cmocka_unit_test(test_darts_refractive_index),
-        cmocka_unit_test(test_darts_frames_vs_path_tracer),
+        cmocka_unit_test(test_frames_two_pulsed_emitters),
+        cmocka_unit_test(test_pulse_start_moves_frames),
     };
     /* DARTSPP_TEST_FILTER=name (cmocka wildcards) runs only the matching tests */
     if (getenv("DARTSPP_TEST_FILTER")) cmocka_set_test_filter(getenv("DARTSPP_TEST_FILTER"));

@@ -198,6 +198,48 @@ static void test_darts_mirrors(void **state)
     assert_non_null(strstr(err.msg, "sideways"));
 }
 
+/* Camera-unwarped time (issue 21, README "Outputs and time"): the bounds drop the camera leg, so DA distance
+ * sampling and EDA (which aim at the camera's ellipsoid) are off, control vertices stay on as spheres even
+ * where η differs between regions (they need no η along a camera leg), and where the camera sees a mirror
+ * they are off (the later camera segments count); the plan's JSON says which time. */
+static void test_camera_unwarp(void **state)
+{
+    (void)state;
+    scene s;
+    render_plan p;
+    char json[8192];
+    plan_of("", PP GATE R "\"enable_guiding\": true, \"enable_elliptical\": true, \"strict_time_width\": true,"
+                          "\"eda\": true, \"camera_unwarp\": true", "", &s, &p);
+    assert_true(p.window.camera_unwarp && p.darts.active && p.darts.unwarped && p.darts.strict);
+    assert_true(p.darts.control_vertices && !p.darts.distance_sampling && !p.darts.unwarped_mirror_off);
+    assert_true(!p.eda[0].on && p.eda[0].asked_unwarped && !p.eda_active);
+    assert_int_equal(plan_json(&p, &s, json, sizeof json), 0);
+    assert_non_null(strstr(json, "\"time\":\"camera-unwarped optical path length\""));
+    plan_done(&s, &p);
+
+    /* the same keys warped: everything on */
+    plan_of("", PP GATE R "\"enable_guiding\": true, \"enable_elliptical\": true, \"eda\": true", "", &s, &p);
+    assert_true(!p.darts.unwarped && p.darts.control_vertices && p.darts.distance_sampling && p.eda[0].on);
+    assert_false(p.eda[0].asked_unwarped);
+    assert_int_equal(plan_json(&p, &s, json, sizeof json), 0);
+    assert_non_null(strstr(json, "\"time\":\"camera-warped optical path length\""));
+    plan_done(&s, &p);
+
+    /* two refractive indices: warped control vertices are off, unwarped ones on */
+    const char *cube = ", { \"type\": \"cube\", \"bsdf\": { \"type\": \"forward\" }, \"int_medium\": \"fog\","
+                       "    \"transform\": { \"position\": [0, 0, 2], \"scale\": [1, 1, 1] } }";
+    plan_of(", \"speed_of_light\": 0.75", PP GATE R "\"enable_elliptical\": true, \"camera_unwarp\": true", cube, &s, &p);
+    assert_true(p.darts.control_vertices);
+    plan_done(&s, &p);
+
+    /* a mirror in view: control vertices off, and said why */
+    const char *mirror = ", { \"type\": \"quad\", \"name\": \"floor\", \"bsdf\": { \"type\": \"mirror\" },"
+                         " \"transform\": { \"position\": [0, -1, 2], \"scale\": [10, 1, 10] } }";
+    plan_of("", PP GATE R "\"enable_elliptical\": true, \"camera_unwarp\": true", mirror, &s, &p);
+    assert_true(p.darts.side.seen && !p.darts.control_vertices && p.darts.unwarped_mirror_off && !p.darts.cv_multi);
+    plan_done(&s, &p);
+}
+
 /* The slack of the DARTS surface tests: η_ub times the surface radius of the iteration, from the closed form
  * of the schedule r0 · (Γ(i+1+α) / (Γ(1+α) Γ(i+2)))^{1/2}; none without surface photons. */
 static void test_surface_slack(void **state)
@@ -282,6 +324,7 @@ int main(void)
         cmocka_unit_test(test_darts_and_eda_switches),
         cmocka_unit_test(test_control_vertices_need_one_eta),
         cmocka_unit_test(test_darts_mirrors),
+        cmocka_unit_test(test_camera_unwarp),
         cmocka_unit_test(test_surface_slack),
         cmocka_unit_test(test_plan_json),
         cmocka_unit_test(test_plan_in_cli_and_exr),

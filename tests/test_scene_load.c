@@ -627,6 +627,13 @@ static void test_bad_values_in_process(void **state)
         {"\"look_at\": [0, 0, 0]", "\"look_at\": [0, 1, -4]", "transform"}, /* look_at == position */
         {"\"transform\": {\"scale\": [4, 1, 4]}", "\"transform\": [1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0]", "transform"},
         {"\"camera\"", "\"kamera\"", "camera"}, /* no camera at all */
+        /* pulses (issue 21): finite and >= 0; camera_unwarp a boolean */
+        {"\"power\": 100", "\"power\": 100, \"pulse_start\": -0.5", "pulse_start"},
+        {"\"power\": 100", "\"power\": 100, \"pulse_start\": 1e999", "pulse_start"},
+        {"\"power\": 100", "\"power\": 100, \"pulse_width\": -1e-12", "pulse_width"},
+        {"\"power\": 100", "\"power\": 100, \"pulse_width\": 1e999", "pulse_width"},
+        {"\"power\": 100", "\"power\": 100, \"pulse_width\": \"short\"", "pulse_width"},
+        {"\"max_bounces\": 4,", "\"max_bounces\": 4, \"camera_unwarp\": \"yes\",", "camera_unwarp"},
     };
     int failures = 0;
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {

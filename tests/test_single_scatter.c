@@ -2,7 +2,9 @@
  * Each pixel's expected value is computed independently by quadrature (Gauss–Legendre over the pixel
  * footprint × composite Gauss–Legendre along the camera ray, over exactly the distances whose camera-warped
  * path time falls in the gate), and the path tracer's image is checked against it with z-scores from the
- * render's own measured standard error (16 independent seeds). */
+ * render's own measured standard error (16 independent seeds). The pulse and time-mode cases (issue 21)
+ * use a second quadrature along the ray, written for them: camera-unwarped time (the camera leg left out)
+ * and a box pulse, as the average of delta pulses over the pulse's emission times, taken in closed form. */
 #include "test_util.h"
 
 #include "dartspp/render.h"
@@ -20,6 +22,8 @@ typedef struct {
     double g, eta;
     int gated;
     double g0, g1;
+    int unwarp;        /* the camera leg takes no time */
+    double p0, pw;     /* pulse: emission at p0 (pw = 0) or uniformly over [p0, p0 + pw) */
 } analytic_case;
 
 static double hg(double g, double mu)
@@ -57,8 +61,74 @@ static double solve_time(const analytic_case *a, vec3 psi, double t)
     return 0.5 * (lo + hi);
 }
 
+/* ---- pulses and unwarped time: a second quadrature along the ray ----
+ * Along psi the light-to-camera time of the vertex at distance s, before emission, is T(s) = η(s + R(s))
+ * warped or η·R(s) unwarped (R = |x(s) − light|). A delta pulse at τ0 counts the vertex iff T(s) + τ0 is in
+ * the gate; a box pulse over [p0, p0 + pw) of unit weight is the average of delta pulses over τ0 in it,
+ * which is the overlap fraction W(s) = |[g0 − T, g1 − T) ∩ [p0, p0 + pw)| / pw, in closed form (the
+ * trapezoid of transient-math.md §1.3). The integrand f(s)·W(s) is smooth between the distances where T(s)
+ * crosses g0 − p0 − pw, g0 − p0, g1 − p0 − pw or g1 − p0: composite Gauss–Legendre between those. */
+static double light_time(const analytic_case *a, vec3 psi, double s)
+{
+    double R = v3_len(v3_sub(v3_add(a->cam, v3_scale(psi, s)), a->light));
+    return a->eta * (a->unwarp ? R : s + R);
+}
+
+static double pulse_weight(const analytic_case *a, double T)
+{
+    if (a->pw == 0) return T + a->p0 >= a->g0 && T + a->p0 < a->g1;
+    double lo = fmax(a->g0 - T, a->p0), hi = fmin(a->g1 - T, a->p0 + a->pw);
+    return hi > lo ? (hi - lo) / a->pw : 0.0;
+}
+
+/* Distances s >= 0 with T(s) = c, appended to out (at most 2). */
+static int time_crossings(const analytic_case *a, vec3 psi, double c, double *out)
+{
+    vec3 l = v3_sub(a->light, a->cam);
+    double b = v3_dot(psi, l), D2 = v3_dot(l, l), tau = c / a->eta;
+    int n = 0;
+    if (a->unwarp) { /* |ψs − l| = τ: s² − 2bs + D² − τ² = 0 */
+        double disc = b * b - D2 + tau * tau;
+        if (disc < 0 || tau <= 0) return 0;
+        double r = sqrt(disc);
+        if (b - r >= 0) out[n++] = b - r;
+        if (b + r >= 0) out[n++] = b + r;
+    } else if (tau * tau > D2) { /* s + |ψs − l| = τ */
+        out[n++] = (tau * tau - D2) / (2 * (tau - b));
+    }
+    return n;
+}
+
+static int cmp_double(const void *x, const void *y)
+{
+    double u = *(const double *)x, v = *(const double *)y;
+    return (u > v) - (u < v);
+}
+
+static double ray_radiance_pulse(const analytic_case *a, vec3 psi, int ch)
+{
+    const double cs[4] = {a->g0 - a->p0 - a->pw, a->g0 - a->p0, a->g1 - a->p0 - a->pw, a->g1 - a->p0};
+    double bp[10] = {0};
+    int n = 1;
+    for (int k = 0; k < 4; k++) n += time_crossings(a, psi, cs[k], bp + n);
+    qsort(bp, (size_t)n, sizeof(double), cmp_double);
+    const int panels = 60;
+    double sum = 0;
+    for (int i = 0; i + 1 < n; i++) {
+        double h = (bp[i + 1] - bp[i]) / panels;
+        for (int p = 0; p < panels && h > 0; p++)
+            for (int k = 0; k < 8; k++) {
+                double s = bp[i] + h * (p + 0.5 + 0.5 * gl_x[k]);
+                double w = pulse_weight(a, light_time(a, psi, s));
+                if (w > 0) sum += gl_w[k] * 0.5 * h * w * integrand(a, psi, s, ch);
+            }
+    }
+    return sum / (a->g1 - a->g0); /* beyond the last crossing T(s) + τ0 >= g1 for every τ0 */
+}
+
 static double ray_radiance(const analytic_case *a, vec3 psi, int ch)
 {
+    if (a->unwarp || a->p0 != 0 || a->pw != 0) return ray_radiance_pulse(a, psi, ch);
     double s0 = 0, s1;
     if (a->gated) {
         s0 = solve_time(a, psi, a->g0);
@@ -82,35 +152,45 @@ static double pixel_value(const analytic_case *a, const camera *cam, int x, int 
     return sum;
 }
 
-static void write_scene(const char *path, const char *phase, double speed, const char *window)
+static void write_scene(const char *path, const char *phase, double speed, const char *window, double p0, double pw)
 {
     char text[4096];
     snprintf(text, sizeof text,
              "{ \"media\": [ { \"name\": \"fog\", \"type\": \"homogeneous\", \"sigma_s\": [0.5, 0.35, 0.6],"
              "  \"sigma_a\": [0.1, 0.2, 0.05], \"speed_of_light\": %.17g, \"phase_function\": %s } ],"
              "  \"primitives\": [ { \"type\": \"point\", \"emission\": [1, 2, 3], \"ext_medium\": \"fog\","
-             "    \"transform\": { \"position\": [1.5, 0.8, 2.0] } } ],"
+             "    \"pulse_start\": %.17g, \"pulse_width\": %.17g, \"transform\": { \"position\": [1.5, 0.8, 2.0] } } ],"
              "  \"camera\": { \"type\": \"pinhole\", \"resolution\": [12, 8], \"fov\": 50, \"medium\": \"fog\","
              "    \"transform\": { \"position\": [0, 0, 0], \"look_at\": [0, 0, 1], \"up\": [0, 1, 0] } },"
              "  \"integrator\": { \"type\": \"path_tracer\", \"max_bounces\": 2, %s },"
              "  \"renderer\": { \"spp\": 1 } }",
-             speed, phase, window);
+             speed, phase, p0, pw, window);
     test_write_file(path, text);
 }
 
-static void check_against_quadrature(const char *phase, double g, double speed, const char *window, int gated,
-                                     double g0, double g1, long passes)
+/* The time mode and pulse of a case: unwarp 1 adds camera_unwarp to the integrator, (p0, pw) is the light's
+ * pulse. */
+typedef struct {
+    int unwarp;
+    double p0, pw;
+} time_mode;
+
+static void check_against_quadrature_mode(const char *phase, double g, double speed, const char *window, int gated,
+                                          double g0, double g1, long passes, time_mode tm)
 {
-    char *dir = test_tmpdir(), path[512];
+    char *dir = test_tmpdir(), path[512], win[512];
     snprintf(path, sizeof path, "%s/single.json", dir);
-    write_scene(path, phase, speed, window);
+    snprintf(win, sizeof win, "%s%s", window, tm.unwarp ? ", \"camera_unwarp\": true" : "");
+    write_scene(path, phase, speed, win, tm.p0, tm.pw);
     scene s;
     dp_error err;
     scene_load_options lo = {0};
     if (scene_load(path, &lo, &s, &err)) fail_msg("%s", err.msg);
     analytic_case a = {.cam = s.cam.pos, .light = s.lights[0].pos, .I = s.lights[0].intensity,
                        .ss = s.media[0].sigma_s, .st = s.media[0].sigma_t, .g = g, .eta = 1.0 / speed,
-                       .gated = gated, .g0 = g0, .g1 = g1};
+                       .gated = gated, .g0 = g0, .g1 = g1, .unwarp = tm.unwarp, .p0 = tm.p0, .pw = tm.pw};
+    assert_int_equal(s.integrator.window.camera_unwarp, tm.unwarp);
+    assert_true(s.lights[0].pulse_start == tm.p0 && s.lights[0].pulse_width == tm.pw);
     int n = s.cam.width * s.cam.height * 3;
     double *sum = calloc(n, sizeof(double)), *sq = calloc(n, sizeof(double));
     for (int k = 0; k < SEEDS; k++) {
@@ -158,6 +238,12 @@ static void check_against_quadrature(const char *phase, double g, double speed, 
     free(dir);
 }
 
+static void check_against_quadrature(const char *phase, double g, double speed, const char *window, int gated,
+                                     double g0, double g1, long passes)
+{
+    check_against_quadrature_mode(phase, g, speed, window, gated, g0, g1, passes, (time_mode){0, 0, 0});
+}
+
 static void test_gate_isotropic(void **state)
 {
     (void)state;
@@ -180,12 +266,65 @@ static void test_steady_hg_backward(void **state)
                              0, 0, 0, 600);
 }
 
+/* A box pulse of width 0.6 from 0.4 under the gate [4, 4.6) of refractive index 4/3: the quadrature is the
+ * average of delta pulses over the pulse (ray_radiance_pulse). And a delta pulse at 0.4, the gate of
+ * test_gate_isotropic moved by 0.4: the quadrature knows nothing of test_gate_isotropic's, so this also checks
+ * that the emission time is added once. Checked against broken variants: the box pulse drawn over
+ * [start, start + 2·width): mean z² 11617, image total −48 %; the emission time left out of the path
+ * tracer's light connections: mean z² 7893, total −57 %. */
+static void test_box_pulse(void **state)
+{
+    (void)state;
+    check_against_quadrature_mode("{\"type\": \"henyey_greenstein\", \"g\": 0.4}", 0.4, 0.75,
+                                  "\"transient_time_center\": 4.3, \"transient_time_width\": 0.6", 1, 4.0, 4.6, 3000,
+                                  (time_mode){0, 0.4, 0.6});
+    check_against_quadrature_mode("{\"type\": \"isotropic\"}", 0.0, 1.0,
+                                  "\"transient_time_center\": 3.65, \"transient_time_width\": 0.5", 1, 3.4, 3.9, 3000,
+                                  (time_mode){0, 0.4, 0});
+}
+
+/* Camera-unwarped time: only the light leg counts, so the gate [0.8, 2.6) selects the shell 0.8 <= R < 2.6
+ * around the light, which the camera sees in every pixel — while warped, no path reaches the camera before
+ * η·|camera − light| = 2.62, so the same gate is exactly black: every pixel 0 in every seed. Unwarped against
+ * the quadrature with the camera leg left out (ray_radiance_pulse: the shell's chord along each ray). Checked
+ * against a broken variant: camera_unwarp ignored by the path tracer: the image is black, and the check
+ * fails (no pixel has a standard error). */
+static void test_unwarped_early_gate(void **state)
+{
+    (void)state;
+    const char *window = "\"transient_time_center\": 1.7, \"transient_time_width\": 1.8";
+    char *dir = test_tmpdir(), path[512];
+    snprintf(path, sizeof path, "%s/warped.json", dir);
+    write_scene(path, "{\"type\": \"isotropic\"}", 1.0, window, 0, 0);
+    scene s;
+    dp_error err;
+    scene_load_options lo = {0};
+    if (scene_load(path, &lo, &s, &err)) fail_msg("%s", err.msg);
+    assert_true(v3_len(v3_sub(s.lights[0].pos, s.cam.pos)) > 2.6); /* the gate ends before any warped path */
+    for (int k = 0; k < 4; k++) {
+        render_options ro = {.threads = 2, .seed = 70 + k, .spp = 500};
+        film f;
+        render_stats st;
+        assert_int_equal(render_scene(&s, &ro, &f, &st, &err), 0);
+        for (size_t i = 0; i < (size_t)3 * f.width * f.height; i++) assert_true(f.sum[i] == 0.0);
+        film_free(&f);
+    }
+    scene_free(&s);
+    char cmd[600];
+    snprintf(cmd, sizeof cmd, "rm -rf %s", dir);
+    (void)!system(cmd);
+    free(dir);
+    check_against_quadrature_mode("{\"type\": \"isotropic\"}", 0.0, 1.0, window, 1, 0.8, 2.6, 3000, (time_mode){1, 0, 0});
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_gate_isotropic),
         cmocka_unit_test(test_gate_hg_refractive),
         cmocka_unit_test(test_steady_hg_backward),
+        cmocka_unit_test(test_box_pulse),
+        cmocka_unit_test(test_unwarped_early_gate),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

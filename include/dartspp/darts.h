@@ -47,6 +47,10 @@ typedef struct {
     vec3 focus[PLAN_MAX_MIRRORS];
     double cv_share[1 + PLAN_MAX_MIRRORS];  /* straight focus, then each mirror focus */
     double cv_defensive;
+    /* camera_unwarp: a path's time leaves out the camera segment adjacent to the sensor, so the camera leg
+     * of every bound above is 0 (the equal-time set around a vertex is a sphere, not an ellipsoid), control
+     * vertices are sphere_control_vertex and the plan turns DA distance sampling, EDA and the mirror foci off */
+    int unwarped;
 } darts_guide;
 
 typedef struct {
@@ -57,9 +61,16 @@ typedef struct {
 
 /* Fills g from the plan and the camera position; g->active is 0 when the plan runs no DARTS sampler. */
 void darts_guide_init(const render_plan *p, vec3 cam, darts_guide *g);
-/* Samples the target bin of a path from a light at x_light: uniform in time over the part of the window
- * reachable from the light, [max(beg, η_lb·|cam − x_light|), end). Returns 0 when nothing is reachable. */
-int darts_sample_bin(const darts_guide *g, vec3 x_light, double u, darts_bin *b);
+/* The least time a straight camera leg from x can take: η_lb·|cam − x|, or 0 when time is unwarped. */
+static inline double darts_leg_lb(const darts_guide *g, vec3 x)
+{
+    return g->unwarped ? 0.0 : g->eta_lb * v3_len(v3_sub(g->cam, x));
+}
+
+/* Samples the target bin of a path emitted at time τ0 from a light at x_light: uniform in time over the part
+ * of the window reachable from the light, [max(beg, τ0 + darts_leg_lb(x_light)), end) — the window as seen
+ * from that path's emission time. Returns 0 when nothing is reachable. */
+int darts_sample_bin(const darts_guide *g, vec3 x_light, double tau0, double u, darts_bin *b);
 
 /* ---- ellipse record (reference §3) ----
  * At a vertex x with elapsed time τ: the admissible residual geometric length S ∈ [S_lo, S_hi] with
@@ -81,7 +92,7 @@ typedef struct {
 void ellipse_record_init(ellipse_record *r, const darts_guide *g, const darts_bin *b, vec3 x, double tau,
                          double eta, residual_sampling mode, double sigma_t_avg, double u);
 /* Whether any later photon of a path at this vertex can still land in its bin (time only grows):
- * τ + η_lb·C < bin end. */
+ * τ + darts_leg_lb(x) < bin end (η_lb·C warped, 0 unwarped). */
 int darts_can_reach(const darts_guide *g, const darts_bin *b, vec3 x, double tau);
 /* Where the reachable set ends along a ray from x: the distance t with t + |x + t·d − cam| = S (in units of
  * η_lb time), an ellipsoid with foci x and the camera, for C = |x − cam| and cos θ = d·(cam − x)/C; 0 when
@@ -114,6 +125,18 @@ int control_vertex_sample(const ellipse_record *r, vec3 d, double tmax, residual
 /* Density in t of control_vertex_sample (mis = 1) or ellipse_control_vertex (mis = 0) at distance t along d:
  * the same mixture, evaluated (not sampled), so the two can be checked against each other. */
 double control_vertex_pdf(const ellipse_record *r, vec3 d, double t, int mis, residual_sampling mode, double sigma);
+
+/* ---- control vertex with camera-unwarped time (ours, issue 21) ----
+ * Unwarped, a photon at distance t along the ray from a vertex of time τ in a medium of index η has the path
+ * time τ + η·t when the camera sees it directly: the places of the ray inside the bin [b0, b1) are the
+ * interval t ∈ [max(0, (b0 − τ)/η), min(tmax, (b1 − τ)/η)) (the ray's chord through a spherical shell
+ * around the vertex). t is drawn in it ∝ e^{−σt} (σ = sigma, the mean σt; uniform where σ·length < 1e-6),
+ * so every photon lands in the bin and the weight σs·e^{−σt·t}/p(t) stays bounded. u in [0, 1). Returns 1
+ * with (t, pdf of t) when the interval is not empty. */
+int sphere_control_vertex(double tau, double eta, const darts_bin *b, double tmax, double sigma, double u, double *t,
+                          double *pdf_t);
+/* Its density at t (0 outside the interval). */
+double sphere_control_vertex_pdf(double tau, double eta, const darts_bin *b, double tmax, double sigma, double t);
 
 /* ---- control vertices behind mirrors (ours; plan.h camera_side_scan, issue 18) ----
  * One-sample MIS over the techniques of one medium segment: the control vertex of the record with focus

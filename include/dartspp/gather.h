@@ -2,7 +2,8 @@
  * null and forward surfaces and continued through specular and near-specular lobes by sampling them; along
  * every medium segment the point-beam 2D estimator (biweight kernel) over the volume photons; at surface
  * hits the surface estimate over the gathered lobes (k nearest within R, box kernel), by the rule of
- * surface_photon_split; camera-warped time for every photon; box gate and frames through the film. */
+ * surface_photon_split; camera-warped time for every photon, or camera-unwarped (camera_unwarp: the camera
+ * segment adjacent to the sensor left out); box gate and frames through the film. */
 #ifndef DARTSPP_GATHER_H
 #define DARTSPP_GATHER_H
 
@@ -25,6 +26,7 @@ typedef struct {
     bounce_limits bounces;          /* which light + camera paths count */
     surface_shading shading;        /* BSDF frames and the gather/continue split (same as the photon pass) */
     int camera_leg_projected;       /* 0: Euclidean distance segment origin → photon (reference) */
+    int camera_unwarp;              /* the camera segment adjacent to the sensor takes no time (§1.4) */
     const dp_stop_flag *stop;       /* rows not started once it is set are skipped (may be NULL) */
 } gather_input;
 

@@ -88,12 +88,16 @@ typedef struct {
     double cv_defensive;
     double mirror_defensive; /* the smallest defensive share where a continued surface is seen (key) */
     int strict_surfaces;   /* strict's start test on surface photons: strict, and not (full mode and side.seen) */
+    int unwarped;          /* camera_unwarp: the bounds drop the camera leg, control vertices are spheres around
+                            * the vertex (sphere_control_vertex), DA distance sampling and EDA are off */
+    int unwarped_mirror_off; /* control vertices off: unwarped, and the camera sees a continued surface */
 } darts_plan;
 
 /* EDA direction sampling in one medium. */
 typedef struct {
     int on;
     double alpha;          /* EDA/phase selection α */
+    int asked_unwarped;    /* asked for, but off: time is camera-unwarped */
 } eda_plan;
 
 typedef struct render_plan {

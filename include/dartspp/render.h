@@ -113,20 +113,25 @@ void memory_format_bytes(double bytes, char *out, size_t n);
 
 /* ---- outputs ----
  * Writes the gate image to `path` (.exr or .pfm), a PNG preview `<stem>.png`, and in frame mode one image
- * per frame `<stem>_<NNNN>.<ext>` (0-based, zero-padded to at least 4 digits) and `<stem>_frames.csv`.
+ * per frame `<stem>_<NNNN>.<ext>` (0-based, zero-padded to at least 4 digits), `<stem>_frames.csv`, the
+ * transient cube `<stem>_cube.npy` (float32, shape (frames, height, width, 3): the frame images value for
+ * value) and the viewer page `<stem>_viewer.html` (io.h), the last two unless `skip` leaves them out.
  * integrator and plan (JSON, plan_json) go into the EXR headers (either may be NULL). Every file is written
  * atomically; `wrote` (may be NULL) is called with each path written. */
-int render_write_outputs(const film *f, const char *path, const char *integrator, const char *plan,
+#define RENDER_SKIP_CUBE 1    /* no <stem>_cube.npy (dartspp render --no-cube) */
+#define RENDER_SKIP_VIEWER 2  /* no <stem>_viewer.html (--no-viewer) */
+int render_write_outputs(const film *f, const char *path, const char *integrator, const char *plan, int skip,
                          void (*wrote)(const char *path), dp_error *err);
 
 #define OUTPUT_PATH_MAX 2048
 /* Before any work: the extension (.exr or .pfm), the folder (created), a probe file created and removed
- * there, the disk room and file count of the gate image, preview and frame files. 0 or -1 with err. */
-int render_outputs_check(const char *path, int width, int height, int frame_count, dp_error *err);
+ * there, the disk room and file count of the gate image, preview, frame files, cube and viewer (skip as
+ * above). 0 or -1 with err. */
+int render_outputs_check(const char *path, int width, int height, int frame_count, int skip, dp_error *err);
 /* When writing to `path` failed at the end: the same outputs, under the same file names, in a new folder
  * dartspp-rescue-XXXXXX in $TMPDIR, else /tmp, else the working folder (the first that takes them);
  * rescue_dir receives that folder. 0, or -1 with err when no folder took them. */
-int render_write_rescue(const film *f, const char *path, const char *integrator, const char *plan,
+int render_write_rescue(const film *f, const char *path, const char *integrator, const char *plan, int skip,
                         void (*wrote)(const char *path), char *rescue_dir, size_t n, dp_error *err);
 
 #endif

@@ -79,7 +79,17 @@ typedef struct {
     vec3 pos;
     vec3 intensity;   /* radiant intensity (W/sr); `power` P is stored as P/(4π) */
     int medium;       /* ext_medium, else MEDIUM_VACUUM */
+    double pulse_start; /* time of emission (pulse_start, default 0) */
+    double pulse_width; /* a box pulse over [start, start + width) of unit total weight; 0: a delta (default) */
 } point_light;
+
+/* The emission time of one light path or light connection: the pulse start, plus a uniform draw across a
+ * box pulse (transient-math.md §1.3: sampling τ_l ~ U[start, start + width) is unbiased for the box). A
+ * delta pulse draws nothing, so its random numbers are those of a scene without pulses. */
+static inline double point_light_emission_time(const point_light *L, dp_rng *rng)
+{
+    return L->pulse_width > 0.0 ? L->pulse_start + L->pulse_width * rng_uniform(rng) : L->pulse_start;
+}
 
 typedef struct {
     int width, height;
@@ -100,6 +110,8 @@ typedef struct {
     int frame_count;  /* 0: one gate image; N >= 1: frames [start + k w, start + (k+1) w) */
     double start;     /* window start */
     double width;     /* gate width, or frame width */
+    int camera_unwarp; /* integrator key camera_unwarp: a path's time leaves out the camera segment adjacent to the
+                        * sensor (transient-math.md §1.4); 0: camera-warped (the default) */
 } time_window;
 
 static inline double time_window_end(const time_window *tw)

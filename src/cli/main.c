@@ -10,7 +10,7 @@ static void usage(FILE *f)
             "usage: dartspp render SCENE.json [--threads N] [--seed S] [--spp N] [--time SECONDS]\n"
             "                      [--output PATH.exr|.pfm] [--checkpoint SECONDS] [--set key=value ...]\n"
             "                      [--reference REF.exr --log RUN.csv [--log-every SECONDS]]\n"
-            "                      [--max-memory SIZE] [--verbose] [--quiet]\n"
+            "                      [--max-memory SIZE] [--no-cube] [--no-viewer] [--verbose] [--quiet]\n"
             "       dartspp compare IMAGE REFERENCE [--csv]      (EXR or PFM)\n"
             "       dartspp patch-mean IMAGE X0 Y0 X1 Y1          (mean of a pixel rectangle)\n"
             "       dartspp merge OUTPUT IMAGE IMAGE [IMAGE...]   (mean of independent renders, its variance)\n"

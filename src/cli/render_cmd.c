@@ -22,6 +22,7 @@ typedef struct {
     const char *reference, *log;
     double log_every;
     double max_memory; /* bytes; 0: what the machine has available */
+    int skip;          /* RENDER_SKIP_CUBE, RENDER_SKIP_VIEWER: --no-cube, --no-viewer */
     render_options ro;
 } render_args;
 
@@ -90,6 +91,8 @@ static int parse_args(int argc, char **argv, render_args *a)
         double d;
         if (!strcmp(o, "--verbose")) a->verbose = 1;
         else if (!strcmp(o, "--quiet")) a->quiet = 1;
+        else if (!strcmp(o, "--no-cube")) a->skip |= RENDER_SKIP_CUBE;
+        else if (!strcmp(o, "--no-viewer")) a->skip |= RENDER_SKIP_VIEWER;
         else if (!strcmp(o, "--threads") || !strcmp(o, "--seed") || !strcmp(o, "--spp") || !strcmp(o, "--time")) {
             if (parse_number(o, v, 0, &d)) return bad_arg(o, v, "expected a non-negative number");
             if (!strcmp(o, "--threads")) a->ro.threads = (int)d;
@@ -150,6 +153,7 @@ typedef struct {
     const char *out;
     double every, last;
     int quiet;
+    int skip;          /* render_write_outputs */
     error_log *log;    /* --log: error against --reference (may be NULL) */
 } after_pass_ctx;
 
@@ -160,7 +164,7 @@ static int after_pass(void *ctx, const film *f, const render_stats *st, dp_error
     if (c->every <= 0 || st->seconds - c->last < c->every) return 0;
     c->last = st->seconds;
     dp_error werr;
-    if (render_write_outputs(f, c->out, c->p->type_name, c->plan_json, NULL, &werr)) {
+    if (render_write_outputs(f, c->out, c->p->type_name, c->plan_json, c->skip, NULL, &werr)) {
         /* the render goes on: its end writes again, to a rescue folder if need be */
         fprintf(stderr, "%swarning: checkpoint not written: %s\n", isatty(2) ? "\r\033[K" : "", werr.msg);
         return 0;
@@ -236,7 +240,8 @@ static void print_samplers(const scene *s, const render_plan *p)
     }
     printf("photon pass: DARTS, %s target bins; DA distance sampling %s; elliptical control vertices %s (residual %s); "
            "strict time %s", p->window.frame_count ? "per-frame" : "gate", d->distance_sampling ? "on" : "off",
-           d->control_vertices ? "on" : d->elliptical_asked ? "off: refractive index not uniform" : "off",
+           d->unwarped ? "off (camera-unwarped time)" : d->control_vertices ? "on"
+           : d->elliptical_asked ? "off: refractive index not uniform" : "off",
            d->residual == RESIDUAL_EXPONENTIAL ? "exponential" : "uniform", d->strict ? "on" : "off");
     if (d->side.seen && d->mirrors == DARTS_MIRRORS_FULL) {
         printf("; behind continued surfaces (the camera sees '%s'):", d->side.first);
@@ -249,6 +254,14 @@ static void print_samplers(const scene *s, const render_plan *p)
         }
         if (d->strict) printf("%s strict mode keeps every surface photon a camera path could gather", d->cv_multi ? ";" : "");
     }
+    if (d->unwarped) {
+        printf("; camera-unwarped time: control vertices %s", d->control_vertices ? "on the light leg's equal-time "
+               "spheres" : d->unwarped_mirror_off ? "off (the camera sees a continued surface, whose later camera "
+               "segments count)" : "off");
+        if (s->integrator.enable_guiding) printf(", DA distance sampling off (it aims at the camera's ellipsoid)");
+    }
+    for (int i = 0; i < s->medium_count; i++)
+        if (p->eda[i].asked_unwarped) printf("; EDA off in '%s' (camera-unwarped time)", s->media[i].name);
     const char *sep = "; EDA direction sampling in ";
     for (int i = 0; i < s->medium_count; i++) {
         if (!p->eda[i].on) continue;
@@ -271,8 +284,10 @@ static void print_summary(const scene *s, const render_plan *p, const render_sta
     printf("scene %s (loaded in %.2f s: %u triangles, %d textures): %s, %dx%d, ", s->path, load_seconds, s->tri_count,
            s->texture_count, p->type_name, s->cam.width, s->cam.height);
     if (!tw->gated) printf("steady state (no gate)\n");
-    else if (tw->frame_count) printf("%d frames of width %g from %g (camera-warped optical path length)\n", tw->frame_count, tw->width, tw->start);
-    else printf("gate [%g, %g) (camera-warped optical path length)\n", tw->start, time_window_end(tw));
+    else if (tw->frame_count) printf("%d frames of width %g from %g (%s optical path length)\n", tw->frame_count, tw->width,
+                                     tw->start, tw->camera_unwarp ? "camera-unwarped" : "camera-warped");
+    else printf("gate [%g, %g) (%s optical path length)\n", tw->start, time_window_end(tw),
+                tw->camera_unwarp ? "camera-unwarped" : "camera-warped");
     printf("rendered %ld passes in %.2f s (%.2f M camera rays/s, %.2f M rays/s)%s; non-finite samples suppressed: %ld\n",
            st->passes, st->seconds, st->seconds > 0 ? st->camera_rays / st->seconds * 1e-6 : 0.0,
            st->seconds > 0 ? st->rays / st->seconds * 1e-6 : 0.0, st->interrupted ? " (interrupted)" : "", st->nonfinite);
@@ -310,6 +325,7 @@ typedef struct {
     char out[OUTPUT_PATH_MAX];
     memory_estimate mem;
     double load_seconds;  /* scene_load: JSON, meshes, textures, Embree build */
+    int skip;             /* render_write_outputs */
 } render_job;
 
 /* The memory guard (before any work): the plan's estimate against the limit; exit 2 naming the key that
@@ -350,10 +366,10 @@ static void print_memory(const memory_estimate *m)
 static int write_outputs(const render_job *j, const film *f)
 {
     dp_error err;
-    if (!render_write_outputs(f, j->out, j->p.type_name, j->plan_json, print_written, &err)) return 0;
+    if (!render_write_outputs(f, j->out, j->p.type_name, j->plan_json, j->skip, print_written, &err)) return 0;
     fprintf(stderr, "dartspp render: %s\n", err.msg);
     char rescue[OUTPUT_PATH_MAX];
-    if (render_write_rescue(f, j->out, j->p.type_name, j->plan_json, print_written, rescue, sizeof rescue, &err))
+    if (render_write_rescue(f, j->out, j->p.type_name, j->plan_json, j->skip, print_written, rescue, sizeof rescue, &err))
         fprintf(stderr, "dartspp render: no rescue folder took the images either (%s): they are lost\n", err.msg);
     else
         fprintf(stderr, "dartspp render: the images of the %ld completed passes were written to %s instead\n",
@@ -380,7 +396,9 @@ static int prepare(const render_args *a, render_job *j, int check_outputs, int r
         rc = 2;
     }
     output_path(a, &j->s, j->out, sizeof j->out);
-    if (!rc && check_outputs && render_outputs_check(j->out, j->s.cam.width, j->s.cam.height, j->p.window.frame_count, &err)) {
+    j->skip = a->skip;
+    if (!rc && check_outputs &&
+        render_outputs_check(j->out, j->s.cam.width, j->s.cam.height, j->p.window.frame_count, j->skip, &err)) {
         fprintf(stderr, "dartspp render: %s\n", err.msg);
         rc = 2;
     }
@@ -421,7 +439,7 @@ int cli_render_cluster(int argc, char **argv, const render_cluster *cluster)
     after_pass_ctx cp = {0};
     int prepared = !rc && !(rc = prepare(&a, &j, rank == 0, cl ? cl->ranks_on_node : 1));
     if (prepared) {
-        cp = (after_pass_ctx){.p = &j.p, .plan_json = j.plan_json, .out = j.out, .quiet = a.quiet,
+        cp = (after_pass_ctx){.p = &j.p, .plan_json = j.plan_json, .out = j.out, .quiet = a.quiet, .skip = j.skip,
                               .every = rank != 0 ? 0 : a.checkpoint >= 0 ? a.checkpoint : j.p.checkpoint_seconds};
         /* the error log is rank 0's; its reference is read here, before any rank renders */
         if (rank == 0 && a.log && !(cp.log = error_log_open(a.log, a.reference, j.s.cam.width, j.s.cam.height,

@@ -6,7 +6,7 @@
 
 int darts_can_reach(const darts_guide *g, const darts_bin *b, vec3 x, double tau)
 {
-    return tau + g->eta_lb * v3_len(v3_sub(g->cam, x)) < b->end;
+    return tau + darts_leg_lb(g, x) < b->end;
 }
 
 /* Residual S on [lo, hi]: uniform (reference) or exponential with rate σ truncated to [lo, hi] (eq. 21–22). */

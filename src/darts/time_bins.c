@@ -1,5 +1,6 @@
 /* Time window and per-path target bins (reference §2): each light path aims at one bin — the gate, or in
- * frame mode one frame, drawn uniformly in time over the part of the window the light can reach. */
+ * frame mode one frame, drawn uniformly in time over the part of the window the path can reach from its
+ * light and emission time. */
 #include "dartspp/darts.h"
 
 void darts_guide_init(const render_plan *p, vec3 cam, darts_guide *g)
@@ -11,15 +12,16 @@ void darts_guide_init(const render_plan *p, vec3 cam, darts_guide *g)
                        .control_vertices = d->control_vertices, .distance_sampling = d->distance_sampling,
                        .control_vertex_mis = d->control_vertex_mis, .residual = d->residual, .strict = d->strict,
                        .early_exit = d->early_exit, .da_defensive = d->da_defensive, .cv_multi = d->cv_multi,
-                       .focus_count = d->cv_multi ? d->side.mirror_count : 0, .cv_defensive = d->cv_defensive};
+                       .focus_count = d->cv_multi ? d->side.mirror_count : 0, .cv_defensive = d->cv_defensive,
+                       .unwarped = tw->camera_unwarp};
     g->strict = d->strict_surfaces;
     for (int k = 0; k < g->focus_count; k++) g->focus[k] = d->side.focus[k];
     for (int k = 0; k <= PLAN_MAX_MIRRORS; k++) g->cv_share[k] = d->cv_share[k];
 }
 
-int darts_sample_bin(const darts_guide *g, vec3 x_light, double u, darts_bin *b)
+int darts_sample_bin(const darts_guide *g, vec3 x_light, double tau0, double u, darts_bin *b)
 {
-    double t_min = dp_fmax(g->beg, g->eta_lb * v3_len(v3_sub(g->cam, x_light)));
+    double t_min = dp_fmax(g->beg, tau0 + darts_leg_lb(g, x_light));
     double range = g->end - t_min;
     if (!(range > 0.0)) return 0;
     if (g->frames == 0) {

@@ -29,6 +29,7 @@ void volume_photon_splat(const gather_input *g, film_pixel *pix, const medium *m
 {
     if (!bounces_count(&g->bounces, p->bounce + b_cam)) return;
     double leg = g->camera_leg_projected ? t : v3_len(v3_sub(photon_vec(p->pos), o));
+    if (g->camera_unwarp && b_cam == 1) leg = 0.0; /* the sensor's own segment takes no time */
     film_slot slot = film_time_slot(pix->f, t_cam + p->time + m->eta * leg, p->frame);
     if (slot.counts) volume_photon_splat_slot(g, pix, m, d, thr, p, t, d2, &slot); /* before the kernel and exp */
 }
@@ -96,7 +97,7 @@ static void direct_light(pixel_ctx *c, const surface_site *ss, unsigned lobes, i
         vec3 f = surface_eval_cos(ss, w, lobes);
         if (v3_max(f) <= 0.0) continue;
         vec3 tr;
-        double t = t_cam;
+        double t = t_cam + point_light_emission_time(L, c->rng);
         c->pix->rays += 1;
         if (!scene_transmittance(s, surface_spawn(s, ss, w), surface_medium_toward(ss, med, w), L->pos, &tr, &t))
             continue;
@@ -132,7 +133,7 @@ static void trace_sensor_path(pixel_ctx *c, vec3 d)
             thr = v3_mul(thr, v3_exp_neg(v3_scale(m->sigma_t, len)));
         }
         if (!hit || v3_is_zero(thr)) return;
-        t_cam += medium_eta(s, med) * len;
+        if (!(c->g->camera_unwarp && b_cam == 1)) t_cam += medium_eta(s, med) * len;
         const surface *sf = &s->surfaces[h.surface];
         const bsdf *bs = &s->bsdfs[sf->bsdf];
         if (bsdf_is_passthrough(bs)) {

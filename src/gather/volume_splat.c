@@ -144,6 +144,7 @@ static camera_leg_time photon_camera_time(const scene *s, const gather_input *g,
     vec3 x = v3(p->pos[0], p->pos[1], p->pos[2]);
     double leg = v3_len(v3_sub(x, s->cam.pos));
     c.valid = 1;
+    if (g->camera_unwarp) leg = 0.0; /* as volume_photon_splat: the sensor's own segment takes no time */
     c.slot = film_time_slot(f, 0.0 + p->time + s->media[s->cam.medium].eta * leg, p->frame);
     c.slot.counts = c.slot.counts && bounces_count(&g->bounces, p->bounce + 1);
     return c;

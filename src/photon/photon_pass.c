@@ -107,7 +107,8 @@ static void mirror_records(light_path *lp, const medium *m)
 /* A new vertex at lp->o: the ellipse record its samplers share (DARTS, inside a medium). */
 static void new_vertex(light_path *lp)
 {
-    if (!aims_at_volume(lp) || lp->med == MEDIUM_VACUUM) return;
+    /* unwarped, the control vertex needs no record and DA and EDA are off (plan.c) */
+    if (!aims_at_volume(lp) || lp->med == MEDIUM_VACUUM || lp->g->unwarped) return;
     const medium *m = &lp->s->media[lp->med];
     ellipse_record_init(&lp->rec, lp->g, &lp->bin, lp->o, lp->time, m->eta, lp->g->residual, v3_avg(m->sigma_t),
                         rng_uniform(lp->rng));
@@ -124,7 +125,7 @@ static void new_vertex(light_path *lp)
 static int surface_time_ok(const light_path *lp, vec3 x)
 {
     if (!lp->g->active) return 1;
-    double dist = v3_len(v3_sub(lp->g->cam, x));
+    double dist = lp->g->unwarped ? 0.0 : v3_len(v3_sub(lp->g->cam, x)); /* unwarped: no camera leg */
     double t_lb = lp->time + lp->g->eta_lb * dist, t_ub = lp->time + lp->g->eta_ub * dist;
     double slack = lp->in->surface_slack;
     return t_lb < lp->bin.end + slack && (!lp->g->strict || t_ub >= lp->bin.start - slack);
@@ -144,7 +145,9 @@ static int medium_segment(light_path *lp, double tmax)
         double t, pdf;
         double sigma = v3_avg(m->sigma_t), u1 = rng_uniform(lp->rng), u2 = rng_uniform(lp->rng);
         int made;
-        if (g->cv_multi) {
+        if (g->unwarped) {
+            made = sphere_control_vertex(lp->time, m->eta, &lp->bin, tmax, sigma, u1, &t, &pdf);
+        } else if (g->cv_multi) {
             const double u[3] = {u1, u2, rng_uniform(lp->rng)};
             made = cv_techniques_sample(&lp->cvt, lp->d, tmax, g->control_vertex_mis, g->residual, sigma, u, &t, &pdf);
         } else {
@@ -179,6 +182,7 @@ static double reach_distance(const light_path *lp)
 {
     const darts_guide *g = lp->g;
     if (!g->active || !g->early_exit) return INFINITY;
+    if (g->unwarped) return dp_fmax(0.0, (lp->reach.end - lp->time) / g->eta_lb); /* τ + η_lb·h = end */
     vec3 to_cam = v3_sub(g->cam, lp->o);
     double C = v3_len(to_cam);
     return darts_reach_along((lp->reach.end - lp->time) / g->eta_lb, C, C > 0.0 ? v3_dot(lp->d, to_cam) / C : 0.0);
@@ -277,10 +281,11 @@ static void trace_light_path(const scene *s, const photon_pass_input *in, int vo
     int li = (int)(rng_uniform(rng) * s->light_count);
     if (li >= s->light_count) li = s->light_count - 1;
     const point_light *L = &s->lights[li];
+    double tau0 = point_light_emission_time(L, rng); /* the path's time starts at its emission */
     light_path lp = {.s = s, .in = in, .g = g, .tb = tb, .pc = pc, .rng = rng, .o = L->pos, .med = L->medium,
-                     .volume_open = volume_open,
+                     .volume_open = volume_open, .time = tau0,
                      .bin = {.start = -INFINITY, .end = INFINITY, .pdf = 1.0, .frame = -1}};
-    if (g->active && !darts_sample_bin(g, L->pos, rng_uniform(rng), &lp.bin)) return;
+    if (g->active && !darts_sample_bin(g, L->pos, tau0, rng_uniform(rng), &lp.bin)) return;
     lp.reach = lp.bin; /* the early exit keeps every path whose surface photons could still count */
     lp.reach.end += in->surface_slack;
     double u1 = rng_uniform(rng), u2 = rng_uniform(rng);

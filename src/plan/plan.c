@@ -22,6 +22,9 @@ static void resolve_eda(const scene *s, render_plan *p)
         const medium *m = &s->media[i];
         eda_plan *e = &p->eda[i];
         e->on = p->type == INTEGRATOR_PHOTON_POINTS && in->window.gated && (m->eda || (in->eda && medium_scatters(m)));
+        /* EDA aims at the camera's equal-time ellipsoid, which unwarped time does not have */
+        e->asked_unwarped = e->on && in->window.camera_unwarp;
+        if (e->asked_unwarped) e->on = 0;
         e->alpha = m->eda_alpha > 0.0 ? m->eda_alpha : in->eda_alpha;
         p->eda_active |= e->on;
     }
@@ -36,9 +39,13 @@ static void resolve_darts(const scene *s, render_plan *p)
     int asked = in->enable_guiding || in->enable_elliptical || in->eda;
     for (int i = 0; i < s->medium_count; i++) asked |= s->media[i].eda;
     d->active = p->type == INTEGRATOR_PHOTON_POINTS && in->window.gated && asked && s->medium_count > 0;
-    d->distance_sampling = in->enable_guiding;
+    d->unwarped = in->window.camera_unwarp;
+    /* DA distance sampling aims at diffusion towards the camera within the residual time of the camera's
+     * ellipsoid: unwarped time has none, so it is off (free flight, unbiased); control vertices become
+     * sphere_control_vertex, which needs no η along a camera leg */
+    d->distance_sampling = in->enable_guiding && !d->unwarped;
     d->elliptical_asked = in->enable_elliptical;
-    d->control_vertices = d->active && in->enable_elliptical && scene_eta_uniform(s);
+    d->control_vertices = d->active && in->enable_elliptical && (d->unwarped || scene_eta_uniform(s));
     d->control_vertex_mis = in->control_vertex_mis;
     d->residual = in->ellipse_residual ? RESIDUAL_EXPONENTIAL : RESIDUAL_UNIFORM;
     d->strict = in->strict_time_width;
@@ -67,6 +74,11 @@ static void resolve_camera_side(const scene *s, render_plan *p)
     if (d->mirrors != DARTS_MIRRORS_FULL || !d->side.seen) return;
     d->strict_surfaces = 0; /* a camera path behind a continued surface has no upper bound on its leg */
     if (!d->control_vertices) return;
+    if (d->unwarped) { /* behind a mirror the camera's later segments count: no sphere aims there */
+        d->control_vertices = 0;
+        d->unwarped_mirror_off = 1;
+        return;
+    }
     d->cv_multi = 1;
     double sum = 1.0, def = dp_fmax(d->side.other_fraction, d->mirror_defensive);
     for (int k = 0; k < d->side.mirror_count; k++) sum += d->side.mirror_fraction[k];
@@ -149,7 +161,8 @@ int plan_json(const render_plan *p, const scene *s, char *out, size_t n)
 {
     size_t len = 0;
     const time_window *tw = &p->window;
-    put(out, n, &len, "{\"integrator\":\"%s\",\"time\":\"camera-warped optical path length\"", p->type_name);
+    put(out, n, &len, "{\"integrator\":\"%s\",\"time\":\"camera-%s optical path length\"", p->type_name,
+        tw->camera_unwarp ? "unwarped" : "warped");
     if (!tw->gated) put(out, n, &len, ",\"window\":\"steady\"");
     else put(out, n, &len, ",\"window\":[%.17g,%.17g],\"frames\":%d", tw->start, time_window_end(tw), tw->frame_count);
     put(out, n, &len, ",\"bounces\":[%d,%d]", p->bounces.min, p->bounces.max);

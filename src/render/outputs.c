@@ -1,5 +1,6 @@
-/* Film → files: gate image, PNG preview, per-frame images and the frame sidecar (DESIGN §4); the check of
- * the output path before any work, and the rescue folder when the final write fails anyway. */
+/* Film → files: gate image, PNG preview, per-frame images, the frame sidecar, the transient cube and its
+ * viewer page (DESIGN §4); the check of the output path before any work, and the rescue folder when the
+ * final write fails anyway. */
 #include "dartspp/render.h"
 
 #include <errno.h>
@@ -41,22 +42,100 @@ static void frame_path(char *out, size_t n, const char *stem, int frame_count, i
     if (snprintf(out, n, "%s_%0*d%s", stem, digits, k, ext) >= (int)n) out[n - 1] = '\0';
 }
 
-static int write_frames(const film *f, const char *stem, const char *ext, image_meta meta,
+/* The cube and the viewer, filled frame by frame beside the frame files. */
+typedef struct {
+    int skip;
+    char npy_path[OUTPUT_PATH_MAX + 64], html_path[OUTPUT_PATH_MAX + 64];
+    npy_file npy;
+    int npy_open;
+    viewer_cube view;
+} frame_extras;
+
+static int extras_open(frame_extras *x, const film *f, const char *stem, int skip, dp_error *err)
+{
+    const time_window *tw = &f->window;
+    x->skip = skip;
+    x->npy_open = 0;
+    x->view.data = NULL;
+    x->view.hist = NULL;
+    snprintf(x->npy_path, sizeof x->npy_path, "%s_cube.npy", stem);
+    snprintf(x->html_path, sizeof x->html_path, "%s_viewer.html", stem);
+    size_t shape[4] = {(size_t)tw->frame_count, (size_t)f->height, (size_t)f->width, 3};
+    if (!(skip & RENDER_SKIP_VIEWER) && viewer_cube_init(&x->view, f->width, f->height, tw->frame_count, err))
+        return -1;
+    if (!(skip & RENDER_SKIP_CUBE)) {
+        if (npy_open(&x->npy, x->npy_path, shape, 4, err)) {
+            viewer_cube_free(&x->view);
+            return -1;
+        }
+        x->npy_open = 1;
+    }
+    return 0;
+}
+
+static int extras_add(frame_extras *x, int k, const image_rgb *img, dp_error *err)
+{
+    if (x->view.data) viewer_cube_add(&x->view, k, img);
+    if (x->npy_open && npy_append(&x->npy, img->rgb, 3 * (size_t)img->width * img->height, err)) {
+        x->npy_open = 0; /* npy_append removed the file */
+        return -1;
+    }
+    return 0;
+}
+
+static void extras_abort(frame_extras *x)
+{
+    if (x->npy_open) npy_abort(&x->npy);
+    x->npy_open = 0;
+    viewer_cube_free(&x->view);
+}
+
+static int extras_close(frame_extras *x, const film *f, const char *stem, void (*wrote)(const char *), dp_error *err)
+{
+    int rc = 0;
+    if (x->npy_open) {
+        x->npy_open = 0;
+        rc = npy_close(&x->npy, err);
+        if (!rc && wrote) wrote(x->npy_path);
+    }
+    if (!rc && x->view.data) {
+        const char *base = strrchr(stem, '/');
+        viewer_time vt = {.title = base ? base + 1 : stem, .time_unit = TIME_UNIT,
+                          .camera_warped = !f->window.camera_unwarp, .start = f->window.start,
+                          .width = f->window.width};
+        rc = viewer_html_write(x->html_path, &x->view, &vt, err);
+        if (!rc && wrote) wrote(x->html_path);
+    }
+    viewer_cube_free(&x->view);
+    return rc;
+}
+
+static int write_frames(const film *f, const char *stem, const char *ext, image_meta meta, int skip,
                         void (*wrote)(const char *), dp_error *err)
 {
     const time_window *tw = &f->window;
+    frame_extras x;
+    if (extras_open(&x, f, stem, skip, err)) return -1;
     for (int k = 0; k < tw->frame_count; k++) {
         char path[OUTPUT_PATH_MAX + 64];
         frame_path(path, sizeof path, stem, tw->frame_count, k, ext);
         image_rgb img = {0};
-        if (film_image(f, k, &img, err)) return -1;
+        if (film_image(f, k, &img, err)) {
+            extras_abort(&x);
+            return -1;
+        }
         meta.frame_index = k;
         meta.gate_start = tw->start + k * tw->width;
         meta.gate_end = tw->start + (k + 1) * tw->width;
         int rc = write_one(path, &img, &meta, wrote, err);
+        if (!rc) rc = extras_add(&x, k, &img, err);
         image_free(&img);
-        if (rc) return -1;
+        if (rc) {
+            extras_abort(&x);
+            return -1;
+        }
     }
+    if (extras_close(&x, f, stem, wrote, err)) return -1;
     char csv[OUTPUT_PATH_MAX + 64];
     snprintf(csv, sizeof csv, "%s_frames.csv", stem);
     if (frames_csv_write(csv, tw->frame_count, tw->start, tw->width, err)) return -1;
@@ -64,7 +143,7 @@ static int write_frames(const film *f, const char *stem, const char *ext, image_
     return 0;
 }
 
-int render_write_outputs(const film *f, const char *path, const char *integrator, const char *plan,
+int render_write_outputs(const film *f, const char *path, const char *integrator, const char *plan, int skip,
                          void (*wrote)(const char *path), dp_error *err)
 {
     char stem[OUTPUT_PATH_MAX];
@@ -72,7 +151,7 @@ int render_write_outputs(const film *f, const char *path, const char *integrator
     if (split_output_path(path, stem, sizeof stem, &dot, err) || io_make_parent_dirs(path, err)) return -1;
     const time_window *tw = &f->window;
     image_meta meta = {.time_unit = TIME_UNIT, .gated = tw->gated, .gate_start = tw->start,
-                       .gate_end = time_window_end(tw), .camera_warped = 1, .frame_index = -1,
+                       .gate_end = time_window_end(tw), .camera_warped = !tw->camera_unwarp, .frame_index = -1,
                        .integrator = integrator, .plan = plan, .passes = f->passes};
     image_rgb img = {0};
     if (film_image(f, -1, &img, err)) return -1;
@@ -82,7 +161,7 @@ int render_write_outputs(const film *f, const char *path, const char *integrator
     if (!rc) rc = png_write_preview(png, &img, err);
     if (!rc && wrote) wrote(png);
     image_free(&img);
-    if (!rc && tw->frame_count > 0) rc = write_frames(f, stem, dot, meta, wrote, err);
+    if (!rc && tw->frame_count > 0) rc = write_frames(f, stem, dot, meta, skip, wrote, err);
     return rc;
 }
 
@@ -95,7 +174,23 @@ static void parent_dir(const char *path, char *dir, size_t n)
     else snprintf(dir, n, "%.*s", (int)(slash - path), path);
 }
 
-int render_outputs_check(const char *path, int width, int height, int frame_count, dp_error *err)
+/* Bytes and files of the cube and the viewer (frame mode). */
+static void extras_room(int width, int height, int frame_count, int skip, double *bytes, double *files)
+{
+    if (frame_count <= 0) return;
+    if (!(skip & RENDER_SKIP_CUBE)) {
+        *bytes += (double)frame_count * width * height * 12 + NPY_HEADER_MAX;
+        *files += 1;
+    }
+    if (!(skip & RENDER_SKIP_VIEWER)) {
+        viewer_layout l;
+        viewer_layout_of(width, height, frame_count, &l);
+        *bytes += viewer_html_bytes_max(&l);
+        *files += 1;
+    }
+}
+
+int render_outputs_check(const char *path, int width, int height, int frame_count, int skip, dp_error *err)
 {
     char stem[OUTPUT_PATH_MAX], dir[OUTPUT_PATH_MAX], probe[OUTPUT_PATH_MAX + 64];
     const char *ext;
@@ -110,9 +205,11 @@ int render_outputs_check(const char *path, int width, int height, int frame_coun
     if (fd < 0) return dp_fail(err, "%s: cannot write in the output folder %s: %s", path, dir, strerror(errno));
     close(fd);
     unlink(probe);
-    /* room: float32 RGB images (an upper bound: EXR's ZIP only shrinks them), the PNG, the frame files */
+    /* room: float32 RGB images (an upper bound: EXR's ZIP only shrinks them), the PNG, the frame files, the
+     * cube and the viewer */
     double files = 2 + (frame_count > 0 ? frame_count + 1 : 0);
     double bytes = (1.0 + frame_count) * ((double)width * height * 12 + 4096) + (double)width * height * 4;
+    extras_room(width, height, frame_count, skip, &bytes, &files);
     struct statvfs vfs;
     if (statvfs(dir, &vfs) == 0) {
         double room = (double)vfs.f_bavail * vfs.f_frsize;
@@ -129,7 +226,7 @@ int render_outputs_check(const char *path, int width, int height, int frame_coun
     return 0;
 }
 
-int render_write_rescue(const film *f, const char *path, const char *integrator, const char *plan,
+int render_write_rescue(const film *f, const char *path, const char *integrator, const char *plan, int skip,
                         void (*wrote)(const char *path), char *rescue_dir, size_t n, dp_error *err)
 {
     const char *tmp = getenv("TMPDIR");
@@ -142,7 +239,7 @@ int render_write_rescue(const film *f, const char *path, const char *integrator,
         if ((size_t)snprintf(rescue_dir, n, "%s/dartspp-rescue-XXXXXX", dirs[i]) >= n || !mkdtemp(rescue_dir)) continue;
         char target[OUTPUT_PATH_MAX + 64];
         snprintf(target, sizeof target, "%s/%s", rescue_dir, base);
-        if (!render_write_outputs(f, target, integrator, plan, wrote, &last)) return 0;
+        if (!render_write_outputs(f, target, integrator, plan, skip, wrote, &last)) return 0;
         rmdir(rescue_dir); /* only if it stayed empty */
     }
     rescue_dir[0] = '\0';

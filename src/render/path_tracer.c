@@ -1,7 +1,9 @@
 /* The reference integrator: an unbiased time-resolved volumetric path tracer.
  * Free-flight distance sampling (spectral: one channel picked, pdf averaged over channels), phase and BSDF
- * sampling, next-event estimation to every point light through index-matched boundaries, camera-warped
- * path time (η·d on every segment, camera leg included), box gate or frames via the film.
+ * sampling, next-event estimation to every point light through index-matched boundaries, path time η·d on
+ * every segment from the light's emission time (pulse_start, a uniform draw across a box pulse), the camera
+ * leg included (camera-warped) or, with camera_unwarp, the segment from the sensor to the first scattering
+ * vertex left out (transient-math.md §1.4), box gate or frames via the film.
  * Bounces (DESIGN §4): a path of n segments, the light connection included, counts iff
  * n <= max_bounces and n - 1 >= min_bounces. Crossing a null/forward surface does not end a segment. */
 #include "dartspp/render.h"
@@ -13,7 +15,7 @@ typedef struct {
     vec3 o, d;
     int medium;
     vec3 beta;     /* throughput */
-    double time;   /* path time from the camera to o */
+    double time;   /* path time from the camera to o (unwarped: from the first scattering vertex) */
     int depth;     /* scattering vertices so far (segments so far) */
 } path_state;
 
@@ -39,7 +41,7 @@ static void connect_lights(pixel_ctx *c, const path_state *ps, vec3 x, const pha
         vec3 f = ss ? surface_eval_cos(ss, w, BSDF_LOBES_ALL) : v3s(phase_eval(pf, ps->d, w));
         if (v3_max(f) <= 0.0) continue;
         vec3 tr;
-        double t = ps->time;
+        double t = ps->time + point_light_emission_time(L, c->rng);
         c->pix->rays += 1;
         vec3 o = ss ? surface_spawn(s, ss, w) : x;
         if (!scene_transmittance(s, o, ss ? surface_medium_toward(ss, ps->medium, w) : ps->medium, L->pos, &tr, &t))
@@ -48,13 +50,20 @@ static void connect_lights(pixel_ctx *c, const path_state *ps, vec3 x, const pha
     }
 }
 
+/* Time of a segment of length len in a region of index eta: η·len, but nothing for the camera segment
+ * adjacent to the sensor (depth 0: no scattering vertex yet) when time is camera-unwarped. */
+static double segment_time(const pixel_ctx *c, const path_state *ps, double eta, double len)
+{
+    return c->p->window.camera_unwarp && ps->depth == 0 ? 0.0 : eta * len;
+}
+
 /* Medium vertex: NEE, then phase sampling. Returns 0 when the path ends. */
 static int scatter_medium(pixel_ctx *c, path_state *ps, double t, int *medium_events)
 {
     const scene *s = c->s;
     const medium *m = &s->media[ps->medium];
     ps->o = v3_add(ps->o, v3_scale(ps->d, t));
-    ps->time += m->eta * t;
+    ps->time += segment_time(c, ps, m->eta, t);
     ps->depth++;
     if (++*medium_events > m->max_bounces) return 0;
     if (bounces_count(&c->p->bounces, ps->depth + 1)) connect_lights(c, ps, ps->o, &m->phase, NULL);
@@ -70,7 +79,7 @@ static int scatter_surface(pixel_ctx *c, path_state *ps, const hit_record *h, in
     const scene *s = c->s;
     const surface *sf = &s->surfaces[h->surface];
     const bsdf *b = &s->bsdfs[sf->bsdf];
-    ps->time += medium_eta(s, ps->medium) * h->t;
+    ps->time += segment_time(c, ps, medium_eta(s, ps->medium), h->t);
     if (bsdf_is_passthrough(b)) {
         vec3 n_out = v3_dot(ps->d, h->ng) < 0.0 ? v3_neg(h->ng) : h->ng; /* the far side */
         ps->medium = surface_next_medium(sf, ps->medium, ps->d, h->ng);

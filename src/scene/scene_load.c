@@ -13,7 +13,8 @@ static const char *const top_keys[] = {"media", "bsdfs", "primitives", "camera",
 static const char *const medium_keys[] = {"name", "type", "sigma_s", "sigma_a", "density", "speed_of_light",
                                           "max_bounces", "phase_function", NULL};
 static const char *const prim_keys[] = {"name", "type", "transform", "bsdf", "emission", "power", "int_medium",
-                                        "ext_medium", "file", "smooth", "backface_culling", "recompute_normals", NULL};
+                                        "ext_medium", "file", "smooth", "backface_culling", "recompute_normals",
+                                        "pulse_start", "pulse_width", NULL};
 static const char *const camera_keys[] = {"type", "resolution", "fov", "transform", "medium", NULL};
 
 static char *read_text_file(const char *path, dp_error *err)
@@ -336,6 +337,9 @@ static int parse_point_light(json_ctx *c, scene *s, const cJSON *v, const char *
     if (L.intensity.x < 0 || L.intensity.y < 0 || L.intensity.z < 0)
         return jfail(c, where, has_e ? "emission" : "power", "must be >= 0");
     if (has_p) L.intensity = v3_scale(L.intensity, DP_INV_4PI);
+    if (jget_number_range(c, v, where, "pulse_start", 0.0, 0.0, 0.0, &L.pulse_start) ||
+        jget_number_range(c, v, where, "pulse_width", 0.0, 0.0, 0.0, &L.pulse_width))
+        return -1;
     L.medium = MEDIUM_VACUUM;
     const cJSON *em = cJSON_GetObjectItemCaseSensitive(v, "ext_medium");
     if (em && medium_ref(c, s, em, where, "ext_medium", &L.medium)) return -1;

@@ -6,7 +6,7 @@
 #include <string.h>
 
 static const char *const integrator_keys[] = {
-    "type", "min_bounces", "max_bounces", "transient_time_center", "transient_time_width", "frame_num",
+    "type", "min_bounces", "max_bounces", "transient_time_center", "transient_time_width", "frame_num", "camera_unwarp",
     "start_time", "vaccum_speed_of_light", "delta_time_gate", "enable_rr", "enable_light_sampling",
     "enable_volume_light_sampling", "photon_count", "volume_photon_count", "gather_photon_count",
     "gather_radius", "volume_gather_radius", "volume_photon_type", "alpha", "volume_alpha",
@@ -121,7 +121,8 @@ static int parse_window(json_ctx *c, const cJSON *v, integrator_settings *in)
         jget_number(c, v, "integrator", "transient_time_width", 0.1, &width) ||
         jget_number(c, v, "integrator", "start_time", 0.0, &start) ||
         jget_int(c, v, "integrator", "frame_num", 0, &frames) ||
-        jget_bool(c, v, "integrator", "delta_time_gate", 0, &delta))
+        jget_bool(c, v, "integrator", "delta_time_gate", 0, &delta) ||
+        jget_bool(c, v, "integrator", "camera_unwarp", 0, &in->window.camera_unwarp))
         return -1;
     if (delta) return jfail(c, "integrator", "delta_time_gate", "delta gates are not supported (use a box gate width)");
     if (width < 0) return jfail(c, "integrator", "transient_time_width", "empty time window: width %g < 0", width);
