@@ -5,24 +5,14 @@
 
 #include "dartspp/io.h"
 
-#include <ftw.h>
 #include <stdint.h>
 
 static char *tmp; /* the test's folder, removed by the teardown */
 
-static int remove_entry(const char *p, const struct stat *st, int flag, struct FTW *ftw)
-{
-    (void)st;
-    (void)flag;
-    (void)ftw;
-    return remove(p);
-}
-
 static int teardown_tmp(void **state)
 {
     (void)state;
-    if (tmp) nftw(tmp, remove_entry, 16, FTW_DEPTH | FTW_PHYS);
-    free(tmp);
+    test_rmtree(tmp);
     tmp = NULL;
     return 0;
 }

@@ -232,10 +232,7 @@ static void check_against_quadrature_mode(const char *phase, double g, double sp
     free(sum);
     free(sq);
     scene_free(&s);
-    char cmd[600];
-    snprintf(cmd, sizeof cmd, "rm -rf %s", dir);
-    (void)!system(cmd);
-    free(dir);
+    test_rmtree(dir);
 }
 
 static void check_against_quadrature(const char *phase, double g, double speed, const char *window, int gated,
@@ -310,10 +307,7 @@ static void test_unwarped_early_gate(void **state)
         film_free(&f);
     }
     scene_free(&s);
-    char cmd[600];
-    snprintf(cmd, sizeof cmd, "rm -rf %s", dir);
-    (void)!system(cmd);
-    free(dir);
+    test_rmtree(dir);
     check_against_quadrature_mode("{\"type\": \"isotropic\"}", 0.0, 1.0, window, 1, 0.8, 2.6, 3000, (time_mode){1, 0, 0});
 }
 

@@ -8,6 +8,7 @@
 #include <stdint.h>
 #include <cmocka.h>
 
+#include <ftw.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -68,6 +69,21 @@ static inline char *test_tmpdir(void)
     char *d = strdup("/tmp/dartspp-test-XXXXXX");
     if (!mkdtemp(d)) { free(d); return NULL; }
     return d;
+}
+
+static inline int test_remove_entry_(const char *p, const struct stat *st, int flag, struct FTW *ftw)
+{
+    (void)st;
+    (void)flag;
+    (void)ftw;
+    return remove(p);
+}
+
+/* Removes a folder made by test_tmpdir with everything in it, and frees its name; NULL does nothing. */
+static inline void test_rmtree(char *dir)
+{
+    if (dir) nftw(dir, test_remove_entry_, 16, FTW_DEPTH | FTW_PHYS);
+    free(dir);
 }
 
 static inline void test_write_file(const char *path, const char *text)
