@@ -58,6 +58,12 @@ void render_memory_estimate(const scene *s, const render_plan *p, int have_refer
     double film = 2 * px * 3 * sizeof(double) + 2 * px * 3 * (double)frames * sizeof(float);
     add(m, "film (sums and the pass in progress)", frames > 0 ? "integrator.frame_num" : "camera.resolution", film);
     add(m, "output and reference images", "camera.resolution", image * (have_reference ? 3 : 2));
+    if (frames > 0) { /* written at the end: the viewer's embedded frames and histogram (io.h) */
+        viewer_layout l;
+        viewer_layout_of(s->cam.width, s->cam.height, frames, &l);
+        add(m, "viewer page data", "integrator.frame_num",
+            (double)l.embedded * l.dw * l.dh * 3 * sizeof(float) + VIEWER_HIST_BINS * sizeof(double));
+    }
     if (p->type != INTEGRATOR_PHOTON_POINTS) return;
     add(m, "EDA tables", "integrator.eda_shape", (double)eda_set_bytes(s, p));
     double V = p->volume_budget, S = p->surface_budget, ph = sizeof(photon), rate_v = 1, rate_s = 1;
