@@ -7,15 +7,8 @@
 
 #include <stdint.h>
 
-static char *tmp; /* the test's folder, removed by the teardown */
+static char *tmp; /* the test's folder, also in *state: test_teardown_tmpdir removes it */
 
-static int teardown_tmp(void **state)
-{
-    (void)state;
-    test_rmtree(tmp);
-    tmp = NULL;
-    return 0;
-}
 
 /* The whole file; the caller frees it. */
 static unsigned char *slurp(const char *path, size_t *n)
@@ -110,8 +103,7 @@ static void npy_parse(const char *path, npy_read *r)
 /* Shape (2, 1, 2, 3), values 0.5·i - 1: the exact header NumPy 1.0 files carry, then the values. */
 static void test_header_by_hand(void **state)
 {
-    (void)state;
-    tmp = test_tmpdir();
+    *state = tmp = test_tmpdir();
     char path[512];
     snprintf(path, sizeof path, "%s/hand.npy", tmp);
     float v[12];
@@ -149,8 +141,7 @@ static void test_header_by_hand(void **state)
 /* Too few or too many values: an error naming the file, and no file left behind. */
 static void test_wrong_count_leaves_nothing(void **state)
 {
-    (void)state;
-    tmp = test_tmpdir();
+    *state = tmp = test_tmpdir();
     char path[512];
     snprintf(path, sizeof path, "%s/short.npy", tmp);
     size_t shape[2] = {2, 3};
@@ -181,8 +172,7 @@ static void test_wrong_count_leaves_nothing(void **state)
 /* Every value of the cube is the float of the frame files: bit for bit. */
 static void test_cube_equals_frames(void **state)
 {
-    (void)state;
-    tmp = test_tmpdir();
+    *state = tmp = test_tmpdir();
     char cmd[1024], out[8192], path[512];
     snprintf(cmd, sizeof cmd, DARTSPP_BIN RENDER " --output %s/fb.exr", tmp);
     assert_int_equal(test_run(cmd, out, sizeof out), 0);
@@ -220,8 +210,7 @@ static void test_cube_equals_frames(void **state)
 /* --no-cube and --no-viewer leave the two files out; the rest is written. */
 static void test_switches(void **state)
 {
-    (void)state;
-    tmp = test_tmpdir();
+    *state = tmp = test_tmpdir();
     char cmd[1024], out[8192], path[512];
     snprintf(cmd, sizeof cmd, DARTSPP_BIN RENDER " --spp 1 --no-cube --no-viewer --output %s/fb.exr", tmp);
     assert_int_equal(test_run(cmd, out, sizeof out), 0);
@@ -245,10 +234,10 @@ static void test_switches(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test_teardown(test_header_by_hand, teardown_tmp),
-        cmocka_unit_test_teardown(test_wrong_count_leaves_nothing, teardown_tmp),
-        cmocka_unit_test_teardown(test_cube_equals_frames, teardown_tmp),
-        cmocka_unit_test_teardown(test_switches, teardown_tmp),
+        cmocka_unit_test_teardown(test_header_by_hand, test_teardown_tmpdir),
+        cmocka_unit_test_teardown(test_wrong_count_leaves_nothing, test_teardown_tmpdir),
+        cmocka_unit_test_teardown(test_cube_equals_frames, test_teardown_tmpdir),
+        cmocka_unit_test_teardown(test_switches, test_teardown_tmpdir),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -86,6 +86,15 @@ static inline void test_rmtree(char *dir)
     free(dir);
 }
 
+/* cmocka teardown of a test that put its test_tmpdir() folder in *state: the folder goes, even after a
+ * failed assertion. */
+static inline int test_teardown_tmpdir(void **state)
+{
+    test_rmtree(*state);
+    *state = NULL;
+    return 0;
+}
+
 static inline void test_write_file(const char *path, const char *text)
 {
     FILE *f = fopen(path, "wb");

@@ -10,15 +10,8 @@
 #include <cjson/cJSON.h>
 #include <stdint.h>
 
-static char *tmp; /* the test's folder, removed by the teardown */
+static char *tmp; /* the test's folder, also in *state: test_teardown_tmpdir removes it */
 
-static int teardown_tmp(void **state)
-{
-    (void)state;
-    test_rmtree(tmp);
-    tmp = NULL;
-    return 0;
-}
 
 /* ---- layout and data, by hand ---- */
 
@@ -319,8 +312,7 @@ static void expect_quiet_console(const char *err_path)
 
 static void test_page_in_chromium(void **state)
 {
-    (void)state;
-    tmp = test_tmpdir();
+    *state = tmp = test_tmpdir();
     char cmd[1024], out[16384], path[600], page[600], errp[600];
     snprintf(cmd, sizeof cmd,
              DARTSPP_BIN " render scenes/fogbox/fogbox.json --spp 1 --quiet --seed 3 --set resolution=%dx%d "
@@ -392,7 +384,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_layout),
         cmocka_unit_test(test_box_means_and_quantile),
-        cmocka_unit_test_teardown(test_page_in_chromium, teardown_tmp),
+        cmocka_unit_test_teardown(test_page_in_chromium, test_teardown_tmpdir),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
