@@ -61,11 +61,15 @@ typedef struct {
 
 /* Fills g from the plan and the camera position; g->active is 0 when the plan runs no DARTS sampler. */
 void darts_guide_init(const render_plan *p, vec3 cam, darts_guide *g);
-/* The least time a straight camera leg from x can take: η_lb·|cam − x|, or 0 when time is unwarped. */
-static inline double darts_leg_lb(const darts_guide *g, vec3 x)
+/* The length of a straight camera leg from x that counts in a path's time: |cam − x|, or 0 when time is
+ * unwarped. */
+static inline double darts_leg_length(const darts_guide *g, vec3 x)
 {
-    return g->unwarped ? 0.0 : g->eta_lb * v3_len(v3_sub(g->cam, x));
+    return g->unwarped ? 0.0 : v3_len(v3_sub(g->cam, x));
 }
+
+/* The least time a straight camera leg from x can take: η_lb times its length. */
+static inline double darts_leg_lb(const darts_guide *g, vec3 x) { return g->eta_lb * darts_leg_length(g, x); }
 
 /* Samples the target bin of a path emitted at time τ0 from a light at x_light: uniform in time over the part
  * of the window reachable from the light, [max(beg, τ0 + darts_leg_lb(x_light)), end) — the window as seen

@@ -125,7 +125,7 @@ static void new_vertex(light_path *lp)
 static int surface_time_ok(const light_path *lp, vec3 x)
 {
     if (!lp->g->active) return 1;
-    double dist = lp->g->unwarped ? 0.0 : v3_len(v3_sub(lp->g->cam, x)); /* unwarped: no camera leg */
+    double dist = darts_leg_length(lp->g, x);
     double t_lb = lp->time + lp->g->eta_lb * dist, t_ub = lp->time + lp->g->eta_ub * dist;
     double slack = lp->in->surface_slack;
     return t_lb < lp->bin.end + slack && (!lp->g->strict || t_ub >= lp->bin.start - slack);
