@@ -528,6 +528,102 @@ static void test_surface_photons_after_volume_budget_full_grey(void **state)
     surface_photons_after_budget(1);
 }
 
+/* Surface power (all channels) summed into a 4x4x4 grid over the box [-1, 1] x [0, 2] x [-1, 1]. */
+enum { CHAIN_CELLS = 64 };
+static void surface_power_cells(const photon_set *p, double *cells)
+{
+    for (size_t i = 0; i < p->n_surf; i++) {
+        const float *x = p->surf[i].pos;
+        int k[3];
+        for (int a = 0; a < 3; a++) {
+            double lo = a == 1 ? 0.0 : -1.0;
+            k[a] = (int)floor((x[a] - lo) / 0.5);
+            k[a] = k[a] < 0 ? 0 : (k[a] > 3 ? 3 : k[a]);
+        }
+        cells[k[0] + 4 * k[1] + 16 * k[2]] += (double)p->surf[i].power[0] + p->surf[i].power[1] + p->surf[i].power[2];
+    }
+}
+
+/* Surface chains (surface_chain.c) replace the independent light paths after the volume budget with Markov
+ * chains that keep to the paths whose surface photons can count, and scale their photons by the visible
+ * fraction the independent proposals estimate. The surface map must keep its expectation cell by cell:
+ * chains on and off, 40 iterations each (32768 paths, the volume budget full after the first batch, a
+ * gate 0.1 wide, where about 4 % of the paths are visible), the surface power in each of the 64 cells of
+ * a grid over the box. One χ² over the cells with power (the two means' difference over its standard
+ * error, estimated across iterations), and the total within 4 standard errors. The chains must also
+ * concentrate the work: at least 3x the surface photons of the independent paths. */
+static void test_surface_chains_keep_the_surface_map(void **state)
+{
+    (void)state;
+    char text[8192];
+    box_scene_text(text, sizeof text, 16,
+                   "\"type\": \"progressive_transient_photon_map\", \"volume_photon_type\": \"points\","
+                   " \"photon_count\": 32768, \"volume_photon_count\": 2000, \"gather_photon_count\": 16,"
+                   " \"gather_radius\": 0.15, \"volume_gather_radius\": 0.08, \"max_bounces\": 40,"
+                   " \"transient_time_center\": 4.5, \"transient_time_width\": 0.1, \"enable_guiding\": true,"
+                   " \"enable_elliptical\": true, \"strict_time_width\": true");
+    box_scene_make_grey(text);
+    tmp_scene t;
+    tmp_scene_write(&t, text);
+    scene son, soff;
+    load_scene(t.path, NULL, 0, &son);
+    const char *sets[] = {"surface_chains=false"};
+    load_scene(t.path, sets, 1, &soff);
+    enum { ITERS = 40 };
+    static double cell[2][ITERS][CHAIN_CELLS];
+    double total[2][ITERS];
+    size_t photons[2] = {0, 0};
+    photon_chain_stats st = {0};
+    memset(cell, 0, sizeof cell);
+    for (int i = 0; i < ITERS; i++)
+        for (int m = 0; m < 2; m++) {
+            dp_error err;
+            photon_set p;
+            if (run_photon_pass(m ? &son : &soff, 31, i, 0.05, &p, &err)) fail_msg("%s", err.msg);
+            assert_int_equal(p.surf_paths, 32768);
+            if (m) {
+                assert_true(p.chain.traced > 0);
+                st.traced += p.chain.traced, st.large += p.chain.large, st.visible += p.chain.visible;
+                st.small += p.chain.small, st.accepted += p.chain.accepted;
+            } else {
+                assert_int_equal(p.chain.traced, 0);
+            }
+            surface_power_cells(&p, cell[m][i]);
+            total[m][i] = surface_power_total(&p);
+            photons[m] += p.n_surf;
+            photon_set_free(&p);
+        }
+    double chi2 = 0.0, mt[2] = {0, 0}, vt[2] = {0, 0};
+    int dof = 0;
+    for (int c = 0; c < CHAIN_CELLS; c++) {
+        double mean[2] = {0, 0}, var[2] = {0, 0};
+        for (int m = 0; m < 2; m++) {
+            for (int i = 0; i < ITERS; i++) mean[m] += cell[m][i][c] / ITERS;
+            for (int i = 0; i < ITERS; i++) var[m] += (cell[m][i][c] - mean[m]) * (cell[m][i][c] - mean[m]) / (ITERS - 1);
+        }
+        if (var[0] <= 0.0 || var[1] <= 0.0) continue; /* no photon in this cell in some method */
+        chi2 += (mean[1] - mean[0]) * (mean[1] - mean[0]) / ((var[0] + var[1]) / ITERS);
+        dof++;
+    }
+    for (int m = 0; m < 2; m++) {
+        for (int i = 0; i < ITERS; i++) mt[m] += total[m][i] / ITERS;
+        for (int i = 0; i < ITERS; i++) vt[m] += (total[m][i] - mt[m]) * (total[m][i] - mt[m]) / (ITERS - 1);
+    }
+    double z = (mt[1] - mt[0]) / sqrt((vt[0] + vt[1]) / ITERS), p = test_gamma_q(dof / 2.0, chi2 / 2.0);
+    print_message("  chains: %.1f %% of the independent proposals visible, %.1f %% of the small steps accepted; "
+                  "surface photons %zu against %zu\n",
+                  100.0 * st.visible / st.large, 100.0 * st.accepted / st.small, photons[1], photons[0]);
+    print_message("  surface total %.5g (chains) against %.5g (independent): z = %.2f; %d cells: chi2 %.1f, p = %.3f\n",
+                  mt[1], mt[0], z, dof, chi2, p);
+    assert_true(dof >= 20);
+    assert_true(fabs(z) < 4.0);
+    assert_true(p > 1e-3);
+    assert_true(photons[1] > 3 * photons[0]);
+    scene_free(&son);
+    scene_free(&soff);
+    tmp_scene_remove(&t);
+}
+
 /* The DARTS early exit ends a light path once no later vertex can reach its bin, and the fast path stops
  * a free-flight ray where a vertex would no longer reach it (photon_pass.c, reach_distance). Neither may
  * lose a photon: every stored photon passed the same reachability test at its own vertex, and by the
@@ -1583,6 +1679,7 @@ int main(void)
         cmocka_unit_test(test_threads_bit_identical),
         cmocka_unit_test(test_surface_photons_after_volume_budget_full),
         cmocka_unit_test(test_surface_photons_after_volume_budget_full_grey),
+        cmocka_unit_test(test_surface_chains_keep_the_surface_map),
         cmocka_unit_test(test_early_exit_keeps_every_photon),
         cmocka_unit_test(test_darts_surface_band_edges),
         cmocka_unit_test(test_single_scatter_total),

@@ -79,14 +79,40 @@ void v3_basis(vec3 n, vec3 *s, vec3 *t);
 /* ---- counter-based RNG ----
  * A stream is keyed by (seed, a, b) — e.g. (seed, iteration, pixel) — so that a sample's random numbers
  * do not depend on which thread computes it or in which order. */
+typedef struct rng_replay rng_replay;
 typedef struct {
     uint64_t state;
+    rng_replay *replay; /* NULL: the stream itself; else rng_uniform reads the replay (primary sample space) */
 } dp_rng;
 
 dp_rng rng_stream(uint64_t seed, uint64_t a, uint64_t b);
 uint64_t rng_next_u64(dp_rng *r);
 /* uniform in [0, 1) with 53 random bits */
 double rng_uniform(dp_rng *r);
+
+/* ---- primary-sample-space replay (Kelemen et al. 2002) ----
+ * A sample's random numbers as a vector u: rng_uniform on a dp_rng whose `replay` is set makes the next
+ * value (fresh from `fresh`, or another sample's value moved, rng_replay_mutate) and records it in u, so
+ * that `used` ends as the number of values the sample consumed. A Markov chain over samples mutates u. */
+struct rng_replay {
+    double *u;               /* the values consumed so far */
+    int used;                /* how many */
+    int cap;
+    int oom;                 /* a record failed: the sample is not reproducible (the chain rejects it) */
+    const double *src;       /* rng_replay_mutate: the sample moved (read as this one is consumed) */
+    int src_n;               /* its length: values past it are fresh */
+    double s_max, log_ratio; /* the step's largest size and ln(s_min/s_max) */
+    dp_rng fresh;            /* a plain stream (replay NULL): fresh values and the steps' draws */
+};
+void rng_replay_free(rng_replay *r);
+/* Starts a fresh sample: every value drawn from r->fresh. */
+void rng_replay_restart(rng_replay *r);
+/* Starts the sample `src` moved by a symmetric step: each of its used values u ± s_max·(s_min/s_max)^ξ
+ * (sign and ξ uniform, from r->fresh; Kelemen et al. 2002, eq. 11), wrapped into [0, 1); values past
+ * src->used are drawn fresh. The kernel is symmetric, so a Metropolis step accepts with the ratio of the
+ * targets alone. s_max = 0 replays src exactly. The values are made as they are consumed, so src must stay
+ * unchanged until r's sample is done. */
+void rng_replay_mutate(rng_replay *r, const rng_replay *src, double s_min, double s_max);
 
 /* ---- sampling helpers (pdfs in solid angle) ---- */
 vec3 sample_uniform_sphere(double u1, double u2);

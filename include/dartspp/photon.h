@@ -60,6 +60,14 @@ size_t volume_map_bytes(size_t n);
  * by that number of paths. */
 #define PHOTON_PASS_BATCH 8192 /* light paths traced between two merges (and two looks at the stop flag) */
 
+/* The surface chains of one photon pass (surface_chain.c). */
+typedef struct {
+    long traced;          /* light paths the chains traced */
+    long large, visible;  /* independent proposals, and those that stored a surface photon */
+    long states;          /* chain states counted */
+    long small, accepted; /* small steps proposed and accepted */
+} photon_chain_stats;
+
 typedef struct {
     photon *vol, *surf;
     size_t n_vol, n_surf;
@@ -69,6 +77,7 @@ typedef struct {
     long nonfinite;        /* photons dropped for a non-finite power */
     long early_exits;      /* paths ended by the DARTS early exit */
     long aimed_paths;      /* DARTS: paths traced with its samplers, before the volume budget filled */
+    photon_chain_stats chain; /* surface chains (all 0 without them) */
     int interrupted;       /* the stop flag ended the pass early: the sets are incomplete */
 } photon_set;
 
@@ -79,6 +88,8 @@ typedef struct {
     int max_bounces;                /* path segments; photons of longer paths cannot count */
     double t_end;                   /* the window's end (INFINITY: steady state) */
     int include_surfaces, low_order_scattering;
+    int surface_chains;             /* DARTS: once the volume budget is full, the surface photons come from
+                                     * Markov chains over light paths (surface_chain.c) */
     darts_guide guide;              /* DARTS bins, bounds and switches; guide.active 0: baseline */
     double surface_slack;           /* widening of the DARTS surface time tests and early exit: the camera-leg
                                      * change across the surface gather radius, so the gather's own gate

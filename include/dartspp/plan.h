@@ -115,6 +115,7 @@ typedef struct render_plan {
     int camera_leg_projected;
     int volume_splat;               /* primary lines gathered photon by photon (volume_gather "splat") */
     int include_surfaces, low_order_scattering;
+    int surface_chains;              /* DARTS: surface photons after the volume budget from Markov chains */
     int pass_weights_equal;          /* pass_weights "equal": every iteration weighs 1 in the image */
     darts_plan darts;
     int medium_count;

@@ -51,6 +51,7 @@ typedef struct render_stats {
     double r_vol, r_surf;   /* radii of the last iteration */
     double early_exits;     /* light paths ended by the DARTS early exit */
     double aimed_paths;     /* light paths traced with the DARTS samplers (the rest: surface photons only) */
+    double chain_paths, chain_large, chain_visible, chain_small, chain_accepted; /* surface chains (photon.h) */
     double t_photon, t_maps, t_gather; /* seconds spent in the photon pass, map builds, sensor pass */
     double t_cluster;       /* several ranks: rank 0's seconds in the rounds' agreement and the reductions */
     long reductions;        /* several ranks: film reductions onto rank 0 (checkpoints, log rows, the end) */

@@ -147,6 +147,8 @@ typedef struct {
     double da_defensive;            /* da_defensive: uniform share of the DA-RIS candidate selection (default 0.2) */
     int darts_mirrors_straight;     /* darts_mirrors: "full" (default) or "straight" (the authors', plan.h) */
     double mirror_defensive;        /* mirror_defensive: least defensive share behind continued surfaces (0.05) */
+    int surface_chains;             /* surface_chains: DARTS surface photons from Markov chains over light paths
+                                     * (photon_pass.c; default true) */
     int early_exit;                 /* early_exit: DARTS paths end once their bin is out of reach (default true) */
     int control_vertex_mis;         /* control_vertex_mis: MIS of the elliptical and exponential techniques (default true) */
     int ellipse_residual;           /* ellipse_residual: 0 "uniform" (reference), 1 "exponential" (paper eq. 21-22) */

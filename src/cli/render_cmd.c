@@ -299,6 +299,11 @@ static void print_summary(const scene *s, const render_plan *p, const render_sta
         printf("volume budget: full after %.1f%% of the light paths; the rest fed only the surface map "
                "(free flight, no control vertices)\n",
                100.0 * st->aimed_paths / st->photon_paths);
+    if (st->chain_paths > 0)
+        printf("surface chains: %.1f%% of the light paths; %.2f%% of the independent ones stored a surface photon "
+               "that can count; %.1f%% of the small steps accepted\n",
+               100.0 * st->chain_paths / st->photon_paths, 100.0 * st->chain_visible / fmax(st->chain_large, 1.0),
+               100.0 * st->chain_accepted / fmax(st->chain_small, 1.0));
     if (st->photon_paths > 0)
         printf("photon points: %.3g photon paths (%.2f M/s in the photon pass), %.3g photons stored; "
                "time in photon pass %.2f s, map builds %.2f s, sensor pass %.2f s; last radii r_vol %.4g, R_surf %.4g\n",

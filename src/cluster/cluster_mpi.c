@@ -40,12 +40,14 @@ static int mpi_reduce(const render_cluster *c, const film *mine, film *total, co
         (nf > 0 && reduce_chunks(mine->frame_sum, total->frame_sum, nf, MPI_FLOAT, sizeof(float), c->rank)))
         return dp_fail(err, "MPI: the reduction of the films failed");
     /* the scalars: the counts, the weight sum and the statistics that add up */
-    double v[12] = {(double)mine->passes,    mine->weight_sum,        (double)mine->nonfinite, st_mine->camera_rays,
+    double v[17] = {(double)mine->passes,    mine->weight_sum,        (double)mine->nonfinite, st_mine->camera_rays,
                     st_mine->rays,           st_mine->photon_paths,   st_mine->stored_photons, st_mine->early_exits,
-                    st_mine->aimed_paths,    st_mine->t_photon,       st_mine->t_maps,         st_mine->t_gather};
-    double w[12];
+                    st_mine->aimed_paths,    st_mine->t_photon,       st_mine->t_maps,         st_mine->t_gather,
+                    st_mine->chain_paths,    st_mine->chain_large,    st_mine->chain_visible,  st_mine->chain_small,
+                    st_mine->chain_accepted};
+    double w[17];
     int intr = st_mine->interrupted, intr_all = 0;
-    if (MPI_Reduce(v, w, 12, MPI_DOUBLE, MPI_SUM, 0, MPI_COMM_WORLD) != MPI_SUCCESS ||
+    if (MPI_Reduce(v, w, 17, MPI_DOUBLE, MPI_SUM, 0, MPI_COMM_WORLD) != MPI_SUCCESS ||
         MPI_Reduce(&intr, &intr_all, 1, MPI_INT, MPI_MAX, 0, MPI_COMM_WORLD) != MPI_SUCCESS)
         return dp_fail(err, "MPI: the reduction of the statistics failed");
     if (c->rank != 0) return 0;
@@ -64,6 +66,11 @@ static int mpi_reduce(const render_cluster *c, const film *mine, film *total, co
     st_total->t_photon = w[9];
     st_total->t_maps = w[10];
     st_total->t_gather = w[11];
+    st_total->chain_paths = w[12];
+    st_total->chain_large = w[13];
+    st_total->chain_visible = w[14];
+    st_total->chain_small = w[15];
+    st_total->chain_accepted = w[16];
     st_total->interrupted = intr_all;
     return 0;
 }

@@ -9,38 +9,8 @@
 #include "dartspp/photon.h"
 #include "dartspp/scene.h"
 #include "dartspp/surface.h"
+#include "photon_internal.h"
 
-
-typedef struct {
-    photon *p;
-    size_t n, cap;
-} photon_buf;
-
-static int buf_push(photon_buf *b, const photon *ph)
-{
-    if (b->n == b->cap) {
-        size_t cap = b->cap ? 2 * b->cap : 1024;
-        photon *q = realloc(b->p, cap * sizeof(photon));
-        if (!q) return -1;
-        b->p = q;
-        b->cap = cap;
-    }
-    b->p[b->n++] = *ph;
-    return 0;
-}
-
-typedef struct {
-    photon_buf vol, surf;
-    long nonfinite;
-    int oom;
-} thread_bufs;
-
-typedef struct {
-    uint32_t n_vol, n_surf;    /* photons this path stored */
-    int early_exit;            /* ended by the DARTS early exit */
-    int thread;                /* whose buffers hold them */
-    size_t off_vol, off_surf;  /* where they start there */
-} path_count;
 
 static void make_photon(photon *ph, vec3 x, vec3 d, vec3 beta, int bounce, double time, int frame)
 {
@@ -274,8 +244,8 @@ static int surface_event(light_path *lp, const hit_record *h)
  * Once the volume budget is full (volume_open = 0) the path only feeds surface photons, so it is traced with
  * plain free flight and phase sampling: every sampler is unbiased, and DA, control vertices and EDA only pay
  * off for the volume map. Bin sampling, the surface time test and the early exit stay on. */
-static void trace_light_path(const scene *s, const photon_pass_input *in, int volume_open, dp_rng *rng,
-                             thread_bufs *tb, path_count *pc)
+void trace_light_path(const scene *s, const photon_pass_input *in, int volume_open, dp_rng *rng, thread_bufs *tb,
+                      path_count *pc)
 {
     const darts_guide *g = &in->guide;
     int li = (int)(rng_uniform(rng) * s->light_count);
@@ -321,6 +291,15 @@ typedef struct {
     long paths;    /* complete leading paths */
 } budget_state;
 
+typedef struct {
+    budget_state bv, bsf;
+    photon_buf vol, surf;
+    long next;         /* independent light paths traced */
+    long early, aimed;
+    int interrupted;
+    photon_chain_stats chains; /* the merged surface chains */
+} pass_totals;
+
 /* Appends the photons of one path from a thread buffer in path order, or closes the budget. */
 static int merge_path(photon_buf *dst, budget_state *bs, const photon_buf *src, size_t off, uint32_t n)
 {
@@ -349,31 +328,26 @@ void photon_pass_input_init(photon_pass_input *in, const scene *s, const render_
                               .surface_budget = p->surface_budget, .max_bounces = p->bounces.max,
                               .t_end = p->window.gated ? time_window_end(&p->window) : INFINITY,
                               .include_surfaces = p->include_surfaces, .low_order_scattering = p->low_order_scattering,
+                              .surface_chains = p->surface_chains,
                               .surface_slack = plan_surface_slack(p, iteration), .shading = p->shading,
                               .eda = eda, .seed = seed,
                               .iteration = iteration, .stop = stop};
     darts_guide_init(p, s->cam.pos, &in->guide);
 }
 
-int photon_pass(const scene *s, const photon_pass_input *in, photon_set *out, dp_error *err)
+/* Light paths in independent batches; with surface chains on, they stop once the volume budget is full. */
+static int independent_paths(const scene *s, const photon_pass_input *in, int nt, thread_bufs *tb, path_count *pc,
+                             int chains, pass_totals *pt)
 {
-    memset(out, 0, sizeof *out);
-    if (s->light_count == 0) return 0;
     long max_paths = (long)in->light_paths;
-    budget_state bv = {.budget = (size_t)in->volume_budget};
-    budget_state bsf = {.budget = (size_t)in->surface_budget};
-    photon_buf vol = {0}, surf = {0};
     const darts_guide *guide = &in->guide;
-    long early = 0, aimed = 0;
-    int nt = omp_get_max_threads();
-    thread_bufs *tb = calloc((size_t)nt, sizeof(thread_bufs));
-    path_count *pc = malloc(PHOTON_PASS_BATCH * sizeof(path_count));
-    int rc = (!tb || !pc) ? -1 : 0;
-    long next = 0;
-    while (!rc && next < max_paths && !(bv.full && bsf.full)) {
-        if ((out->interrupted = dp_stopped(in->stop))) break; /* read once per batch */
-        long nb = max_paths - next < PHOTON_PASS_BATCH ? max_paths - next : PHOTON_PASS_BATCH;
-        aimed += guide->active && !bv.full ? nb : 0;
+    int rc = 0;
+    while (!rc && pt->next < max_paths && !(pt->bv.full && pt->bsf.full) && !(chains && pt->bv.full)) {
+        if ((pt->interrupted = dp_stopped(in->stop))) break; /* read once per batch */
+        long nb = max_paths - pt->next < PHOTON_PASS_BATCH ? max_paths - pt->next : PHOTON_PASS_BATCH;
+        pt->aimed += guide->active && !pt->bv.full ? nb : 0;
+        long next = pt->next;
+        int open = !pt->bv.full;
 #pragma omp parallel num_threads(nt)
         {
             thread_bufs *mine = &tb[omp_get_thread_num()];
@@ -382,17 +356,84 @@ int photon_pass(const scene *s, const photon_pass_input *in, photon_set *out, dp
             for (long i = 0; i < nb; i++) {
                 dp_rng rng = rng_stream(in->seed ^ 0x70686f746f6eULL, (uint64_t)in->iteration, (uint64_t)(next + i));
                 pc[i] = (path_count){.thread = omp_get_thread_num(), .off_vol = mine->vol.n, .off_surf = mine->surf.n};
-                trace_light_path(s, in, !bv.full, &rng, mine, &pc[i]);
+                trace_light_path(s, in, open, &rng, mine, &pc[i]);
             }
         }
         for (long i = 0; i < nb && !rc; i++) { /* merge in path order */
             const thread_bufs *src = &tb[pc[i].thread];
-            early += pc[i].early_exit;
-            rc |= merge_path(&vol, &bv, &src->vol, pc[i].off_vol, pc[i].n_vol);
-            rc |= merge_path(&surf, &bsf, &src->surf, pc[i].off_surf, pc[i].n_surf);
+            pt->early += pc[i].early_exit;
+            rc |= merge_path(&pt->vol, &pt->bv, &src->vol, pc[i].off_vol, pc[i].n_vol);
+            rc |= merge_path(&pt->surf, &pt->bsf, &src->surf, pc[i].off_surf, pc[i].n_surf);
         }
-        next += nb;
+        pt->next += nb;
     }
+    return rc;
+}
+
+static void chain_stats_add(photon_chain_stats *sum, const photon_chain_stats *c)
+{
+    sum->traced += c->traced;
+    sum->large += c->large;
+    sum->visible += c->visible;
+    sum->states += c->states;
+    sum->small += c->small;
+    sum->accepted += c->accepted;
+}
+
+/* The rest of the light paths as surface chains of CHAIN_STEPS paths each, CHAIN_BATCH chains between two
+ * merges; a chain's photons are kept whole or not at all (the surface budget), in chain order. */
+#define CHAIN_STEPS 1024
+#define CHAIN_BATCH 32
+static int chain_paths(const scene *s, const photon_pass_input *in, int nt, thread_bufs *tb, pass_totals *pt)
+{
+    long left = (long)in->light_paths - pt->next;
+    long n_chains = (left + CHAIN_STEPS - 1) / CHAIN_STEPS;
+    chain_count cc[CHAIN_BATCH];
+    chain_scratch **cs = calloc((size_t)nt, sizeof *cs);
+    int rc = cs ? 0 : -1;
+    for (int t = 0; t < nt && !rc; t++) rc = (cs[t] = chain_scratch_new()) ? 0 : -1;
+    for (long c0 = 0; !rc && c0 < n_chains && !pt->bsf.full; c0 += CHAIN_BATCH) {
+        if ((pt->interrupted = dp_stopped(in->stop))) break;
+        int nb = n_chains - c0 < CHAIN_BATCH ? (int)(n_chains - c0) : CHAIN_BATCH;
+#pragma omp parallel num_threads(nt)
+        {
+            int me = omp_get_thread_num();
+            tb[me].surf.n = 0;
+#pragma omp for schedule(dynamic, 1)
+            for (int i = 0; i < nb; i++) {
+                long c = c0 + i, steps = left - c * CHAIN_STEPS < CHAIN_STEPS ? left - c * CHAIN_STEPS : CHAIN_STEPS;
+                cc[i] = (chain_count){.thread = me};
+                surface_chain_run(s, in, c, (int)steps, cs[me], &tb[me], &cc[i]);
+            }
+        }
+        for (int i = 0; i < nb && !rc; i++) {
+            if (pt->surf.n + cc[i].n > pt->bsf.budget) {
+                pt->bsf.full = 1;
+                break;
+            }
+            rc |= merge_path(&pt->surf, &pt->bsf, &tb[cc[i].thread].surf, cc[i].off, cc[i].n);
+            chain_stats_add(&pt->chains, &cc[i].st);
+        }
+    }
+    for (int t = 0; cs && t < nt; t++) chain_scratch_free(cs[t]);
+    free(cs);
+    return rc;
+}
+
+int photon_pass(const scene *s, const photon_pass_input *in, photon_set *out, dp_error *err)
+{
+    memset(out, 0, sizeof *out);
+    if (s->light_count == 0) return 0;
+    pass_totals pt = {.bv = {.budget = (size_t)in->volume_budget}, .bsf = {.budget = (size_t)in->surface_budget}};
+    int nt = omp_get_max_threads();
+    thread_bufs *tb = calloc((size_t)nt, sizeof(thread_bufs));
+    path_count *pc = malloc(PHOTON_PASS_BATCH * sizeof(path_count));
+    int chains = in->surface_chains && in->guide.active && in->include_surfaces;
+    int rc = (!tb || !pc) ? -1 : independent_paths(s, in, nt, tb, pc, chains, &pt);
+    size_t n_independent = pt.surf.n; /* surface photons of the independent paths */
+    if (!rc && chains && pt.bv.full && !pt.interrupted && pt.next < (long)in->light_paths)
+        rc = chain_paths(s, in, nt, tb, &pt);
+    out->interrupted = pt.interrupted;
     for (int t = 0; t < nt && tb; t++) {
         out->nonfinite += tb[t].nonfinite;
         rc |= tb[t].oom ? -1 : 0;
@@ -402,21 +443,29 @@ int photon_pass(const scene *s, const photon_pass_input *in, photon_set *out, dp
     free(tb);
     free(pc);
     if (rc) {
-        free(vol.p);
-        free(surf.p);
+        free(pt.vol.p);
+        free(pt.surf.p);
         return dp_fail(err, "%s: out of memory in the photon pass", s->path);
     }
-    out->paths = next;
-    out->early_exits = early;
-    out->aimed_paths = aimed;
-    out->vol_paths = bv.full ? bv.paths : next;
-    out->surf_paths = bsf.full ? bsf.paths : next;
-    scale_powers(vol.p, vol.n, out->vol_paths);
-    scale_powers(surf.p, surf.n, out->surf_paths);
-    out->vol = vol.p;
-    out->n_vol = vol.n;
-    out->surf = surf.p;
-    out->n_surf = surf.n;
+    out->paths = pt.next + pt.chains.traced;
+    out->early_exits = pt.early;
+    out->aimed_paths = pt.aimed;
+    out->chain = pt.chains;
+    out->vol_paths = pt.bv.full ? pt.bv.paths : pt.next;
+    /* the independent paths count once each, the chains as the paths they traced */
+    out->surf_paths = (pt.bsf.full && !pt.chains.traced ? pt.bsf.paths : pt.next) + pt.chains.traced;
+    scale_powers(pt.vol.p, pt.vol.n, out->vol_paths);
+    scale_powers(pt.surf.p, n_independent, out->surf_paths);
+    if (pt.chains.states > 0) { /* P̂(V)·traced/states: the chain states stand for the paths they replace */
+        double p_visible = (double)pt.chains.visible / (double)pt.chains.large;
+        double w = p_visible * (double)pt.chains.traced / (double)pt.chains.states / (double)out->surf_paths;
+        for (size_t i = n_independent; i < pt.surf.n; i++)
+            for (int c = 0; c < 3; c++) pt.surf.p[i].power[c] *= (float)w;
+    }
+    out->vol = pt.vol.p;
+    out->n_vol = pt.vol.n;
+    out->surf = pt.surf.p;
+    out->n_surf = pt.surf.n;
     return 0;
 }
 

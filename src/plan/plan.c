@@ -110,6 +110,7 @@ int plan_resolve(const scene *s, render_plan *p, dp_error *err)
     p->volume_splat = !in->volume_gather_beam;
     p->include_surfaces = in->include_surfaces;
     p->pass_weights_equal = in->pass_weights_equal;
+    p->surface_chains = in->surface_chains;
     p->low_order_scattering = in->low_order_scattering;
     p->medium_count = s->medium_count;
     if (s->medium_count > 0 && !(p->eda = calloc((size_t)s->medium_count, sizeof *p->eda)))

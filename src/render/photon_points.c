@@ -37,6 +37,11 @@ int photon_points_pass(const scene *s, const render_plan *p, const struct eda_se
         st->photon_paths += (double)ps.paths;
         st->early_exits += (double)ps.early_exits;
         st->aimed_paths += (double)ps.aimed_paths;
+        st->chain_paths += (double)ps.chain.traced;
+        st->chain_large += (double)ps.chain.large;
+        st->chain_visible += (double)ps.chain.visible;
+        st->chain_small += (double)ps.chain.small;
+        st->chain_accepted += (double)ps.chain.accepted;
         st->stored_photons += (double)(ps.n_vol + ps.n_surf);
         st->r_vol = g.r_vol;
         st->r_surf = g.r_surf;

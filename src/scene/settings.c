@@ -11,7 +11,7 @@ static const char *const integrator_keys[] = {
     "enable_volume_light_sampling", "photon_count", "volume_photon_count", "gather_photon_count",
     "gather_radius", "volume_gather_radius", "volume_photon_type", "alpha", "volume_alpha",
     "fixed_volume_radius", "include_surfaces", "low_order_scattering", "enable_guiding", "enable_elliptical",
-    "strict_time_width", "camera_leg", "volume_gather", "radius_schedule", "pass_weights", "ellipse_residual", "control_vertex_mis", "early_exit", "da_defensive", "darts_mirrors", "mirror_defensive", "eda", "eda_alpha", "eda_table_dir", "eda_shape", "enable_consistency_checks", "enable_two_sided_shading", "glossy_gather_alpha", "exclude_non_mis", "use_grid",
+    "strict_time_width", "camera_leg", "volume_gather", "radius_schedule", "pass_weights", "ellipse_residual", "control_vertex_mis", "early_exit", "surface_chains", "da_defensive", "darts_mirrors", "mirror_defensive", "eda", "eda_alpha", "eda_table_dir", "eda_shape", "enable_consistency_checks", "enable_two_sided_shading", "glossy_gather_alpha", "exclude_non_mis", "use_grid",
     NULL};
 static const char *const renderer_keys[] = {"spp", "spp_step", "timeout", "checkpoint_interval", "output_file",
                                             "hdr_output_file", "output_buffers", "overwrite_output_files",
@@ -179,7 +179,8 @@ static int parse_photon_keys(json_ctx *c, const cJSON *v, integrator_settings *i
         jget_bool(c, v, w, "enable_elliptical", 0, &in->enable_elliptical) ||
         jget_bool(c, v, w, "strict_time_width", 0, &in->strict_time_width) ||
         jget_bool(c, v, w, "control_vertex_mis", 1, &in->control_vertex_mis) ||
-        jget_bool(c, v, w, "early_exit", 1, &in->early_exit))
+        jget_bool(c, v, w, "early_exit", 1, &in->early_exit) ||
+        jget_bool(c, v, w, "surface_chains", 1, &in->surface_chains))
         return -1;
     if (k < 1 || k > 256) return jfail(c, w, "gather_photon_count", "must be in [1, 256] (got %ld)", k);
     if (!in->fixed_volume_radius && cJSON_GetObjectItemCaseSensitive(v, "fixed_volume_radius"))

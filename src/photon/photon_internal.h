@@ -1,0 +1,63 @@
+/* Inside the photon module: the per-thread photon buffers and one light path, shared by the photon pass
+ * (photon_pass.c) and the surface chains (surface_chain.c). */
+#ifndef DARTSPP_PHOTON_INTERNAL_H
+#define DARTSPP_PHOTON_INTERNAL_H
+
+#include <stdint.h>
+#include <stdlib.h>
+
+#include "dartspp/photon.h"
+#include "dartspp/scene.h"
+
+typedef struct {
+    photon *p;
+    size_t n, cap;
+} photon_buf;
+
+static inline int buf_push(photon_buf *b, const photon *ph)
+{
+    if (b->n == b->cap) {
+        size_t cap = b->cap ? 2 * b->cap : 1024;
+        photon *q = realloc(b->p, cap * sizeof(photon));
+        if (!q) return -1;
+        b->p = q;
+        b->cap = cap;
+    }
+    b->p[b->n++] = *ph;
+    return 0;
+}
+
+typedef struct {
+    photon_buf vol, surf;
+    long nonfinite;
+    int oom;
+} thread_bufs;
+
+typedef struct {
+    uint32_t n_vol, n_surf;    /* photons this path stored */
+    int early_exit;            /* ended by the DARTS early exit */
+    int thread;                /* whose buffers hold them */
+    size_t off_vol, off_surf;  /* where they start there */
+} path_count;
+
+/* One light path from a light picked with rng, its photons appended to tb and counted in pc. volume_open:
+ * the volume budget has room (the DARTS samplers run); 0: the path only feeds surface photons. */
+void trace_light_path(const scene *s, const photon_pass_input *in, int volume_open, dp_rng *rng, thread_bufs *tb,
+                      path_count *pc);
+
+/* ---- surface chains (surface_chain.c) ---- */
+typedef struct {
+    photon_chain_stats st;
+    int thread;           /* whose buffer holds its photons */
+    size_t off;           /* where they start there */
+    uint32_t n;           /* how many: each distinct state's photons once, powers times the steps it held */
+} chain_count;
+
+typedef struct chain_scratch chain_scratch;
+chain_scratch *chain_scratch_new(void);
+void chain_scratch_free(chain_scratch *cs);
+/* Chain `index` of this pass, `steps` light paths long, its photons appended to tb->surf. */
+void surface_chain_run(const scene *s, const photon_pass_input *in, long index, int steps, chain_scratch *cs,
+                       thread_bufs *tb, chain_count *cc);
+
+#endif
