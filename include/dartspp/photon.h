@@ -66,6 +66,7 @@ typedef struct {
     long large, visible;  /* independent proposals, and those that stored a surface photon */
     long states;          /* chain states counted */
     long small, accepted; /* small steps proposed and accepted */
+    long early_exits;     /* chain paths ended by the DARTS early exit */
 } photon_chain_stats;
 
 typedef struct {

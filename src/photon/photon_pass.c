@@ -378,6 +378,7 @@ static void chain_stats_add(photon_chain_stats *sum, const photon_chain_stats *c
     sum->states += c->states;
     sum->small += c->small;
     sum->accepted += c->accepted;
+    sum->early_exits += c->early_exits;
 }
 
 /* The rest of the light paths as surface chains of CHAIN_STEPS paths each, CHAIN_BATCH chains between two
@@ -448,7 +449,7 @@ int photon_pass(const scene *s, const photon_pass_input *in, photon_set *out, dp
         return dp_fail(err, "%s: out of memory in the photon pass", s->path);
     }
     out->paths = pt.next + pt.chains.traced;
-    out->early_exits = pt.early;
+    out->early_exits = pt.early + pt.chains.early_exits;
     out->aimed_paths = pt.aimed;
     out->chain = pt.chains;
     out->vol_paths = pt.bv.full ? pt.bv.paths : pt.next;

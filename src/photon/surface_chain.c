@@ -84,6 +84,7 @@ void surface_chain_run(const scene *s, const photon_pass_input *in, long index, 
         tb->oom |= prop_ph->oom;
         int visible = pc.n_surf > 0 && !prop->oom;
         cc->st.traced++;
+        cc->st.early_exits += pc.early_exit;
         if (large) {
             cc->st.large++;
             cc->st.visible += visible;
