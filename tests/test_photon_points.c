@@ -528,6 +528,15 @@ static void test_surface_photons_after_volume_budget_full_grey(void **state)
     surface_photons_after_budget(1);
 }
 
+/* DARTS in the box: 32768 paths, a volume budget of 2000 that fills in the first batch, a gate at 4.5 of
+ * the given width (a string literal). */
+#define DARTS_BOX_32K(width)                                                                                   \
+    "\"type\": \"progressive_transient_photon_map\", \"volume_photon_type\": \"points\","                          \
+    " \"photon_count\": 32768, \"volume_photon_count\": 2000, \"gather_photon_count\": 16,"                       \
+    " \"gather_radius\": 0.15, \"volume_gather_radius\": 0.08, \"max_bounces\": 40,"                              \
+    " \"transient_time_center\": 4.5, \"transient_time_width\": " width ", \"enable_guiding\": true,"             \
+    " \"enable_elliptical\": true, \"strict_time_width\": true"
+
 /* Surface power (all channels) summed into a 4x4x4 grid over the box [-1, 1] x [0, 2] x [-1, 1]. */
 enum { CHAIN_CELLS = 64 };
 static void surface_power_cells(const photon_set *p, double *cells)
@@ -556,12 +565,7 @@ static void test_surface_chains_keep_the_surface_map(void **state)
 {
     (void)state;
     char text[8192];
-    box_scene_text(text, sizeof text, 16,
-                   "\"type\": \"progressive_transient_photon_map\", \"volume_photon_type\": \"points\","
-                   " \"photon_count\": 32768, \"volume_photon_count\": 2000, \"gather_photon_count\": 16,"
-                   " \"gather_radius\": 0.15, \"volume_gather_radius\": 0.08, \"max_bounces\": 40,"
-                   " \"transient_time_center\": 4.5, \"transient_time_width\": 0.1, \"enable_guiding\": true,"
-                   " \"enable_elliptical\": true, \"strict_time_width\": true");
+    box_scene_text(text, sizeof text, 16, DARTS_BOX_32K("0.1"));
     box_scene_make_grey(text);
     tmp_scene t;
     tmp_scene_write(&t, text);
@@ -635,12 +639,7 @@ static void test_early_exit_keeps_every_photon(void **state)
 {
     (void)state;
     char text[8192];
-    box_scene_text(text, sizeof text, 16,
-                   "\"type\": \"progressive_transient_photon_map\", \"volume_photon_type\": \"points\","
-                   " \"photon_count\": 32768, \"volume_photon_count\": 2000, \"gather_photon_count\": 16,"
-                   " \"gather_radius\": 0.15, \"volume_gather_radius\": 0.08, \"max_bounces\": 40,"
-                   " \"transient_time_center\": 4.5, \"transient_time_width\": 0.5, \"enable_guiding\": true,"
-                   " \"enable_elliptical\": true, \"strict_time_width\": true");
+    box_scene_text(text, sizeof text, 16, DARTS_BOX_32K("0.5"));
     box_scene_make_grey(text);
     tmp_scene t;
     tmp_scene_write(&t, text);

@@ -407,13 +407,9 @@ static int chain_paths(const scene *s, const photon_pass_input *in, int nt, thre
                 surface_chain_run(s, in, c, (int)steps, cs[me], &tb[me], &cc[i]);
             }
         }
-        for (int i = 0; i < nb && !rc; i++) {
-            if (pt->surf.n + cc[i].n > pt->bsf.budget) {
-                pt->bsf.full = 1;
-                break;
-            }
+        for (int i = 0; i < nb && !rc && !pt->bsf.full; i++) {
             rc |= merge_path(&pt->surf, &pt->bsf, &tb[cc[i].thread].surf, cc[i].off, cc[i].n);
-            chain_stats_add(&pt->chains, &cc[i].st);
+            if (!pt->bsf.full) chain_stats_add(&pt->chains, &cc[i].st); /* a chain that did not fit is dropped */
         }
     }
     for (int t = 0; cs && t < nt; t++) chain_scratch_free(cs[t]);
