@@ -64,9 +64,9 @@ static void test_keys_resolved(void **state)
     assert_true(p.light_paths == 1234 && p.surface_budget == 1234 && p.volume_budget == 567);
     assert_true(p.r_surf.r0 == 0.3 && p.r_surf.alpha == 0.6 && p.r_surf.dims == 2);
     assert_true(p.r_vol.r0 == 0.2 && p.r_vol.alpha == 0.9 && p.r_vol.dims == 3);
-    assert_int_equal(p.k_surf, 9);
+    assert_int_equal(p.keys.gather_photon_count, 9);
     assert_true(p.bounces.min == 1 && p.bounces.max == 5);
-    assert_true(p.camera_leg_projected);
+    assert_true(p.keys.camera_leg_projected);
     assert_true(p.window.gated && p.window.start == 2.75 && p.window.width == 0.5);
     assert_true(p.spp == 7 && p.timeout_seconds == 12.0);
     /* path segments that count: n <= max and n - 1 >= min */
@@ -271,7 +271,7 @@ static void test_plan_json(void **state)
     assert_int_equal(plan_json(&p, &s, json, sizeof json), 0);
     cJSON *j = cJSON_Parse(json);
     assert_non_null(j);
-    assert_true(cJSON_GetObjectItem(j, "light_paths")->valuedouble == 4321);
+    assert_true(cJSON_GetObjectItem(cJSON_GetObjectItem(j, "keys"), "photon_count")->valuedouble == 4321);
     const cJSON *w = cJSON_GetObjectItem(j, "window");
     assert_true(cJSON_GetArrayItem(w, 0)->valuedouble == 2.75 && cJSON_GetArrayItem(w, 1)->valuedouble == 3.25);
     const cJSON *d = cJSON_GetObjectItem(j, "darts");

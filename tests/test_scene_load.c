@@ -482,7 +482,7 @@ static void test_cli_bad_input(void **state)
         {"negative sigma_s", "\"sigma_s\": 0.1", "\"sigma_s\": -0.1", NULL, {"media[0]", "sigma_s", NULL}},
         {"non-finite sigma_a", "\"sigma_a\": 0.01", "\"sigma_a\": 1e999", NULL, {"media[0]", "sigma_a", NULL}},
         {"negative gate width", "\"transient_time_width\": 0.5", "\"transient_time_width\": -0.5", NULL,
-         {"transient_time_width", "empty time window", NULL}},
+         {"transient_time_width", "must be >= 0", NULL}},
         {"frames of width 0", "\"transient_time_width\": 0.5", "\"transient_time_width\": 0, \"frame_num\": 3", NULL,
          {"transient_time_width", NULL, NULL}},
         {"unknown integrator", "\"type\": \"path_tracer\"", "\"type\": \"bidirectional_path_tracer\"", NULL,

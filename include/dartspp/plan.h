@@ -101,28 +101,22 @@ typedef struct {
 } eda_plan;
 
 typedef struct render_plan {
+    integrator_settings keys;        /* the integrator keys as resolved (key table, scene.h); the decisions
+                                      * below are derived from them */
     integrator_type type;
     char type_name[64];
     time_window window;
     bounce_limits bounces;
-    int enable_rr;                   /* path tracer: Russian roulette */
     surface_shading shading;         /* two-sided shading, consistency checks, the photon-points glossy rule */
     /* photon points */
     double light_paths;              /* photon_count: light paths per iteration */
     double volume_budget, surface_budget; /* photons per iteration */
     radius_schedule r_vol, r_surf;
-    int k_surf;                      /* gather_photon_count */
-    int camera_leg_projected;
     int volume_splat;               /* primary lines gathered photon by photon (volume_gather "splat") */
-    int include_surfaces, low_order_scattering;
-    int surface_chains;              /* DARTS: surface photons after the volume budget from Markov chains */
-    int pass_weights_equal;          /* pass_weights "equal": every iteration weighs 1 in the image */
     darts_plan darts;
     int medium_count;
     eda_plan *eda;                   /* medium_count entries */
     int eda_active;                  /* some medium uses EDA */
-    char eda_table_dir[512];
-    int eda_shape[3];
     /* renderer (the command line may override) */
     long spp;
     double timeout_seconds, checkpoint_seconds;

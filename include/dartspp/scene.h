@@ -119,56 +119,113 @@ static inline double time_window_end(const time_window *tw)
     return tw->start + tw->width * (tw->frame_count > 0 ? tw->frame_count : 1);
 }
 
-/* ---- settings ---- */
-typedef enum { INTEGRATOR_PATH_TRACER, INTEGRATOR_PHOTON_POINTS } integrator_type;
+/* ---- settings ----
+ * The integrator and renderer keys are declared once, in the key table (src/scene/keys.c): name, JSON type,
+ * default, range or choices, the integrators that read it, whether it changes the image and its meaning.
+ * Parsing, validation, `--set`, the unknown/unread-key notes, the plan's JSON and `dartspp keys` all iterate
+ * that table; the resolved values land in the structs below, which the plan reads. */
+typedef enum { INTEGRATOR_PATH_TRACER, INTEGRATOR_PHOTON_POINTS, INTEGRATOR_COUNT } integrator_type;
 
 typedef struct {
-    integrator_type type;
-    char type_name[64];
-    int min_bounces, max_bounces;   /* path segments incl. the light connection (DESIGN §4) */
+    /* choice keys hold the index of their choice in the key table */
+    int type;                       /* type: integrator_type */
+    char type_name[64];             /* the chosen type's name */
+    long min_bounces, max_bounces;  /* path segments incl. the light connection (docs/design.md) */
+    /* the time keys as written, and the window they resolve to */
+    double transient_time_center, transient_time_width, start_time;
+    long frame_num;
+    int delta_time_gate, camera_unwarp;
     time_window window;
-    double vacuum_eta;              /* 1 / vaccum_speed_of_light */
+    double vacuum_speed;            /* vaccum_speed_of_light (the format's spelling) */
+    double vacuum_eta;              /* 1 / vacuum_speed */
     int enable_rr;                  /* path tracer: Russian roulette on throughput */
     /* photon points */
     double photon_count, volume_photon_count;
-    int gather_photon_count;
+    long gather_photon_count;
     double gather_radius, volume_gather_radius, alpha, volume_alpha;
     int fixed_volume_radius, include_surfaces, low_order_scattering;
     int enable_guiding, enable_elliptical, strict_time_width;
-    int volume_beams;               /* volume_photon_type "beams": loads, refused at render time */
-    int camera_leg_projected;       /* camera_leg: "euclidean" (reference, default) or "projected" */
-    int volume_gather_beam;         /* volume_gather: "splat" (default) or "beam" (a query per camera segment) */
-    int radius_schedule_3d;         /* radius_schedule: "2d" (default) or "3d" (reference cube root) */
-    int pass_weights_equal;         /* pass_weights: "kernel_area" (default) or "equal" (reference) */
-    int eda;                        /* eda: EDA direction sampling in every medium (default false) */
-    double eda_alpha;               /* eda_alpha: α of the EDA/phase selection (default 0.5) */
-    char eda_table_dir[512];        /* eda_table_dir: the EDA table cache (default "tables") */
-    int eda_shape[3];               /* eda_shape: [C/S rows, S columns, cos bins] of built tables (128, 128, 256) */
-    double da_defensive;            /* da_defensive: uniform share of the DA-RIS candidate selection (default 0.2) */
-    int darts_mirrors_straight;     /* darts_mirrors: "full" (default) or "straight" (the authors', plan.h) */
-    double mirror_defensive;        /* mirror_defensive: least defensive share behind continued surfaces (0.05) */
-    int surface_chains;             /* surface_chains: DARTS surface photons from Markov chains over light paths
-                                     * (photon_pass.c; default true) */
-    int early_exit;                 /* early_exit: DARTS paths end once their bin is out of reach (default true) */
-    int control_vertex_mis;         /* control_vertex_mis: MIS of the elliptical and exponential techniques (default true) */
-    int ellipse_residual;           /* ellipse_residual: 0 "uniform" (reference), 1 "exponential" (paper eq. 21-22) */
-    int two_sided_shading;          /* enable_two_sided_shading: opaque surfaces shade both sides (default true) */
-    int consistency_checks;         /* enable_consistency_checks: a direction on different sides of the shading and
-                                     * geometric normals is refused (default false) */
-    double glossy_gather_alpha;     /* glossy_gather_alpha: photon points gather on glossy lobes at least this rough
-                                     * (microfacet α) and continue camera paths through smoother ones (default 0.5,
-                                     * bench/results/glossy_gather.md) */
+    int volume_beams;               /* volume_photon_type: 0 points, 1 beams (loads, refused at render time) */
+    int camera_leg_projected;       /* camera_leg: 0 euclidean, 1 projected */
+    int volume_gather_beam;         /* volume_gather: 0 splat, 1 beam */
+    int radius_schedule_3d;         /* radius_schedule: 0 2d, 1 3d */
+    int pass_weights_equal;         /* pass_weights: 0 kernel_area, 1 equal */
+    int eda;
+    double eda_alpha;
+    char eda_table_dir[512];
+    int eda_shape[3];               /* [C/S rows, S columns, cos bins] */
+    double da_defensive;
+    int darts_mirrors_straight;     /* darts_mirrors: 0 full, 1 straight (plan.h) */
+    double mirror_defensive;
+    int surface_chains;
+    int early_exit;
+    int control_vertex_mis;
+    int ellipse_residual;           /* 0 uniform, 1 exponential (residual_sampling in plan.h) */
+    int two_sided_shading;          /* enable_two_sided_shading */
+    int consistency_checks;         /* enable_consistency_checks */
+    double glossy_gather_alpha;
 } integrator_settings;
-
 
 typedef struct {
     long spp;                /* progressive passes; 0 = no limit */
     double timeout_seconds;  /* 0 = no limit */
     double checkpoint_seconds;
-    char output_file[1024];  /* LDR preview as written in the scene (may be empty) */
+    char output_file[1024];  /* LDR preview as written in the scene (not written by dartspp) */
     char hdr_output_file[1024];
-    int transients_buffer;   /* output_buffers has an entry of type "transients" */
 } renderer_settings;
+
+/* One key of the table. */
+typedef enum { KEY_SECTION_INTEGRATOR, KEY_SECTION_RENDERER } scene_key_section;
+typedef enum {
+    KEY_BOOL,     /* int 0/1; also 0/1 and "true"/"false" as the format's files write them */
+    KEY_INT,      /* long; an integral number */
+    KEY_NUMBER,   /* double; finite */
+    KEY_CHOICE,   /* int: index into choices */
+    KEY_STRING,   /* char[size] */
+    KEY_DURATION, /* double seconds; a bare number means minutes, suffixes ms, s, m, h, d; negative: no limit (0) */
+    KEY_SHAPE3,   /* int[3], integers in [lo, hi] (the last at least lo + 1) */
+    KEY_ANY       /* accepted as the format writes it and not read (no field) */
+} scene_key_type;
+
+enum { KEY_LO = 1, KEY_HI = 2, KEY_LO_OPEN = 4 }; /* lo <= v (lo < v with KEY_LO_OPEN); v <= hi */
+#define KEY_READ_BY(t) (1u << (t))
+#define KEY_READ_BY_ALL ((1u << INTEGRATOR_COUNT) - 1u)
+
+typedef struct {
+    const char *name;
+    scene_key_section section;
+    scene_key_type type;
+    unsigned read_by;            /* KEY_READ_BY bits of the integrators that read it; 0: accepted, never read */
+    int changes_image;           /* its value changes the pixels at a fixed seed (it is then in the plan's JSON) */
+    double def;                  /* default of bool/int/number/choice keys (choice: index) */
+    const char *def_from;        /* default: the value of this earlier key instead (NULL: def) */
+    const char *def_text;        /* default of string, duration and shape keys, as documented */
+    double lo, hi;               /* range of numbers and integers, as bounds says */
+    unsigned bounds;             /* KEY_LO | KEY_HI | KEY_LO_OPEN */
+    const char *const *choices;  /* KEY_CHOICE: NULL-terminated */
+    size_t offset, size;         /* the resolved value in integrator_settings or renderer_settings */
+    const char *meaning;
+} scene_key;
+
+/* The table, in the order the keys are documented; *count gets its length. */
+const scene_key *scene_keys(int *count);
+/* The key called name in either section, or NULL. */
+const scene_key *scene_key_find(const char *name);
+/* "integrator" or "renderer": the scene file's object that holds the section's keys. */
+const char *scene_key_section_name(scene_key_section s);
+/* The choice names of integrator_type (the table's `type` key). */
+const char *integrator_type_name(integrator_type t);
+/* The table's columns as text (`dartspp keys`, docs/keys.md): "number", "0.3" or "= alpha", "[0, 1]" or the
+ * choices, "all" or the integrators that read the key ("none": accepted, never read). */
+const char *scene_key_type_name(scene_key_type t);
+void scene_key_default_text(const scene_key *k, char *out, size_t n);
+void scene_key_range_text(const scene_key *k, char *out, size_t n);
+void scene_key_readers_text(const scene_key *k, char *out, size_t n);
+/* Whether integrator type t reads the key. */
+static inline int scene_key_read_by(const scene_key *k, int t)
+{
+    return (k->read_by & KEY_READ_BY(t)) != 0;
+}
 
 /* ---- the scene ---- */
 typedef struct scene scene;

@@ -16,7 +16,8 @@ static void usage(FILE *f)
             "       dartspp merge OUTPUT IMAGE IMAGE [IMAGE...]   (mean of independent renders, its variance)\n"
             "       dartspp table --sigma-s S --sigma-a A --g G [--shape R,S,C] [--s-max X] --output FILE\n"
             "                                                     (EDA direction-sampling table)\n"
-            "See README.md for the scene keys, outputs and units.\n");
+            "       dartspp keys [--markdown]                     (the scene's integrator and renderer keys)\n"
+            "See docs/ for the scene keys, outputs and units.\n");
 }
 
 #ifdef DARTSPP_MPI
@@ -53,7 +54,8 @@ int main(int argc, char **argv)
     if (!strcmp(argv[1], "patch-mean")) return cli_patch_mean(argc - 2, argv + 2);
     if (!strcmp(argv[1], "merge")) return cli_merge(argc - 2, argv + 2);
     if (!strcmp(argv[1], "table")) return cli_table(argc - 2, argv + 2);
-    fprintf(stderr, "dartspp: unknown command '%s' (commands: render, compare, patch-mean, merge, table)\n", argv[1]);
+    if (!strcmp(argv[1], "keys")) return cli_keys(argc - 2, argv + 2);
+    fprintf(stderr, "dartspp: unknown command '%s' (commands: render, compare, patch-mean, merge, table, keys)\n", argv[1]);
     usage(stderr);
     return 2;
 }

@@ -23,8 +23,8 @@ static int load_for_medium(const scene *s, const render_plan *p, const medium *m
                             "without scattering)", s->path, m->name);
     if (!(s_max > 0.0))
         return dp_fail(err, "%s: medium '%s': EDA needs a gate that ends after time 0", s->path, m->name);
-    return eda_table_cached(t, p->eda_table_dir, v3_avg(m->sigma_s), v3_avg(m->sigma_a), g, p->eda_shape[0],
-                            p->eda_shape[1], p->eda_shape[2], s_max, m->eda_r_lo, m->eda_r_hi, err);
+    return eda_table_cached(t, p->keys.eda_table_dir, v3_avg(m->sigma_s), v3_avg(m->sigma_a), g, p->keys.eda_shape[0],
+                            p->keys.eda_shape[1], p->keys.eda_shape[2], s_max, m->eda_r_lo, m->eda_r_hi, err);
 }
 
 int eda_set_prepare(const scene *s, const render_plan *p, eda_set *set, dp_error *err)
@@ -57,7 +57,7 @@ int eda_set_prepare(const scene *s, const render_plan *p, eda_set *set, dp_error
 size_t eda_set_bytes(const scene *s, const render_plan *p)
 {
     size_t bytes = 0;
-    const int *shape = p->eda_shape;
+    const int *shape = p->keys.eda_shape;
     for (int i = 0; i < s->medium_count; i++) {
         const medium *m = &s->media[i];
         if (!p->eda[i].on) continue;

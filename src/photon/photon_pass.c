@@ -327,8 +327,8 @@ void photon_pass_input_init(photon_pass_input *in, const scene *s, const render_
     *in = (photon_pass_input){.light_paths = p->light_paths, .volume_budget = p->volume_budget,
                               .surface_budget = p->surface_budget, .max_bounces = p->bounces.max,
                               .t_end = p->window.gated ? time_window_end(&p->window) : INFINITY,
-                              .include_surfaces = p->include_surfaces, .low_order_scattering = p->low_order_scattering,
-                              .surface_chains = p->surface_chains,
+                              .include_surfaces = p->keys.include_surfaces, .low_order_scattering = p->keys.low_order_scattering,
+                              .surface_chains = p->keys.surface_chains,
                               .surface_slack = plan_surface_slack(p, iteration), .shading = p->shading,
                               .eda = eda, .seed = seed,
                               .iteration = iteration, .stop = stop};

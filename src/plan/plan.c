@@ -1,7 +1,7 @@
 /* The render plan: every decision derived from the integrator and renderer keys, taken once. */
 #include "dartspp/plan.h"
 
-#include <stdarg.h>
+#include <cjson/cJSON.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -92,34 +92,26 @@ int plan_resolve(const scene *s, render_plan *p, dp_error *err)
 {
     const integrator_settings *in = &s->integrator;
     memset(p, 0, sizeof *p);
+    p->keys = *in;
     if (in->volume_beams)
         return dp_fail(err, "%s: integrator.volume_photon_type: 'beams' is not supported (supported: points)", s->path);
     p->type = in->type;
     snprintf(p->type_name, sizeof p->type_name, "%s", in->type_name);
     p->window = in->window;
-    p->bounces = (bounce_limits){in->min_bounces, in->max_bounces};
-    p->enable_rr = in->enable_rr;
+    p->bounces = (bounce_limits){(int)in->min_bounces, (int)in->max_bounces};
     p->shading = (surface_shading){in->two_sided_shading, in->consistency_checks, in->glossy_gather_alpha};
     p->light_paths = in->photon_count;
     p->volume_budget = in->volume_photon_count;
     p->surface_budget = in->photon_count;
     p->r_vol = (radius_schedule){in->volume_gather_radius, in->volume_alpha, in->radius_schedule_3d ? 3 : 2};
     p->r_surf = (radius_schedule){in->gather_radius, in->alpha, 2};
-    p->k_surf = in->gather_photon_count;
-    p->camera_leg_projected = in->camera_leg_projected;
     p->volume_splat = !in->volume_gather_beam;
-    p->include_surfaces = in->include_surfaces;
-    p->pass_weights_equal = in->pass_weights_equal;
-    p->surface_chains = in->surface_chains;
-    p->low_order_scattering = in->low_order_scattering;
     p->medium_count = s->medium_count;
     if (s->medium_count > 0 && !(p->eda = calloc((size_t)s->medium_count, sizeof *p->eda)))
         return dp_fail(err, "%s: out of memory for the render plan", s->path);
     resolve_eda(s, p);
     resolve_darts(s, p);
     resolve_camera_side(s, p);
-    snprintf(p->eda_table_dir, sizeof p->eda_table_dir, "%s", in->eda_table_dir);
-    memcpy(p->eda_shape, in->eda_shape, sizeof p->eda_shape);
     p->spp = s->renderer.spp;
     p->timeout_seconds = s->renderer.timeout_seconds;
     p->checkpoint_seconds = s->renderer.checkpoint_seconds;
@@ -134,82 +126,96 @@ void plan_free(render_plan *p)
 
 double plan_surface_slack(const render_plan *p, long iteration)
 {
-    if (!p->include_surfaces) return 0.0;
+    if (!p->keys.include_surfaces) return 0.0;
     return p->darts.eta_ub * schedule_radius(&p->r_surf, iteration);
 }
 
 double plan_pass_weight(const render_plan *p, long iteration)
 {
-    if (p->type != INTEGRATOR_PHOTON_POINTS || p->pass_weights_equal) return 1.0;
-    const radius_schedule *r = p->include_surfaces ? &p->r_surf : &p->r_vol;
+    if (p->type != INTEGRATOR_PHOTON_POINTS || p->keys.pass_weights_equal) return 1.0;
+    const radius_schedule *r = p->keys.include_surfaces ? &p->r_surf : &p->r_vol;
     double q = schedule_radius(r, iteration) / r->r0;
     return q * q;
 }
 
-/* Appends printf-style text; keeps track of overflow. */
-static void put(char *out, size_t n, size_t *len, const char *fmt, ...) __attribute__((format(printf, 4, 5)));
-static void put(char *out, size_t n, size_t *len, const char *fmt, ...)
+/* A key's resolved value as JSON, by its type in the key table. */
+static cJSON *key_value_json(const scene_key *k, const integrator_settings *in)
 {
-    if (*len >= n) return;
-    va_list ap;
-    va_start(ap, fmt);
-    int k = vsnprintf(out + *len, n - *len, fmt, ap);
-    va_end(ap);
-    *len = k < 0 ? n : *len + (size_t)k;
+    const void *f = (const char *)in + k->offset;
+    switch (k->type) {
+    case KEY_BOOL: return cJSON_CreateBool(*(const int *)f);
+    case KEY_INT: return cJSON_CreateNumber((double)*(const long *)f);
+    case KEY_NUMBER: return cJSON_CreateNumber(*(const double *)f);
+    case KEY_CHOICE: return cJSON_CreateString(k->choices[*(const int *)f]);
+    case KEY_STRING: return cJSON_CreateString((const char *)f);
+    case KEY_SHAPE3: return cJSON_CreateIntArray((const int *)f, 3);
+    default: return cJSON_CreateNull();
+    }
+}
+
+/* Every integrator key that changes the image and that this integrator reads, as resolved. */
+static void add_keys(cJSON *root, const render_plan *p)
+{
+    cJSON *keys = cJSON_AddObjectToObject(root, "keys");
+    int n;
+    const scene_key *table = scene_keys(&n);
+    for (int i = 0; i < n; i++)
+        if (table[i].section == KEY_SECTION_INTEGRATOR && table[i].changes_image && scene_key_read_by(&table[i], p->type))
+            cJSON_AddItemToObject(keys, table[i].name, key_value_json(&table[i], &p->keys));
+}
+
+/* What the DARTS photon pass will run, as derived from the keys and the scene. */
+static void add_darts(cJSON *root, const render_plan *p, const scene *s)
+{
+    const darts_plan *d = &p->darts;
+    cJSON *j = cJSON_AddObjectToObject(root, "darts");
+    cJSON_AddBoolToObject(j, "active", d->active);
+    if (!d->active) return;
+    cJSON_AddBoolToObject(j, "distance_sampling", d->distance_sampling);
+    cJSON_AddBoolToObject(j, "control_vertices", d->control_vertices);
+    cJSON_AddBoolToObject(j, "strict_surfaces", d->strict_surfaces);
+    double eta[2] = {d->eta_lb, d->eta_ub};
+    cJSON_AddItemToObject(j, "eta", cJSON_CreateDoubleArray(eta, 2));
+    if (!d->cv_multi) return;
+    cJSON *shares = cJSON_AddArrayToObject(j, "cv_share");
+    cJSON_AddItemToArray(shares, cJSON_CreateNumber(d->cv_share[0]));
+    for (int k = 0; k < d->side.mirror_count; k++) {
+        cJSON *m = cJSON_CreateObject();
+        cJSON_AddStringToObject(m, "mirror", s->surfaces[d->side.mirror_surface[k]].name);
+        cJSON_AddNumberToObject(m, "share", d->cv_share[1 + k]);
+        double focus[3] = {d->side.focus[k].x, d->side.focus[k].y, d->side.focus[k].z};
+        cJSON_AddItemToObject(m, "focus", cJSON_CreateDoubleArray(focus, 3));
+        cJSON_AddItemToArray(shares, m);
+    }
+    cJSON *def = cJSON_CreateObject();
+    cJSON_AddNumberToObject(def, "defensive", d->cv_defensive);
+    cJSON_AddItemToArray(shares, def);
 }
 
 int plan_json(const render_plan *p, const scene *s, char *out, size_t n)
 {
-    size_t len = 0;
     const time_window *tw = &p->window;
-    put(out, n, &len, "{\"integrator\":\"%s\",\"time\":\"camera-%s optical path length\"", p->type_name,
-        tw->camera_unwarp ? "unwarped" : "warped");
-    if (!tw->gated) put(out, n, &len, ",\"window\":\"steady\"");
-    else put(out, n, &len, ",\"window\":[%.17g,%.17g],\"frames\":%d", tw->start, time_window_end(tw), tw->frame_count);
-    put(out, n, &len, ",\"bounces\":[%d,%d]", p->bounces.min, p->bounces.max);
-    put(out, n, &len, ",\"two_sided_shading\":%s,\"consistency_checks\":%s", p->shading.two_sided ? "true" : "false",
-        p->shading.consistency_checks ? "true" : "false");
-    if (p->type == INTEGRATOR_PATH_TRACER) {
-        put(out, n, &len, ",\"russian_roulette\":%s}", p->enable_rr ? "true" : "false");
-        return len < n ? 0 : -1;
+    cJSON *root = cJSON_CreateObject();
+    cJSON_AddStringToObject(root, "integrator", p->type_name);
+    cJSON_AddStringToObject(root, "time", tw->camera_unwarp ? "camera-unwarped optical path length"
+                                                            : "camera-warped optical path length");
+    if (!tw->gated) cJSON_AddStringToObject(root, "window", "steady");
+    else {
+        double w[2] = {tw->start, time_window_end(tw)};
+        cJSON_AddItemToObject(root, "window", cJSON_CreateDoubleArray(w, 2));
+        cJSON_AddNumberToObject(root, "frames", tw->frame_count);
     }
-    const darts_plan *d = &p->darts;
-    put(out, n, &len,
-        ",\"light_paths\":%.17g,\"volume_budget\":%.17g,\"surface_budget\":%.17g"
-        ",\"r_vol\":{\"r0\":%.17g,\"alpha\":%.17g,\"dims\":%d},\"r_surf\":{\"r0\":%.17g,\"alpha\":%.17g,\"k\":%d}"
-        ",\"camera_leg\":\"%s\",\"volume_gather\":\"%s\",\"surfaces\":%s,\"low_order_scattering\":%s,\"glossy_gather_alpha\":%.17g",
-        p->light_paths, p->volume_budget, p->surface_budget, p->r_vol.r0, p->r_vol.alpha, p->r_vol.dims, p->r_surf.r0,
-        p->r_surf.alpha, p->k_surf, p->camera_leg_projected ? "projected" : "euclidean",
-        p->volume_splat ? "splat" : "beam", p->include_surfaces ? "true" : "false", p->low_order_scattering ? "true" : "false",
-        p->shading.glossy_gather_alpha);
-    put(out, n, &len, ",\"pass_weights\":\"%s\"", p->pass_weights_equal ? "equal" : "kernel_area");
-    put(out, n, &len, ",\"darts\":{\"active\":%s", d->active ? "true" : "false");
-    if (d->active)
-        put(out, n, &len,
-            ",\"distance_sampling\":%s,\"control_vertices\":%s,\"control_vertex_mis\":%s,\"residual\":\"%s\""
-            ",\"strict\":%s,\"early_exit\":%s,\"da_defensive\":%.17g,\"eta\":[%.17g,%.17g]",
-            d->distance_sampling ? "true" : "false", d->control_vertices ? "true" : "false",
-            d->control_vertex_mis ? "true" : "false", d->residual == RESIDUAL_EXPONENTIAL ? "exponential" : "uniform",
-            d->strict ? "true" : "false", d->early_exit ? "true" : "false", d->da_defensive, d->eta_lb, d->eta_ub);
-    if (d->active) {
-        put(out, n, &len, ",\"mirrors\":\"%s\",\"strict_surfaces\":%s", d->mirrors == DARTS_MIRRORS_FULL ? "full" : "straight",
-            d->strict_surfaces ? "true" : "false");
-        if (d->cv_multi) {
-            put(out, n, &len, ",\"cv_share\":[%.17g", d->cv_share[0]);
-            for (int k = 0; k < d->side.mirror_count; k++)
-                put(out, n, &len, ",{\"mirror\":\"%s\",\"share\":%.17g,\"focus\":[%.17g,%.17g,%.17g]}",
-                    s->surfaces[d->side.mirror_surface[k]].name, d->cv_share[1 + k], d->side.focus[k].x, d->side.focus[k].y,
-                    d->side.focus[k].z);
-            put(out, n, &len, ",{\"defensive\":%.17g}]", d->cv_defensive);
-        }
+    add_keys(root, p);
+    if (p->type == INTEGRATOR_PHOTON_POINTS) {
+        add_darts(root, p, s);
+        cJSON *eda = cJSON_AddObjectToObject(root, "eda");
+        for (int i = 0; i < p->medium_count; i++)
+            if (p->eda[i].on) cJSON_AddNumberToObject(cJSON_AddObjectToObject(eda, s->media[i].name), "alpha", p->eda[i].alpha);
     }
-    put(out, n, &len, "},\"eda\":{");
-    const char *sep = "";
-    for (int i = 0; i < p->medium_count; i++) {
-        if (!p->eda[i].on) continue;
-        put(out, n, &len, "%s\"%s\":{\"alpha\":%.17g}", sep, s->media[i].name, p->eda[i].alpha);
-        sep = ",";
-    }
-    put(out, n, &len, "}}");
-    return len < n ? 0 : -1;
+    char *text = cJSON_PrintUnformatted(root);
+    cJSON_Delete(root);
+    int fits = text && strlen(text) < n;
+    if (fits) memcpy(out, text, strlen(text) + 1);
+    cJSON_free(text);
+    return fits ? 0 : -1;
 }

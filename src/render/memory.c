@@ -76,7 +76,7 @@ void render_memory_estimate(const scene *s, const render_plan *p, int have_refer
     int volume = s->medium_count > 0;
     if (volume) add(m, "volume photons and their map", "integrator.volume_photon_count", V * (ph + per_mapped));
     if (volume) add(m, "primary lines of the sensor pass", "camera.resolution", (double)sensor_pass_bytes(1, 1) * px);
-    if (p->include_surfaces || !volume)
+    if (p->keys.include_surfaces || !volume)
         add(m, "surface photons and their map", "integrator.photon_count", S * (ph + per_mapped));
     add(m, "photon batch buffers", NULL, PHOTON_PASS_BATCH * dp_fmax(rate_v + rate_s, 1.0) * ph);
 }

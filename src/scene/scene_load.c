@@ -135,7 +135,7 @@ static int parse_medium(json_ctx *c, const cJSON *v, int i, medium *m)
     else if (!strcmp(type, "guided_homo")) m->guided = 1;
     else return jfail(c, w, "type", "unsupported medium '%s' (supported: homogeneous, guided_homo)", type);
     double density, speed;
-    long maxb;
+    long maxb = 1024; /* set by jget_int; initialised for the flow analysis under LTO */
     if (jget_vec3(c, v, w, "sigma_s", v3s(0), &m->sigma_s) || jget_vec3(c, v, w, "sigma_a", v3s(0), &m->sigma_a) ||
         jget_number_range(c, v, w, "density", 1.0, 0.0, 0.0, &density) ||
         jget_number(c, v, w, "speed_of_light", 1.0, &speed) || jget_int(c, v, w, "max_bounces", 1024, &maxb))
