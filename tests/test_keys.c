@@ -311,6 +311,48 @@ static void test_paper_path_trace_darts_keys_reported(void **state)
     scene_free(&s);
 }
 
+/* The other objects keep no list of their keys: a key is known where it is read, so a member no reader asked
+ * for is listed with --verbose — one the format has but this object's type does not read included — and no
+ * member that was read is. */
+static void test_object_keys_nobody_reads(void **state)
+{
+    (void)state;
+    char *dir = test_tmpdir();
+    char path[600];
+    snprintf(path, sizeof path, "%s/scene.json", dir);
+    test_write_file(path,
+                    "{ \"media\": [ { \"name\": \"fog\", \"sigma_s\": 0.5, \"colour\": 1,"
+                    "    \"phase_function\": { \"type\": \"isotropic\", \"g\": 0.5 } } ],"
+                    "  \"bsdfs\": [ { \"name\": \"white\", \"type\": \"lambert\", \"albedo\": 0.5, \"shininess\": 3 } ],"
+                    "  \"primitives\": [ { \"type\": \"point\", \"emission\": 1, \"bsdf\": \"white\", \"ext_medium\": \"fog\","
+                    "      \"transform\": { \"position\": [0, 0, 2], \"skew\": 1 } },"
+                    "    { \"type\": \"quad\", \"bsdf\": \"white\", \"smooth\": true,"
+                    "      \"transform\": { \"position\": [0, -1, 2], \"scale\": 4 } } ],"
+                    "  \"camera\": { \"resolution\": [4, 4], \"fov\": 40, \"medium\": \"fog\", \"tonemap\": \"filmic\","
+                    "    \"transform\": { \"position\": [0, 0, 0], \"look_at\": [0, 0, 1], \"up\": [0, 1, 0] } },"
+                    "  \"extras\": { } }");
+    scene s;
+    dp_error err = {0};
+    scene_load_options opt = {.verbose = 1};
+    int rc = scene_load(path, &opt, &s, &err);
+    test_rmtree(dir);
+    if (rc) fail_msg("%s", err.msg);
+    const char *expected[] = {"media[0].colour\n", "media[0].phase_function.g\n", "bsdfs[0].shininess\n",
+                              "primitives[0].bsdf\n", "primitives[0].transform.skew\n", "primitives[1].smooth\n",
+                              "camera.tonemap\n", "ignored key: extras\n"};
+    const char *read[] = {"media[0].sigma_s\n", "media[0].name\n", "media[0].phase_function.type\n", "media[0].phase_function\n",
+                          "bsdfs[0].albedo\n", "primitives[0].emission\n", "primitives[0].transform.position\n",
+                          "primitives[1].bsdf\n", "primitives[1].transform\n", "camera.fov\n", "camera.medium\n",
+                          "camera.transform\n", "ignored key: media\n", "ignored key: camera\n"};
+    char notes[4096];
+    snprintf(notes, sizeof notes, "%s", s.notes ? s.notes : "");
+    scene_free(&s);
+    print_message("%s", notes);
+    for (size_t i = 0; i < sizeof expected / sizeof *expected; i++) ASSERT_NOTE(notes, expected[i]);
+    for (size_t i = 0; i < sizeof read / sizeof *read; i++)
+        if (strstr(notes, read[i])) fail_msg("%s was read, yet listed as ignored", read[i]);
+}
+
 /* ---- every bound and choice of the table ---- */
 
 static int refused_with_key(const char *set, const char *section, const char *key, const char *reason)
@@ -407,6 +449,7 @@ int main(void)
         cmocka_unit_test(test_image_keys_change_the_plan),
         cmocka_unit_test(test_unread_keys_reported),
         cmocka_unit_test(test_paper_path_trace_darts_keys_reported),
+        cmocka_unit_test(test_object_keys_nobody_reads),
         cmocka_unit_test(test_bounds_and_choices_enforced),
         cmocka_unit_test(test_keys_doc_is_generated),
     };

@@ -7,9 +7,6 @@
 #include <stdio.h>
 #include <string.h>
 
-static const char *const bsdf_keys[] = {"name", "type", "albedo", "distribution", "roughness", "material", "eta", "k",
-                                        "ior", "enable_refraction", "thickness", "sigma_a", "Ks", NULL};
-
 static void supported_types(char *out, size_t n)
 {
     out[0] = 0;
@@ -33,7 +30,7 @@ static int parse_distribution(json_ctx *c, const cJSON *v, const char *where, bs
 
 static int parse_albedo(json_ctx *c, const cJSON *v, const char *where, scene *s, bsdf *b)
 {
-    const cJSON *a = cJSON_GetObjectItemCaseSensitive(v, "albedo");
+    const cJSON *a = jget_item(c, v, "albedo");
     b->texture = -1;
     if (cJSON_IsString(a)) {
         /* the constant albedo: 0.5 for a missing file (the average of Tungsten's stand-in checkerboard),
@@ -64,7 +61,7 @@ static int parse_conductor(json_ctx *c, const cJSON *v, const char *where, bsdf 
 int bsdf_parse(json_ctx *c, const cJSON *v, const char *where, scene *s, bsdf *b)
 {
     if (!cJSON_IsObject(v)) return jfail(c, where, NULL, "expected a BSDF object");
-    jnote_unknown_keys(c, v, where, bsdf_keys);
+    size_t mark = jread_mark(c);
     const char *type = "lambert", *name = "";
     if (jget_string(c, v, where, "type", &type) < 0 || jget_string(c, v, where, "name", &name) < 0) return -1;
     int t = bsdf_type_from_name(type);
@@ -75,7 +72,7 @@ int bsdf_parse(json_ctx *c, const cJSON *v, const char *where, scene *s, bsdf *b
     }
     bsdf_defaults(b, (bsdf_type)t);
     snprintf(b->name, sizeof b->name, "%s", name[0] ? name : where);
-    const cJSON *rough = cJSON_GetObjectItemCaseSensitive(v, "roughness");
+    const cJSON *rough = jget_item(c, v, "roughness");
     if (rough && !cJSON_IsNumber(rough))
         return jfail(c, where, "roughness", "expected a number (roughness textures are not supported)");
     if (parse_albedo(c, v, where, s, b) || parse_distribution(c, v, where, b) ||
@@ -88,5 +85,6 @@ int bsdf_parse(json_ctx *c, const cJSON *v, const char *where, scene *s, bsdf *b
     dp_error perr;
     memset(&perr, 0, sizeof perr);
     if (bsdf_prepare(b, &perr)) return jfail(c, where, NULL, "%s", perr.msg);
+    jnote_unread_keys(c, v, where, mark);
     return 0;
 }

@@ -74,7 +74,7 @@ static int as_number(const cJSON *v, double *out)
 
 int jget_number(json_ctx *c, const cJSON *obj, const char *where, const char *key, double def, double *out)
 {
-    const cJSON *v = cJSON_GetObjectItemCaseSensitive(obj, key);
+    const cJSON *v = jget_item(c, obj, key);
     *out = def;
     if (!v) return 0;
     double d;
@@ -104,7 +104,7 @@ int jget_int(json_ctx *c, const cJSON *obj, const char *where, const char *key, 
 
 int jget_bool(json_ctx *c, const cJSON *obj, const char *where, const char *key, int def, int *out)
 {
-    const cJSON *v = cJSON_GetObjectItemCaseSensitive(obj, key);
+    const cJSON *v = jget_item(c, obj, key);
     *out = def;
     if (!v) return 0;
     if (cJSON_IsBool(v)) *out = cJSON_IsTrue(v);
@@ -117,7 +117,7 @@ int jget_bool(json_ctx *c, const cJSON *obj, const char *where, const char *key,
 
 int jget_vec3(json_ctx *c, const cJSON *obj, const char *where, const char *key, vec3 def, vec3 *out)
 {
-    const cJSON *v = cJSON_GetObjectItemCaseSensitive(obj, key);
+    const cJSON *v = jget_item(c, obj, key);
     *out = def;
     if (!v) return 0;
     double d;
@@ -140,19 +140,50 @@ int jget_vec3(json_ctx *c, const cJSON *obj, const char *where, const char *key,
 
 int jget_string(json_ctx *c, const cJSON *obj, const char *where, const char *key, const char **out)
 {
-    const cJSON *v = cJSON_GetObjectItemCaseSensitive(obj, key);
+    const cJSON *v = jget_item(c, obj, key);
     if (!v) return 0;
     if (!cJSON_IsString(v)) return jfail(c, where, key, "expected a string");
     *out = v->valuestring;
     return 1;
 }
 
-void jnote_unknown_keys(json_ctx *c, const cJSON *obj, const char *where, const char *const *known)
+const cJSON *jget_item(json_ctx *c, const cJSON *obj, const char *key)
 {
-    if (!c->verbose || !c->notes || !cJSON_IsObject(obj)) return;
-    for (const cJSON *it = obj->child; it; it = it->next) {
-        int found = 0;
-        for (const char *const *k = known; *k && !found; k++) found = it->string && !strcmp(it->string, *k);
-        if (!found) strbuf_addf(c->notes, "ignored key: %s%s%s", where, where[0] ? "." : "", it->string);
+    const cJSON *v = cJSON_GetObjectItemCaseSensitive(obj, key);
+    if (!v || c->read_lost) return v;
+    if (c->read_len == c->read_cap) {
+        size_t cap = c->read_cap ? 2 * c->read_cap : 64;
+        const cJSON **grown = realloc(c->read, cap * sizeof *grown);
+        if (!grown) {
+            c->read_lost = 1;
+            return v;
+        }
+        c->read = grown;
+        c->read_cap = cap;
     }
+    c->read[c->read_len++] = v;
+    return v;
+}
+
+size_t jread_mark(const json_ctx *c)
+{
+    return c->read_len;
+}
+
+void jnote_unread_keys(json_ctx *c, const cJSON *obj, const char *where, size_t mark)
+{
+    if (mark > c->read_len) mark = c->read_len;
+    for (const cJSON *it = cJSON_IsObject(obj) ? obj->child : NULL; it && c->verbose && c->notes && !c->read_lost; it = it->next) {
+        int read = 0;
+        for (size_t i = mark; i < c->read_len && !read; i++) read = c->read[i] == it;
+        if (!read) strbuf_addf(c->notes, "ignored key: %s%s%s", where, where[0] ? "." : "", it->string);
+    }
+    c->read_len = mark;
+}
+
+void json_ctx_free(json_ctx *c)
+{
+    free(c->read);
+    c->read = NULL;
+    c->read_len = c->read_cap = 0;
 }

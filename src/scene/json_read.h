@@ -19,7 +19,23 @@ typedef struct {
     dp_error *err;
     int verbose;        /* list ignored keys */
     strbuf *notes;      /* warnings and ignored keys */
+    /* the members read so far (jget_item), so that the keys nobody read can be listed: no list of known
+     * keys is kept anywhere, a key is known where it is read */
+    const cJSON **read;
+    size_t read_len, read_cap;
+    int read_lost;      /* out of memory while recording: list nothing rather than wrong keys */
 } json_ctx;
+
+void json_ctx_free(json_ctx *c);
+
+/* The member `key` of obj (NULL when absent or obj is NULL), recorded as read. Every getter below reads
+ * through it. */
+const cJSON *jget_item(json_ctx *c, const cJSON *obj, const char *key);
+/* Where the members read from now on start; pass it to jnote_unread_keys once the object is parsed. */
+size_t jread_mark(const json_ctx *c);
+/* With verbose: notes each member of obj that was not read since mark ("ignored key: <where>.<key>"); then
+ * forgets what was read since mark. Call it after the object's last read. */
+void jnote_unread_keys(json_ctx *c, const cJSON *obj, const char *where, size_t mark);
 
 /* Each getter leaves *out = def when the key is absent and returns 0; on a present but bad value it
  * returns -1 with "<file>: <where>.<key>: <reason>" in ctx->err. `where` is the object's path. */
@@ -32,8 +48,6 @@ int jget_string(json_ctx *c, const cJSON *obj, const char *where, const char *ke
 /* Like jget_number but also requires lo <= value (and value <= hi when hi > lo). */
 int jget_number_range(json_ctx *c, const cJSON *obj, const char *where, const char *key, double def, double lo,
                       double hi, double *out);
-/* Notes keys of obj that are not in the NULL-terminated list `known` (only with ctx->verbose). */
-void jnote_unknown_keys(json_ctx *c, const cJSON *obj, const char *where, const char *const *known);
 int jfail(json_ctx *c, const char *where, const char *key, const char *fmt, ...) __attribute__((format(printf, 4, 5)));
 void jwarn(json_ctx *c, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
 

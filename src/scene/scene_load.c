@@ -9,14 +9,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-static const char *const top_keys[] = {"media", "bsdfs", "primitives", "camera", "integrator", "renderer", NULL};
-static const char *const medium_keys[] = {"name", "type", "sigma_s", "sigma_a", "density", "speed_of_light",
-                                          "max_bounces", "phase_function", NULL};
-static const char *const prim_keys[] = {"name", "type", "transform", "bsdf", "emission", "power", "int_medium",
-                                        "ext_medium", "file", "smooth", "backface_culling", "recompute_normals",
-                                        "pulse_start", "pulse_width", NULL};
-static const char *const camera_keys[] = {"type", "resolution", "fov", "transform", "medium", NULL};
-
 static char *read_text_file(const char *path, dp_error *err)
 {
     FILE *f = fopen(path, "rb");
@@ -126,7 +118,7 @@ static int parse_medium(json_ctx *c, const cJSON *v, int i, medium *m)
     char w[64];
     snprintf(w, sizeof w, "media[%d]", i);
     if (!cJSON_IsObject(v)) return jfail(c, w, NULL, "expected an object");
-    jnote_unknown_keys(c, v, w, medium_keys);
+    size_t mark = jread_mark(c);
     const char *name = "", *type = "homogeneous";
     if (jget_string(c, v, w, "name", &name) < 0 || jget_string(c, v, w, "type", &type) < 0) return -1;
     if (strlen(name) >= sizeof m->name) return jfail(c, w, "name", "longer than %zu characters", sizeof m->name - 1);
@@ -154,14 +146,19 @@ static int parse_medium(json_ctx *c, const cJSON *v, int i, medium *m)
     if (!v3_is_finite(m->sigma_t)) return jfail(c, w, "sigma_s", "sigma_s + sigma_a times density overflows");
     if (!isfinite(m->eta)) return jfail(c, w, "speed_of_light", "too small (got %g)", speed);
     m->max_bounces = maxb > 1 << 30 ? 1 << 30 : (int)maxb;
-    const cJSON *pv = cJSON_GetObjectItemCaseSensitive(v, "phase_function");
-    if (parse_phase(c, pv, w, &m->phase)) return -1;
-    return parse_eda_keys(c, pv, w, m);
+    const cJSON *pv = jget_item(c, v, "phase_function");
+    size_t phase_mark = jread_mark(c);
+    if (parse_phase(c, pv, w, &m->phase) || parse_eda_keys(c, pv, w, m)) return -1;
+    char pw[256];
+    snprintf(pw, sizeof pw, "%s.phase_function", w);
+    jnote_unread_keys(c, pv, pw, phase_mark);
+    jnote_unread_keys(c, v, w, mark);
+    return 0;
 }
 
 static int parse_media(json_ctx *c, const cJSON *root, scene *s)
 {
-    const cJSON *arr = cJSON_GetObjectItemCaseSensitive(root, "media");
+    const cJSON *arr = jget_item(c, root, "media");
     if (!arr) return 0;
     if (!cJSON_IsArray(arr)) return jfail(c, "media", NULL, "expected an array");
     s->medium_count = cJSON_GetArraySize(arr);
@@ -208,7 +205,7 @@ static int medium_ref(json_ctx *c, scene *s, const cJSON *v, const char *where, 
 
 static int parse_bsdfs(json_ctx *c, const cJSON *root, scene *s, const cJSON **names)
 {
-    const cJSON *arr = cJSON_GetObjectItemCaseSensitive(root, "bsdfs");
+    const cJSON *arr = jget_item(c, root, "bsdfs");
     *names = NULL;
     if (!arr) return 0;
     if (!cJSON_IsArray(arr)) return jfail(c, "bsdfs", NULL, "expected an array");
@@ -330,7 +327,7 @@ static int parse_point_light(json_ctx *c, scene *s, const cJSON *v, const char *
     if (jget_string(c, v, where, "name", &name) < 0) return -1;
     snprintf(L.name, sizeof L.name, "%s", name);
     L.pos = T->pos;
-    int has_e = cJSON_HasObjectItem(v, "emission"), has_p = cJSON_HasObjectItem(v, "power");
+    int has_e = (jget_item(c, v, "emission") != NULL), has_p = (jget_item(c, v, "power") != NULL);
     if (has_e && has_p) return jfail(c, where, "power", "give either emission or power, not both");
     if (!has_e && !has_p) return jfail(c, where, "emission", "a point light needs emission (intensity) or power");
     if (jget_vec3(c, v, where, has_e ? "emission" : "power", v3s(0), &L.intensity)) return -1;
@@ -341,7 +338,7 @@ static int parse_point_light(json_ctx *c, scene *s, const cJSON *v, const char *
         jget_number_range(c, v, where, "pulse_width", 0.0, 0.0, 0.0, &L.pulse_width))
         return -1;
     L.medium = MEDIUM_VACUUM;
-    const cJSON *em = cJSON_GetObjectItemCaseSensitive(v, "ext_medium");
+    const cJSON *em = jget_item(c, v, "ext_medium");
     if (em && medium_ref(c, s, em, where, "ext_medium", &L.medium)) return -1;
     point_light *grown = realloc(s->lights, ((size_t)s->light_count + 1) * sizeof(point_light));
     if (!grown) return jfail(c, where, NULL, "out of memory");
@@ -357,11 +354,11 @@ static int parse_surface(json_ctx *c, scene *s, const cJSON *names, const cJSON 
     const char *name = "";
     if (jget_string(c, v, where, "name", &name) < 0) return -1;
     snprintf(sf.name, sizeof sf.name, "%s", name[0] ? name : where);
-    if (cJSON_HasObjectItem(v, "emission") || cJSON_HasObjectItem(v, "power"))
+    if ((jget_item(c, v, "emission") != NULL) || (jget_item(c, v, "power") != NULL))
         return jfail(c, where, "emission", "emissive %s primitives (area lights) are not supported (supported lights: point)", type);
-    if (bsdf_ref(c, s, names, cJSON_GetObjectItemCaseSensitive(v, "bsdf"), where, &sf.bsdf)) return -1;
-    const cJSON *im = cJSON_GetObjectItemCaseSensitive(v, "int_medium");
-    const cJSON *em = cJSON_GetObjectItemCaseSensitive(v, "ext_medium");
+    if (bsdf_ref(c, s, names, jget_item(c, v, "bsdf"), where, &sf.bsdf)) return -1;
+    const cJSON *im = jget_item(c, v, "int_medium");
+    const cJSON *em = jget_item(c, v, "ext_medium");
     sf.int_medium = sf.ext_medium = MEDIUM_VACUUM;
     sf.overrides_media = im || em;
     if (im && medium_ref(c, s, im, where, "int_medium", &sf.int_medium)) return -1;
@@ -381,7 +378,7 @@ static int parse_surface(json_ctx *c, scene *s, const cJSON *names, const cJSON 
 
 static int parse_primitives(json_ctx *c, const cJSON *root, scene *s, const cJSON *names)
 {
-    const cJSON *arr = cJSON_GetObjectItemCaseSensitive(root, "primitives");
+    const cJSON *arr = jget_item(c, root, "primitives");
     if (!arr) return 0;
     if (!cJSON_IsArray(arr)) return jfail(c, "primitives", NULL, "expected an array");
     for (int i = 0; i < cJSON_GetArraySize(arr); i++) {
@@ -389,17 +386,18 @@ static int parse_primitives(json_ctx *c, const cJSON *root, scene *s, const cJSO
         snprintf(w, sizeof w, "primitives[%d]", i);
         const cJSON *v = cJSON_GetArrayItem(arr, i);
         if (!cJSON_IsObject(v)) return jfail(c, w, NULL, "expected an object");
-        jnote_unknown_keys(c, v, w, prim_keys);
+        size_t mark = jread_mark(c);
         const char *type = NULL;
         if (jget_string(c, v, w, "type", &type) <= 0) return type ? -1 : jfail(c, w, "type", "missing");
         xform T;
-        if (xform_parse(c, cJSON_GetObjectItemCaseSensitive(v, "transform"), w, &T)) return -1;
+        if (xform_parse(c, jget_item(c, v, "transform"), w, &T)) return -1;
         int rc;
         if (!strcmp(type, "point")) rc = parse_point_light(c, s, v, w, &T);
         else if (!strcmp(type, "mesh") || !strcmp(type, "quad") || !strcmp(type, "cube"))
             rc = parse_surface(c, s, names, v, w, type, &T);
         else rc = jfail(c, w, "type", "unsupported primitive '%s' (supported: mesh, quad, cube, point)", type);
         if (rc) return rc;
+        jnote_unread_keys(c, v, w, mark);
     }
     return 0;
 }
@@ -408,16 +406,16 @@ static int parse_primitives(json_ctx *c, const cJSON *root, scene *s, const cJSO
 
 static int parse_camera(json_ctx *c, const cJSON *root, scene *s)
 {
-    const cJSON *v = cJSON_GetObjectItemCaseSensitive(root, "camera");
+    const cJSON *v = jget_item(c, root, "camera");
     if (!cJSON_IsObject(v)) return jfail(c, "camera", NULL, v ? "expected an object" : "missing");
-    jnote_unknown_keys(c, v, "camera", camera_keys);
+    size_t mark = jread_mark(c);
     const char *type = "pinhole";
     if (jget_string(c, v, "camera", "type", &type) < 0) return -1;
     if (strcmp(type, "pinhole")) return jfail(c, "camera", "type", "unsupported camera '%s' (supported: pinhole)", type);
     camera *cam = &s->cam;
     cam->width = 512;
     cam->height = 512;
-    const cJSON *res = cJSON_GetObjectItemCaseSensitive(v, "resolution");
+    const cJSON *res = jget_item(c, v, "resolution");
     if (res) {
         double w, h;
         if (cJSON_IsNumber(res)) w = h = res->valuedouble;
@@ -434,15 +432,17 @@ static int parse_camera(json_ctx *c, const cJSON *root, scene *s)
     if (jget_number(c, v, "camera", "fov", 60.0, &cam->fov_deg)) return -1;
     if (!(cam->fov_deg > 0 && cam->fov_deg < 180)) return jfail(c, "camera", "fov", "must be in (0, 180) degrees (got %g)", cam->fov_deg);
     xform T;
-    if (xform_parse(c, cJSON_GetObjectItemCaseSensitive(v, "transform"), "camera", &T)) return -1;
+    if (xform_parse(c, jget_item(c, v, "transform"), "camera", &T)) return -1;
     cam->pos = T.pos;
     cam->right = v3_neg(v3_norm(T.x)); /* Tungsten negates the camera's x axis */
     cam->up = v3_norm(T.y);
     cam->forward = v3_norm(T.z);
     cam->plane_dist = 1.0 / tan(0.5 * cam->fov_deg * M_PI / 180.0);
     cam->medium = MEDIUM_VACUUM;
-    const cJSON *m = cJSON_GetObjectItemCaseSensitive(v, "medium");
-    return m ? medium_ref(c, s, m, "camera", "medium", &cam->medium) : 0;
+    const cJSON *m = jget_item(c, v, "medium");
+    if (m && medium_ref(c, s, m, "camera", "medium", &cam->medium)) return -1;
+    jnote_unread_keys(c, v, "camera", mark);
+    return 0;
 }
 
 /* ---- top level ---- */
@@ -458,7 +458,6 @@ static void set_dir(scene *s, const char *path)
 static int parse_all(json_ctx *c, cJSON *root, scene *s, const scene_load_options *opt)
 {
     if (!cJSON_IsObject(root)) return jfail(c, "(top level)", NULL, "expected a JSON object");
-    jnote_unknown_keys(c, root, "", top_keys);
     if (settings_apply_overrides(c, root, opt ? opt->sets : NULL, opt ? opt->set_count : 0)) return -1;
     const cJSON *names = NULL;
     int rc = parse_media(c, root, s);
@@ -466,6 +465,7 @@ static int parse_all(json_ctx *c, cJSON *root, scene *s, const scene_load_option
     if (!rc) rc = parse_primitives(c, root, s, names);
     if (!rc) rc = parse_camera(c, root, s);
     if (!rc) rc = settings_parse(c, root, s);
+    if (!rc) jnote_unread_keys(c, root, "", 0);
     cJSON_Delete((cJSON *)names);
     return rc;
 }
@@ -490,6 +490,7 @@ int scene_load(const char *path, const scene_load_options *opt, scene *s, dp_err
         rc = parse_all(&c, root, s, opt);
     }
     cJSON_Delete(root);
+    json_ctx_free(&c);
     free(text);
     s->notes = notes.text;
     if (!rc) rc = scene_build_embree(s, err);

@@ -161,7 +161,7 @@ static int read_shape_key(json_ctx *c, const scene_key *k, const char *where, co
 static int read_key(json_ctx *c, const scene_key *k, const cJSON *obj, scene *s)
 {
     const char *where = scene_key_section_name(k->section);
-    const cJSON *v = cJSON_GetObjectItemCaseSensitive(obj, k->name);
+    const cJSON *v = jget_item(c, obj, k->name);
     void *field = key_field(k, s);
     switch (k->type) {
     case KEY_BOOL: return jget_bool(c, obj, where, k->name, (int)k->def, field);
@@ -268,7 +268,7 @@ static int resolve_integrator(json_ctx *c, const cJSON *v, integrator_settings *
 static const cJSON *section_object(json_ctx *c, const cJSON *root, scene_key_section section, int *bad)
 {
     const char *name = scene_key_section_name(section);
-    const cJSON *v = cJSON_GetObjectItemCaseSensitive(root, name);
+    const cJSON *v = jget_item(c, root, name);
     *bad = v && !cJSON_IsObject(v) ? jfail(c, name, NULL, "expected an object") : 0;
     return v;
 }

@@ -48,9 +48,6 @@ static int parse_matrix16(json_ctx *c, const cJSON *v, const char *where, xform 
     return 0;
 }
 
-static const char *const transform_keys[] = {"position", "look_at", "up", "x_axis", "y_axis", "z_axis",
-                                             "scale", "rotation", NULL};
-
 int xform_parse(json_ctx *c, const cJSON *v, const char *where, xform *out)
 {
     out->x = v3(1, 0, 0);
@@ -65,13 +62,13 @@ int xform_parse(json_ctx *c, const cJSON *v, const char *where, xform *out)
     if (!cJSON_IsObject(v)) return jfail(c, where, "transform", "expected an object or 16 numbers");
     char w[256];
     snprintf(w, sizeof w, "%s.transform", where);
-    jnote_unknown_keys(c, v, w, transform_keys);
+    size_t mark = jread_mark(c);
 
     vec3 x = out->x, y = out->y, z = out->z, pos, look, scale, rot;
     if (jget_vec3(c, v, w, "position", v3s(0), &pos)) return -1;
-    int ex = cJSON_HasObjectItem(v, "x_axis"), ey = cJSON_HasObjectItem(v, "up") || cJSON_HasObjectItem(v, "y_axis");
-    int ez = cJSON_HasObjectItem(v, "look_at") || cJSON_HasObjectItem(v, "z_axis");
-    if (cJSON_HasObjectItem(v, "look_at")) {
+    int ex = (jget_item(c, v, "x_axis") != NULL), ey = (jget_item(c, v, "up") != NULL) || (jget_item(c, v, "y_axis") != NULL);
+    int ez = (jget_item(c, v, "look_at") != NULL) || (jget_item(c, v, "z_axis") != NULL);
+    if ((jget_item(c, v, "look_at") != NULL)) {
         if (jget_vec3(c, v, w, "look_at", v3s(0), &look)) return -1;
         z = v3_sub(look, pos);
     }
@@ -98,7 +95,7 @@ int xform_parse(json_ctx *c, const cJSON *v, const char *where, xform *out)
     x = v3_scale(x, scale.x);
     y = v3_scale(y, scale.y);
     z = v3_scale(z, scale.z);
-    if (cJSON_HasObjectItem(v, "rotation")) {
+    if ((jget_item(c, v, "rotation") != NULL)) {
         if (jget_vec3(c, v, w, "rotation", v3s(0), &rot)) return -1;
         x = rot_yxz(rot, x);
         y = rot_yxz(rot, y);
@@ -108,5 +105,6 @@ int xform_parse(json_ctx *c, const cJSON *v, const char *where, xform *out)
     out->y = y;
     out->z = z;
     out->pos = pos;
+    jnote_unread_keys(c, v, w, mark);
     return 0;
 }
