@@ -1,4 +1,4 @@
-/* Integrator and renderer keys (scene-format.md §2.4 tables), time window (DESIGN §4). */
+/* Integrator and renderer keys (docs/scene-format.md §2.8), time window (docs/time.md §3). */
 #include "settings.h"
 
 #include <stdio.h>
