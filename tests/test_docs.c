@@ -1,5 +1,5 @@
 /* Every section a comment cites resolves inside a clone (issue 31). The test lists each "§" in the text files
- * of src/, include/, tests/ and bench/ and checks it (the rules are also in docs/README.md):
+ * of src/, include/, tests/, bench/ and in README.md, and checks it (the rules are also in docs/README.md):
  * - `docs/time.md §2.2`: a path from the repository root ending in .md, then the section number. The file
  *   must exist and have a Markdown heading whose text begins with that number (`### 2.2 Unwarped ...`;
  *   `§2` finds `## 2. Camera-warped ...` but not `## 2.2 ...` nor `## 20 ...`).
@@ -27,7 +27,7 @@ static const char *const WORKS[] = {
     "Numerical Recipes",
 };
 
-static const char *const ROOTS[] = {"src", "include", "tests", "bench"};
+static const char *const ROOTS[] = {"src", "include", "tests", "bench", "README.md"};
 static const char *const EXTENSIONS[] = {".c", ".h", ".md", ".sh", ".py"};
 
 typedef struct {
@@ -152,10 +152,24 @@ typedef struct {
     size_t n, cap;
 } path_list;
 
+static void add_path(path_list *out, const char *path)
+{
+    if (out->n == out->cap) {
+        out->cap = out->cap ? 2 * out->cap : 256;
+        out->paths = realloc(out->paths, out->cap * sizeof *out->paths);
+        assert_non_null(out->paths);
+    }
+    out->paths[out->n++] = strdup(path);
+}
+
+/* The text files under dir (or dir itself when it is a file). */
 static void list_files(const char *dir, path_list *out)
 {
     DIR *d = opendir(dir);
-    if (!d) return;
+    if (!d) {
+        if (!access(dir, R_OK)) add_path(out, dir);
+        return;
+    }
     struct dirent *e;
     while ((e = readdir(d))) {
         if (e->d_name[0] == '.') continue;
@@ -172,12 +186,7 @@ static void list_files(const char *dir, path_list *out)
             text |= ends_with(path, strlen(path), EXTENSIONS[k]);
         /* this file's own examples are broken on purpose (test_checker_on_known_lines) */
         if (!S_ISREG(st.st_mode) || !text || !strcmp(path, "tests/test_docs.c")) continue;
-        if (out->n == out->cap) {
-            out->cap = out->cap ? 2 * out->cap : 256;
-            out->paths = realloc(out->paths, out->cap * sizeof *out->paths);
-            assert_non_null(out->paths);
-        }
-        out->paths[out->n++] = strdup(path);
+        add_path(out, path);
     }
     closedir(d);
 }
