@@ -78,7 +78,7 @@ test: build/dartspp build/dartspp-mpi build/san/dartspp $(TEST_BIN)
 
 # The whole stress matrix (extreme media, anisotropy, gates, scales, geometry): the estimator-level cases of
 # tests/test_darts.c and tests/test_eda.c, the renders of tests/test_stress.c and all 18 material cases of
-# tests/test_materials.c, about 6 minutes under ASan on 2 cores. `make test` runs a fast subset of each. DARTSPP_STRESS_ONLY=text picks render cases by name.
+# tests/test_materials.c (how long: tests/README.md). `make test` runs a fast subset of each. DARTSPP_STRESS_ONLY=text picks render cases by name.
 STRESS_TESTS = build/san/tests/test_darts build/san/tests/test_eda build/san/tests/test_stress build/san/tests/test_materials
 stress: $(STRESS_TESTS)
 	@rm -rf build/san/stress && mkdir -p build/san/stress && cp $(STRESS_TESTS) build/san/stress/

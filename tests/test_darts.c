@@ -206,7 +206,7 @@ static int run_cv_case(const cv_case *k, uint64_t seed)
 static void test_control_vertex_reference_case(void **state)
 {
     (void)state;
-    /* reference §6 check case: C = 3, cosθ = 0.3, window [4, 4.5], τ = 0, σt = 0.5 with σs = 0.4 (albedo 0.8),
+    /* docs/reference-renderer.md §6 check case: C = 3, cosθ = 0.3, window [4, 4.5], τ = 0, σt = 0.5 with σs = 0.4,
      * tmax = 4; our own g, so the reference's number does not apply */
     const cv_case cases[] = {
         {"ref case, uniform residual", 3, 0.3, 4, 4.5, 0, 1, 0.4, 0.5, 4, RESIDUAL_UNIFORM, 0.5, 0, 1000000},

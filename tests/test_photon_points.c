@@ -937,7 +937,7 @@ static const ss_expectation *ss_reference(const scene *s)
 }
 
 /* Point light in an infinite fog (HG g = 0.3, coloured σs and σa, η = 1.25), camera in the fog, gate
- * [3, 4), max_bounces 2 with min_bounces 1: exactly single scattering (path tracer's counting, DESIGN §4:
+ * [3, 4), max_bounces 2 with min_bounces 1: exactly single scattering (path tracer's counting, docs/design.md §5.1:
  * light -> scattering vertex -> camera is 2 segments). The light is in the field of view, but the gate
  * starts after the direct camera-light time η|l| = 2.33, so no gated scattering point is closer to the light
  * than (3/η - |l|)/2 = 0.27 and the image is bounded and smooth.

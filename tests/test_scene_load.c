@@ -657,7 +657,7 @@ static void test_bad_values_in_process(void **state)
 }
 
 /* A coefficient that is finite as written but overflows once the loader combines it (sigma x density,
- * 1 / speed_of_light): DESIGN §4 forbids non-finite coefficients, so the load must fail or stay finite. */
+ * 1 / speed_of_light): docs/design.md §4.5 forbids non-finite coefficients, so the load must fail or stay finite. */
 static void test_derived_coefficients_stay_finite(void **state)
 {
     (void)state;
@@ -1043,7 +1043,7 @@ static size_t json_tokens(const char *t, size_t n, size_t *start, size_t *end, i
     return k;
 }
 
-/* A Cornell-box floor as a `.wo3` mesh (scene-format.md §1), the size of the paper's cbox_floor.001.wo3:
+/* A Cornell-box floor as a `.wo3` mesh (docs/scene-format.md §1), the size of the paper's cbox_floor.001.wo3:
  * 4 vertices (position, normal +y, uv) at offset 8, triangle count at 136, 2 triangles at 144; 176 bytes. */
 #define FLOOR_WO3_SIZE 176
 static void make_floor_wo3(unsigned char b[FLOOR_WO3_SIZE])
@@ -1199,7 +1199,7 @@ static void test_fuzz_wo3(void **state)
     unsigned char *orig = fx_keep(malloc(FLOOR_WO3_SIZE));
     make_floor_wo3(orig);
     size_t n = FLOOR_WO3_SIZE;
-    /* §1: 176 B = 16 + 4*32 + 2*16 (the floor: 4 vertices, 2 triangles) */
+    /* docs/scene-format.md §1: 176 B = 16 + 4*32 + 2*16 (the floor: 4 vertices, 2 triangles) */
     assert_int_equal(n, 176);
     const char *dir = fx_dir();
     char scn[1100];

@@ -66,7 +66,7 @@ static double solve_time(const analytic_case *a, vec3 psi, double t)
  * warped or η·R(s) unwarped (R = |x(s) − light|). A delta pulse at τ0 counts the vertex iff T(s) + τ0 is in
  * the gate; a box pulse over [p0, p0 + pw) of unit weight is the average of delta pulses over τ0 in it,
  * which is the overlap fraction W(s) = |[g0 − T, g1 − T) ∩ [p0, p0 + pw)| / pw, in closed form (the
- * trapezoid of transient-math.md §1.3). The integrand f(s)·W(s) is smooth between the distances where T(s)
+ * trapezoid of docs/time.md §5). The integrand f(s)·W(s) is smooth between the distances where T(s)
  * crosses g0 − p0 − pw, g0 − p0, g1 − p0 − pw or g1 − p0: composite Gauss–Legendre between those. */
 static double light_time(const analytic_case *a, vec3 psi, double s)
 {

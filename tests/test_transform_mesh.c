@@ -1,6 +1,6 @@
 /* Transforms and meshes through the public API: small scenes written to a temp folder, then s.verts,
  * s.tris and s.surfaces inspected. Expected positions and normals are worked out by hand from
- * docs/scene-format.md §1 (.wo3) and §2.4 (transform, quad, cube) and Tungsten's Mat4f::rotYXZ. */
+ * docs/scene-format.md §1 (.wo3), §2.2 (transform) and §2.5 (quad, cube) and Tungsten's Mat4f::rotYXZ. */
 #include "test_util.h"
 
 #include "dartspp/scene.h"
@@ -177,7 +177,7 @@ static void test_quad_rotation_x180(void **state)
     assert_normals(s, 0, v3(0, -1, 0), 1e-6);
 }
 
-/* ---- rotation convention: Tungsten Mat4f::rotYXZ (scene-format.md §2.4 step 4) ---- */
+/* ---- rotation convention: Tungsten Mat4f::rotYXZ (docs/scene-format.md §2.2 step 4) ---- */
 
 /* Tungsten's matrix, row-major, written out from Mat4f::rotYXZ (math/Mat4f.cpp). */
 static vec3 tungsten_rot_yxz(vec3 deg, vec3 v)
@@ -403,7 +403,7 @@ static void test_matrix16(void **state)
 static void test_wo3_handwritten(void **state)
 {
     (void)state;
-    /* §1: uint64 nv | nv x (pos[3], normal[3], uv[2]) float32 | uint64 nt | nt x (v0, v1, v2, material) */
+    /* docs/scene-format.md §1: u64 nv | nv × (pos[3], normal[3], uv[2]) f32 | u64 nt | nt × (v0, v1, v2, material) */
     static const float P[4][3] = {{0, 0, 0}, {0, 0, 2}, {3, 0, 0}, {3, 0, 2}};
     static const uint32_t T[2][3] = {{0, 1, 2}, {1, 3, 2}};
     unsigned char buf[16 + 4 * 32 + 2 * 16];

@@ -2,7 +2,7 @@
  * every light path — time bins, ellipse records (residual time per vertex), elliptical control vertices
  * and DA (diffusion-approximation) distance sampling by resampled importance sampling.
  *
- * Units. Times are optical path lengths (DESIGN §4): a geometric length d in a medium of refractive index
+ * Units. Times are optical path lengths (docs/time.md §1): a geometric length d in a medium of refractive index
  * η takes time η·d. Records convert residual times to geometric residual lengths with the η of the medium
  * the vertex is in (the straight line to the camera is assumed to stay in it; where it does not, DA
  * distance sampling and EDA stay unbiased and only aim less well). Bounds that must never be wrong bound
@@ -25,7 +25,7 @@
 #include "dartspp/plan.h"
 #include "dartspp/scene.h"
 
-/* ---- time window and target bins (reference §2) ---- */
+/* ---- time window and target bins (docs/darts.md §2) ---- */
 typedef struct {
     int active;        /* any DARTS sampler on (and the scene is gated) */
     vec3 cam;          /* the target of every sampler: the pinhole */
@@ -76,7 +76,7 @@ static inline double darts_leg_lb(const darts_guide *g, vec3 x) { return g->eta_
  * from that path's emission time. Returns 0 when nothing is reachable. */
 int darts_sample_bin(const darts_guide *g, vec3 x_light, double tau0, double u, darts_bin *b);
 
-/* ---- ellipse record (reference §3) ----
+/* ---- ellipse record (docs/darts.md §3) ----
  * At a vertex x with elapsed time τ: the admissible residual geometric length S ∈ [S_lo, S_hi] with
  * S_hi = (bin end − τ)/η and S_lo = max((bin start − τ)/η, C), C = |cam − x|, and one sampled residual T
  * shared by the samplers of the vertex. `valid` iff S_hi > C (up to a relative 1e-9). */
@@ -107,7 +107,7 @@ static inline double darts_reach_along(double S, double C, double cos_theta)
     return 0.5 * (S - C) * (S + C) / (S - C * cos_theta);
 }
 
-/* ---- elliptical control vertex (reference §6; paper eq. 19–22, supplement eq. 6–12) ----
+/* ---- elliptical control vertex (docs/darts.md §5; paper eq. 19–22, supplement eq. 6–12) ----
  * The point at distance t along unit d from r->x with t + |x + t·d − cam| = T, t = (T² − C²)/(2(T − C·cosθ)).
  * Returns 1 and (t, pdf of t) when 0 < t < tmax; 0 otherwise (no control vertex: case II is not sampled).
  * pdf(t) = p(T)·(T − C·cosθ)/(T − t). The photon weight is σs·e^{−σt·t}/pdf(t). */
@@ -166,14 +166,14 @@ int cv_techniques_sample(const cv_techniques *ct, vec3 d, double tmax, int mis, 
 double cv_techniques_pdf(const cv_techniques *ct, vec3 d, double tmax, int mis, residual_sampling mode, double sigma,
                          double t);
 
-/* ---- DA distance sampling (reference §5 with DESIGN §5.4–5.5) ----
+/* ---- DA distance sampling (docs/darts.md §6) ----
  * One segment from r->x along d, next surface at tmax (may be INFINITY), channel chosen by u_channel.
  * Surface event by free flight (probability e^{−σt_c·tmax}); a medium event is resampled from 8
  * truncated-exponential candidates (stratified table, random rotation) with target
  *   p̂(t) = e^{−σt·t}·Φ(s, ℓ(t)),  Φ = (4Ds)^{−3/2}·exp(−ℓ²/(4Ds) − σa·s),  D = 1/(3(σa + σs(1−g))),
  * with s = T − t where the sampled residual T can still reach the camera (T − t > ℓ), and s = S_reach − t
  * on the rest of the reachable set (t + ℓ < S_reach), so that p̂ > 0 wherever a photon can still land in the
- * bin (DESIGN §5.4). When no candidate is reachable, the first candidate is kept with its plain
+ * bin (docs/darts.md §6.3). When no candidate is reachable, the first candidate is kept with its plain
  * exponential weight (nothing after it can reach the bin). Weights are per channel, finite and >= 0. */
 typedef struct {
     double t;          /* distance */
@@ -187,7 +187,7 @@ typedef struct {
 void da_sample_distance(const medium *m, const ellipse_record *r, vec3 d, double tmax, double defensive, dp_rng *rng,
                         da_sample *out);
 
-/* ---- EDA direction sampling (reference §7; paper §5.1, eq. 17–20; DESIGN §5.7, §5.9–11) ----
+/* ---- EDA direction sampling (docs/darts.md §8; paper §5.1, eq. 17–20) ----
  * A table of CDFs over the angle θ between the new direction and the camera direction e, one per cell
  * (C/S, S): how much diffusion-approximated radiance the medium inside the vertex's equal-time ellipsoid
  * sends back along each direction,

@@ -10,7 +10,7 @@
 /* Weighted sums of per-pass pixel estimates; the image is sum / weight_sum (pass i weighted by the w_i given
  * at its commit: 1 for the equal mean). Gate image: contributions weighted by
  * 1/width inside [start, end) (steady state: weight 1, no test). Frame k: 1/w inside its own window, so a
- * frame is exactly the gate image of its window (DESIGN §4). In frame mode the gate image is the image of
+ * frame is exactly the gate image of its window (docs/time.md §4). In frame mode the gate image is the image of
  * the union window. A pass splats into the pass layer, which joins the sums at film_commit_pass; an
  * interrupted pass is dropped with film_drop_pass, so the sums only ever hold completed passes. */
 typedef struct {
@@ -46,7 +46,7 @@ static inline film_slot film_time_slot(const film *f, double t, int frame)
     if (!tw->gated) return s;
     double rel = (t - tw->start) / tw->width;
     int frames = tw->frame_count > 0 ? tw->frame_count : 1;
-    s.counts = rel >= 0.0 && rel < frames && (frame < 0 || (int)rel == frame); /* frame: DESIGN §5.22 */
+    s.counts = rel >= 0.0 && rel < frames && (frame < 0 || (int)rel == frame); /* frame: docs/darts.md §2.2 */
     if (!s.counts) return s;
     s.wg = 1.0 / (tw->width * frames);
     s.wf = 1.0 / tw->width;

@@ -26,7 +26,7 @@ typedef struct {
     bounce_limits bounces;          /* which light + camera paths count */
     surface_shading shading;        /* BSDF frames and the gather/continue split (same as the photon pass) */
     int camera_leg_projected;       /* 0: Euclidean distance segment origin → photon (reference) */
-    int camera_unwarp;              /* the camera segment adjacent to the sensor takes no time (§1.4) */
+    int camera_unwarp;              /* the camera segment adjacent to the sensor takes no time (docs/time.md §2.2) */
     const dp_stop_flag *stop;       /* rows not started once it is set are skipped (may be NULL) */
 } gather_input;
 

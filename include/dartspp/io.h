@@ -17,7 +17,7 @@ typedef struct {
 int image_alloc(image_rgb *img, int width, int height, dp_error *err); /* zero-filled */
 void image_free(image_rgb *img);
 
-/* What an EXR header records about the time axis (DESIGN §4). */
+/* What an EXR header records about the time axis (docs/time.md §6). */
 typedef struct {
     const char *time_unit;   /* e.g. "optical path length in scene units (c = 1)" */
     int gated;               /* 0 = steady state (no gate): gate_start/gate_end not written */

@@ -11,7 +11,7 @@
 typedef struct {
     float pos[3];
     float dir[3];     /* propagation direction of the segment arriving at pos (unit) */
-    float power[3];   /* already divided by the number of light paths (DESIGN / reference §8.3) */
+    float power[3];   /* already divided by the number of light paths (docs/design.md §2.3) */
     int bounce;       /* path segments from the light to this photon */
     int frame;        /* DARTS frame mode: the only frame this photon may be gathered in; -1: any */
     double time;      /* light-to-photon path time (optical path length) */

@@ -9,7 +9,7 @@
 #include "dartspp/scene.h"
 #include "dartspp/surface.h"
 
-/* Which light paths count, in path segments including the light connection (DESIGN §4). */
+/* Which light paths count, in path segments including the light connection (docs/design.md §5.1). */
 typedef struct {
     int min, max;
 } bounce_limits;

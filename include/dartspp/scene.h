@@ -1,4 +1,4 @@
-/* dartspp scene: the Tungsten JSON subset of the paper's scenes (docs/scene-format.md §2.4), `.wo3` and
+/* dartspp scene: the Tungsten JSON subset of the paper's scenes (docs/scene-format.md §2), `.wo3` and
  * `.obj` meshes, camera, point lights, BSDFs, homogeneous media, phase functions, the time window and
  * the Embree 3 scene. A loaded scene is read-only: every later stage takes `const scene *`. */
 #ifndef DARTSPP_SCENE_H
@@ -84,7 +84,7 @@ typedef struct {
 } point_light;
 
 /* The emission time of one light path or light connection: the pulse start, plus a uniform draw across a
- * box pulse (transient-math.md §1.3: sampling τ_l ~ U[start, start + width) is unbiased for the box). A
+ * box pulse (docs/time.md §5: sampling τ_l ~ U[start, start + width) is unbiased for the box). A
  * delta pulse draws nothing, so its random numbers are those of a scene without pulses. */
 static inline double point_light_emission_time(const point_light *L, dp_rng *rng)
 {
@@ -111,7 +111,7 @@ typedef struct {
     double start;     /* window start */
     double width;     /* gate width, or frame width */
     int camera_unwarp; /* integrator key camera_unwarp: a path's time leaves out the camera segment adjacent to the
-                        * sensor (transient-math.md §1.4); 0: camera-warped (the default) */
+                        * sensor (docs/time.md §2.2); 0: camera-warped (the default) */
 } time_window;
 
 static inline double time_window_end(const time_window *tw)
@@ -130,7 +130,7 @@ typedef struct {
     /* choice keys hold the index of their choice in the key table */
     int type;                       /* type: integrator_type */
     char type_name[64];             /* the chosen type's name */
-    long min_bounces, max_bounces;  /* path segments incl. the light connection (docs/design.md) */
+    long min_bounces, max_bounces;  /* path segments incl. the light connection (docs/design.md §5.1) */
     /* the time keys as written, and the window they resolve to */
     double transient_time_center, transient_time_width, start_time;
     long frame_num;

@@ -229,7 +229,7 @@ static void warn_mixed_eta(const scene *s, const render_plan *p)
     fprintf(stderr, "\n");
 }
 
-/* Which photon-pass samplers run (DESIGN §4: the summary says which parts are active). */
+/* Which photon-pass samplers run (docs/design.md §4.3: the summary says which parts are active). */
 static void print_samplers(const scene *s, const render_plan *p)
 {
     const darts_plan *d = &p->darts;

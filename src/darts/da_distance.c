@@ -1,4 +1,4 @@
-/* DA distance sampling (reference §5; paper §4.3): free-flight surface/medium decision, then resampled
+/* DA distance sampling (docs/darts.md §6; paper §4.3): free-flight surface/medium decision, then resampled
  * importance sampling of the medium distance with a diffusion-approximation target around the camera.
  * Written by hand: no library offers RIS with this target. */
 #include "dartspp/darts.h"
@@ -119,7 +119,8 @@ void da_sample_distance(const medium *m, const ellipse_record *r, vec3 d, double
         if (acc >= key) break;
     }
     double t = t_c[pick];
-    /* RIS (reference §5.3 step 10 when ε = 0): the medium-event weight is σs e^{−σt t}/(α·q(t)) × 1/(M·P_pick) */
+    /* RIS (docs/reference-renderer.md §5.3 step 10 when ε = 0): the medium-event weight is
+     * σs e^{−σt t}/(α·q(t)) × 1/(M·P_pick) */
     double ris = 1.0 / (M_CAND * P);
     out->t = t;
     out->weight = medium_weight(m, c, t, ris);

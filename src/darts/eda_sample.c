@@ -1,5 +1,6 @@
 /* EDA direction sampling at a medium vertex, combined with the phase function by the one-sample balance
- * heuristic (paper §5.1, eq. 20; DESIGN §5.7 — the authors' code uses another weight, reference §7.2). */
+ * heuristic (paper §5.1, eq. 20; docs/darts.md §8.2 — the authors' code uses another weight,
+ * docs/reference-renderer.md §7.2). */
 #include "dartspp/darts.h"
 
 const float *eda_cell(const eda_table *t, const ellipse_record *r)

@@ -1,6 +1,7 @@
 /* The EDA table: tabulation of I(C, S, θ) (paper eq. 17–19, supplement B.3) into per-cell CDFs over cosθ,
- * in the authors' C++ reading convention (reference §7.3–7.4, DESIGN §5.9–11). Deterministic quadrature
- * instead of the authors' Monte Carlo script: the same parameters always give the same bits. */
+ * in the authors' C++ reading convention (docs/darts.md §8.1; their layout and script:
+ * docs/reference-renderer.md §7.3, §7.4). Deterministic quadrature instead of the authors' Monte Carlo
+ * script: the same parameters always give the same bits. */
 #include <omp.h>
 #include <stdlib.h>
 #include <string.h>
@@ -75,7 +76,7 @@ int eda_table_build(eda_table *t, double sigma_s, double sigma_a, double g, int 
     *t = (eda_table){n_ratio, n_s, n_cos, sigma_s, sigma_a, g, s_max, r_lo, r_hi, NULL};
     t->cdf = malloc(sizeof(float) * (size_t)n_ratio * n_s * n_cos);
     if (!t->cdf) return dp_fail(err, "EDA table: out of memory for %dx%dx%d", n_ratio, n_s, n_cos);
-    const double D = 1.0 / (3.0 * (sigma_a + sigma_s * (1.0 - g))); /* paper's D (DESIGN §5.5) */
+    const double D = 1.0 / (3.0 * (sigma_a + sigma_s * (1.0 - g))); /* paper's D (docs/darts.md §6.3) */
     int done = 0, oom = 0;
 #pragma omp parallel
     {

@@ -1,4 +1,4 @@
-/* Ellipse records and elliptical control vertices (reference §3 and §6; paper §5.2, eq. 19–22). */
+/* Ellipse records and elliptical control vertices (docs/darts.md §3 and §5; paper §5.2, eq. 19–22). */
 #include "dartspp/darts.h"
 
 #define REL_EPS 1e-9 /* relative tolerance on residual lengths (scale-free) */

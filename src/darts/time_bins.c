@@ -1,4 +1,4 @@
-/* Time window and per-path target bins (reference §2): each light path aims at one bin — the gate, or in
+/* Time window and per-path target bins (docs/darts.md §2): each light path aims at one bin — the gate, or in
  * frame mode one frame, drawn uniformly in time over the part of the window the path can reach from its
  * light and emission time. */
 #include "dartspp/darts.h"

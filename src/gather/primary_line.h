@@ -41,7 +41,7 @@ int volume_splat(const scene *s, const gather_input *g, film *f, const primary_l
 void primary_line_gather_beam(const scene *s, const gather_input *g, film_pixel *pix, const primary_line *line);
 
 /* The point-beam 2D estimate of photon p from a camera segment o + t·d (d unit) in medium m, the photon at
- * parameter t and squared distance d2 from it (reference §9.3): biweight kernel 3/(πr²)(1 − d2/r²)², the
+ * parameter t and squared distance d2 from it (docs/design.md §2.5): biweight kernel 3/(πr²)(1 − d2/r²)², the
  * phase function, the camera transmittance over t, camera-warped time; thr and t_cam at o, b_cam camera
  * segments. Both gathers (beam queries and the splat) use it. */
 void volume_photon_splat(const gather_input *g, film_pixel *pix, const medium *m, vec3 o, vec3 d, vec3 thr,

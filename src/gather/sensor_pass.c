@@ -1,4 +1,5 @@
-/* The sensor pass of photon points (reference §9 with DESIGN §5). */
+/* The sensor pass of photon points (docs/design.md §2.5; the authors' version and where we depart from it:
+ * docs/reference-renderer.md §9). */
 #include <stdlib.h>
 
 #include "dartspp/gather.h"
@@ -58,7 +59,7 @@ static int record_line_segment(const scene *s, primary_line *L, int med, vec3 o,
 }
 
 /* Surface estimate at a hit, over the gathered lobes: k nearest within R, box kernel over the disc of the
- * k-th; each photon contributes P·f(ω_cam, −ω_p), the BSDF without the cosine (reference §9.4). */
+ * k-th; each photon contributes P·f(ω_cam, −ω_p), the BSDF without the cosine (docs/reference-renderer.md §9.4). */
 static void gather_surface(pixel_ctx *c, const surface_site *ss, unsigned lobes, vec3 thr, double t_cam, int b_cam)
 {
     const gather_input *g = c->g;

@@ -87,11 +87,11 @@ static void new_vertex(light_path *lp)
 
 /* Surface photons with DARTS: the full path time with a straight camera leg lies in [t_lb, t_ub], the leg
  * taking at least η_lb and at most η_ub times its length. The photon is kept when t_lb is before the bin
- * end and, in strict mode, t_ub is not before its start (reference §8.2, which uses the lower bound for
- * both: with η > 1 somewhere that drops in-gate photons) — both widened by the slack. The gather tests the
- * time again at the gather point x', up to r away, where the camera leg differs by up to η_ub·r: tested
- * only here, at the photon (as the reference does), a photon that counts at x' could be dropped, and the
- * surfaces near the edges of the in-gate band would come out too dark. */
+ * end and, in strict mode, t_ub is not before its start (docs/reference-renderer.md §8.2: the authors
+ * use the lower bound for both, which with η > 1 somewhere drops in-gate photons) — both widened by the
+ * slack. The gather tests the time again at the gather point x', up to r away, where the camera leg
+ * differs by up to η_ub·r: tested only here, at the photon (as the reference does), a photon that counts
+ * at x' could be dropped, and the surfaces near the edges of the in-gate band would come out too dark. */
 static int surface_time_ok(const light_path *lp, vec3 x)
 {
     if (!lp->g->active) return 1;
@@ -124,7 +124,7 @@ static int medium_segment(light_path *lp, double tmax)
             made = g->control_vertex_mis ? control_vertex_sample(&lp->rec, lp->d, tmax, g->residual, sigma, u1, u2, &t, &pdf)
                                          : ellipse_control_vertex(&lp->rec, lp->d, tmax, &t, &pdf);
         }
-        if (made) { /* W = σs e^{−σt t}/p(t) (§6) */
+        if (made) { /* W = σs e^{−σt t}/p(t) (docs/darts.md §5.2) */
             vec3 w = v3_scale(v3_mul(m->sigma_s, v3_exp_neg(v3_scale(m->sigma_t, t))), 1.0 / pdf);
             store(lp, &lp->tb->vol, &lp->pc->n_vol, v3_add(lp->o, v3_scale(lp->d, t)), lp->d, v3_mul(lp->beta, w),
                   lp->bounce + 1, lp->time + m->eta * t);
@@ -195,7 +195,7 @@ static int medium_event(light_path *lp, const medium *m, double t, int darts)
         store(lp, &lp->tb->vol, &lp->pc->n_vol, lp->o, lp->d, lp->beta, lp->bounce, lp->time);
     new_vertex(lp);
     const eda_table *et = darts && in->eda ? in->eda->table[lp->med] : NULL;
-    if (et) { /* EDA with MIS against the phase function (§7.2, eq. 20) */
+    if (et) { /* EDA with MIS against the phase function (docs/darts.md §8.2) */
         double u[4], w;
         for (int k = 0; k < 4; k++) u[k] = rng_uniform(lp->rng);
         lp->d = eda_sample_direction(et, in->eda->alpha[lp->med], &m->phase, lp->d, &lp->rec, u, &w);

@@ -1,5 +1,5 @@
 /* Volume photon map: a balanced BVH over the photons, answering "every photon within r of the segment
- * o + t·d, 0 <= t <= tmax" (reference §8.5, §9.3).
+ * o + t·d, 0 <= t <= tmax" (docs/reference-renderer.md §8.4, §9.3).
  *
  * Layout: a perfect binary tree in implicit (heap) order, node i having children 2i+1 and 2i+2; every leaf
  * sits at the same depth and holds at most LEAF_MAX photons. The photons of the node with index j on level

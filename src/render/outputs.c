@@ -1,5 +1,5 @@
 /* Film → files: gate image, PNG preview, per-frame images, the frame sidecar, the transient cube and its
- * viewer page (DESIGN §4); the check of the output path before any work, and the rescue folder when the
+ * viewer page (docs/cli.md §3); the check of the output path before any work, and the rescue folder when the
  * final write fails anyway. */
 #include "dartspp/render.h"
 

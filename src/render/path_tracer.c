@@ -3,8 +3,8 @@
  * sampling, next-event estimation to every point light through index-matched boundaries, path time η·d on
  * every segment from the light's emission time (pulse_start, a uniform draw across a box pulse), the camera
  * leg included (camera-warped) or, with camera_unwarp, the segment from the sensor to the first scattering
- * vertex left out (transient-math.md §1.4), box gate or frames via the film.
- * Bounces (DESIGN §4): a path of n segments, the light connection included, counts iff
+ * vertex left out (docs/time.md §2.2), box gate or frames via the film.
+ * Bounces (docs/design.md §5.1): a path of n segments, the light connection included, counts iff
  * n <= max_bounces and n - 1 >= min_bounces. Crossing a null/forward surface does not end a segment. */
 #include "dartspp/render.h"
 #include "dartspp/surface.h"

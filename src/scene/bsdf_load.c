@@ -1,4 +1,4 @@
-/* BSDF objects of the scene file (scene-format.md §2.4 bsdfs): the type by its scene name, the defaults of
+/* BSDF objects of the scene file (docs/scene-format.md §2.4): the type by its scene name, the defaults of
  * that type (bsdf_defaults), then the keys as Tungsten's Bsdf subclasses read them, then bsdf_prepare.
  * `albedo` is a number, [r, g, b] or a texture file (texture.c). A conductor's `material` names a complex
  * index and wins over `eta`/`k`, as in Tungsten's ConductorBsdf::fromJson. */

@@ -1,4 +1,4 @@
-/* Tungsten's `.wo3` binary mesh (scene-format.md §1): uint64 vertex count, 32-byte vertices
+/* Tungsten's `.wo3` binary mesh (docs/scene-format.md §1): uint64 vertex count, 32-byte vertices
  * (pos, normal, uv as float32), uint64 triangle count, 16-byte triangles (3 × uint32 index, int32 material).
  * Little-endian; the file size must be exactly 16 + 32·nv + 16·nt. Normals and UVs are kept (has_normals and
  * has_uvs are set when some vertex has a non-zero one; a non-finite one counts as absent). */

@@ -70,7 +70,7 @@ int scene_build_embree(scene *s, dp_error *err);
 void scene_release_embree(scene *s);
 
 /* ---- BSDFs and textures ---- */
-/* A bsdf object of the scene file (scene-format.md §2.4 bsdfs); textures are loaded into s->textures. */
+/* A bsdf object of the scene file (docs/scene-format.md §2.4); textures are loaded into s->textures. */
 int bsdf_parse(json_ctx *c, const cJSON *v, const char *where, scene *s, bsdf *b);
 /* The texture file `file` (relative to the scene's folder) for key `key` of `where`: *index into
  * s->textures (a file already loaded is shared), or -1 with a warning in the notes when the file does not

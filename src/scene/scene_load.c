@@ -1,4 +1,4 @@
-/* Scene files: the Tungsten JSON subset of docs/scene-format.md §2.4. Top level: media, bsdfs,
+/* Scene files: the Tungsten JSON subset of docs/scene-format.md §2. Top level: media, bsdfs,
  * primitives, camera, integrator, renderer. Unknown keys are ignored (listed with verbose). */
 #include "scene_internal.h"
 #include "settings.h"
@@ -87,7 +87,8 @@ static int parse_phase(json_ctx *c, const cJSON *v, const char *where, phase_fun
     return 0;
 }
 
-/* The EDA keys of an `ida` phase function (reference §7.2): table_path, alpha, dT_start, dT_end, max_T. */
+/* The EDA keys of an `ida` phase function (docs/reference-renderer.md §7.2): table_path, alpha, dT_start, dT_end,
+ * max_T. */
 static int parse_eda_keys(json_ctx *c, const cJSON *pv, const char *where, medium *m)
 {
     m->eda = m->phase.type == PHASE_IDA;

@@ -1,5 +1,6 @@
 /* Integrator and renderer keys: read, checked and resolved by iterating the key table (keys.c); then the
- * rules between keys (the time window, photon points' radii) and the notes on keys that are not read. */
+ * rules between keys (the time window, docs/time.md §3; photon points' radii) and the notes on keys that are not
+ * read (docs/scene-format.md §2.8). */
 #include "settings.h"
 
 #include <stdio.h>

@@ -1,5 +1,5 @@
 /* The `transform` of a primitive or camera: a 16-float row-major matrix, or an object with position,
- * look_at, up, x/y/z_axis, scale and rotation, built the way Tungsten builds it (scene-format.md §2.4). */
+ * look_at, up, x/y/z_axis, scale and rotation, built the way Tungsten builds it (docs/scene-format.md §2.2). */
 #include "scene_internal.h"
 
 #include <stdio.h>
