@@ -72,7 +72,7 @@ struct render_cluster {
     int (*share)(const render_cluster *c, double *v, int n);
 };
 
-/* ---- driver ---- */
+/* ---- the progressive driver ---- */
 
 typedef struct {
     const render_plan *plan; /* the scene's resolved plan; NULL: render_scene resolves it */
