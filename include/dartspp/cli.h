@@ -7,9 +7,8 @@
 #include "dartspp/cluster.h"
 
 int cli_render(int argc, char **argv);
-/* The same with the render shared by the ranks of a cluster (NULL or one rank: cli_render): rank 0 checks
- * the scene, outputs and memory before any rank renders, every rank loads the scene, and rank 0 alone prints
- * progress and the summary and writes outputs, checkpoints and the error log. */
+/* The same with the render shared by the ranks of a cluster (NULL or one rank: cli_render); render_run
+ * (include/dartspp/render.h) says who does what. */
 int cli_render_cluster(int argc, char **argv, const render_cluster *cluster);
 int cli_compare(int argc, char **argv);
 int cli_patch_mean(int argc, char **argv);

@@ -20,13 +20,31 @@
 #define DP_INV_PI (1.0 / M_PI)
 #define DP_INV_4PI (1.0 / (4.0 * M_PI))
 
-/* ---- errors: every fallible call fills one of these and returns non-zero ---- */
+/* ---- errors: every fallible call fills one of these and returns non-zero ----
+ * The kind says what went wrong, and decides the exit status of the process (dp_exit_status). */
+typedef enum {
+    DP_ERROR_INPUT,       /* bad input: the command line, the scene or a file it names; a render refused before any
+                           * work (outputs, memory guard) counts as bad input too. Exit 2 */
+    DP_ERROR_OUTPUT,      /* a file could not be written. Exit 1 */
+    DP_ERROR_MEMORY,      /* an allocation failed. Exit 1 */
+    DP_ERROR_INTERRUPTED, /* SIGINT or SIGTERM stopped the work. Exit 130 (128 + SIGINT, as shells report it) */
+    DP_ERROR_RANK,        /* another rank of a cluster failed; that rank reports its own error. Exit 1 */
+    DP_ERROR_INTERNAL,    /* a limit or an invariant of the program, a failed MPI call. Exit 1 */
+} dp_error_kind;
+
 typedef struct {
-    char msg[1024];
+    struct { /* one member, so that `dp_error e = {{0}}` stays a plain zero initialiser */
+        dp_error_kind kind;
+        char msg[1024];
+    };
 } dp_error;
 
-/* printf-style; returns -1 so callers can `return dp_fail(err, ...)`. */
+/* printf-style, kind DP_ERROR_INPUT; returns -1 so callers can `return dp_fail(err, ...)`. */
 int dp_fail(dp_error *err, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+/* The same with another kind. */
+int dp_fail_kind(dp_error *err, dp_error_kind kind, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
+/* The exit status of a process that ends with an error of this kind. */
+int dp_exit_status(dp_error_kind kind);
 
 /* Monotonic wall-clock seconds (for budgets, progress and stage timings). */
 double dp_seconds(void);

@@ -1,18 +1,78 @@
-/* dartspp render: the progressive driver (passes, time budget, progress, interruption), the integrators,
- * the memory guard and the outputs. */
+/* dartspp render: the render command (scene file to images), the progressive driver (passes, time budget,
+ * progress, interruption), the integrators, the memory guard and the outputs. */
 #ifndef DARTSPP_RENDER_H
 #define DARTSPP_RENDER_H
 
 #include <signal.h>
 
-#include "dartspp/cluster.h"
 #include "dartspp/film.h"
 #include "dartspp/io.h"
 #include "dartspp/plan.h"
 #include "dartspp/scene.h"
 
-/* ---- driver ---- */
+/* ---- the render command ----
+ * `dartspp render`, from the scene file to the images: the scene loaded and its plan resolved, the outputs
+ * and the memory checked before any work (a refusal is bad input: exit 2), the progressive render with
+ * checkpoints and the error log, the run summary (stdout) and the outputs, written to a rescue folder when
+ * that fails. Messages go to stderr, each prefixed "dartspp render: ". */
+typedef struct {
+    const char *scene_path;
+    const char *const *sets;     /* "key=value" overrides (--set), set_count of them */
+    int set_count;
+    const char *output;          /* NULL: the scene's hdr_output_file, else <scene stem>.exr */
+    int skip;                    /* RENDER_SKIP_CUBE, RENDER_SKIP_VIEWER (--no-cube, --no-viewer) */
+    int verbose, quiet;
+    int threads;                 /* 0: all cores (several ranks on one machine: their share) */
+    uint64_t seed;
+    long spp;                    /* passes; < 0: as the scene says */
+    double time_limit;           /* seconds; < 0: as the scene says */
+    double checkpoint;           /* seconds between checkpoints; < 0: as the scene says; 0: none */
+    const char *reference, *log; /* the error log against a reference image (both or neither) */
+    double log_every;            /* seconds between its rows; 0: every pass */
+    double max_memory;           /* bytes; 0: what the machine has available */
+} render_request;
+
+typedef struct render_cluster render_cluster;
+
+/* Runs the request on this process alone (cluster NULL or of one rank) or shared by the ranks of a cluster:
+ * rank 0 checks the outputs and opens the error log, every rank loads the scene and passes the memory guard
+ * before any renders, and rank 0 alone prints progress and the summary and writes outputs, checkpoints and
+ * the error log. SIGINT and SIGTERM are caught from here on. Returns the exit status of the process:
+ * 0, or dp_exit_status of the error that ended the run; a refusal on any rank refuses every rank. */
+int render_run(const render_request *rq, const render_cluster *cluster);
+/* For a rank whose command line was refused with exit status `status`: joins the ranks' agreement before
+ * the render (so that the others do not wait for it) and returns the status they agree on. */
+int render_run_refused(const render_cluster *cluster, int status);
+
+/* ---- several processes as one render ----
+ * The operations the driver needs from a cluster (src/cluster implements them over MPI). Every iteration is
+ * an independent draw whose random numbers and radii depend only on the seed and the iteration index, so
+ * rank r of N renders iterations r, r + N, r + 2N, ... ("rounds": in round k every rank renders iteration
+ * kN + r), rank 0 decides after each round whether the render goes on, and the films are summed onto rank 0,
+ * which alone writes. */
 struct render_stats;
+
+struct render_cluster {
+    int rank, size;          /* this process, and how many render together */
+    int ranks_on_node;       /* processes sharing this machine (the memory guard counts them all) */
+    void *ctx;
+    /* After every round, on every rank (collective): *go is 1 on entry if this rank would go on (rank 0:
+     * its budget allows another round; any rank: not interrupted, no error); on return, 1 only if every rank
+     * said 1. *gather is rank 0's wish (ignored elsewhere) to have the films summed now (a checkpoint); on
+     * return, rank 0's wish on every rank. 0, or -1 when the communication failed. */
+    int (*round)(const render_cluster *c, int *go, int *gather);
+    /* Sums the films' pass sums, weight sums, pass counts and non-finite counts, and the statistics, onto
+     * rank 0 (collective; total and st_total are written on rank 0 only, total already initialised like
+     * mine). 0, or -1 with err. */
+    int (*reduce)(const render_cluster *c, const film *mine, film *total,
+                  const struct render_stats *st_mine, struct render_stats *st_total, dp_error *err);
+    /* Whether any rank had rc != 0 (collective): the largest rc of all ranks, on every rank. */
+    int (*agree_rc)(const render_cluster *c, int rc);
+    /* Rank 0's values of n doubles, on every rank (collective). */
+    int (*share)(const render_cluster *c, double *v, int n);
+};
+
+/* ---- the progressive driver ---- */
 
 typedef struct {
     const render_plan *plan; /* the scene's resolved plan; NULL: render_scene resolves it */
@@ -31,7 +91,7 @@ typedef struct {
      * A non-zero return stops the render with that error. May be NULL. */
     int (*after_pass)(void *ctx, const film *f, const struct render_stats *st, dp_error *err);
     void *after_pass_ctx;
-    /* Several processes as one render (include/dartspp/cluster.h); NULL: this process alone. With a cluster
+    /* Several processes as one render (render_cluster above); NULL: this process alone. With a cluster
      * the film and statistics returned are the sums of all ranks on rank 0 (other ranks: their own), and
      * after_pass runs on rank 0 only, with the summed film, after the rounds where the films were summed:
      * every gather_every seconds (0: only at the end). */

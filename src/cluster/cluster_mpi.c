@@ -38,7 +38,7 @@ static int mpi_reduce(const render_cluster *c, const film *mine, film *total, co
     size_t n = (size_t)mine->width * mine->height * 3, nf = n * (size_t)mine->window.frame_count;
     if (reduce_chunks(mine->sum, total->sum, n, MPI_DOUBLE, sizeof(double), c->rank) ||
         (nf > 0 && reduce_chunks(mine->frame_sum, total->frame_sum, nf, MPI_FLOAT, sizeof(float), c->rank)))
-        return dp_fail(err, "MPI: the reduction of the films failed");
+        return dp_fail_kind(err, DP_ERROR_INTERNAL, "MPI: the reduction of the films failed");
     /* the scalars: the counts, the weight sum and the statistics that add up */
     double v[17] = {(double)mine->passes,    mine->weight_sum,        (double)mine->nonfinite, st_mine->camera_rays,
                     st_mine->rays,           st_mine->photon_paths,   st_mine->stored_photons, st_mine->early_exits,
@@ -49,7 +49,7 @@ static int mpi_reduce(const render_cluster *c, const film *mine, film *total, co
     int intr = st_mine->interrupted, intr_all = 0;
     if (MPI_Reduce(v, w, 17, MPI_DOUBLE, MPI_SUM, 0, MPI_COMM_WORLD) != MPI_SUCCESS ||
         MPI_Reduce(&intr, &intr_all, 1, MPI_INT, MPI_MAX, 0, MPI_COMM_WORLD) != MPI_SUCCESS)
-        return dp_fail(err, "MPI: the reduction of the statistics failed");
+        return dp_fail_kind(err, DP_ERROR_INTERNAL, "MPI: the reduction of the statistics failed");
     if (c->rank != 0) return 0;
     total->passes = (long)w[0];
     total->weight_sum = w[1];

@@ -38,7 +38,7 @@ int eda_set_prepare(const scene *s, const render_plan *p, eda_set *set, dp_error
     set->count = n;
     if (!set->tables || !set->table || !set->alpha) {
         eda_set_free(set);
-        return dp_fail(err, "%s: out of memory for the EDA tables", s->path);
+        return dp_fail_kind(err, DP_ERROR_MEMORY, "%s: out of memory for the EDA tables", s->path);
     }
     for (int i = 0; i < n; i++) {
         const medium *m = &s->media[i];

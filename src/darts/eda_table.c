@@ -75,7 +75,7 @@ int eda_table_build(eda_table *t, double sigma_s, double sigma_a, double g, int 
         return dp_fail(err, "EDA table: need 0 <= C/S range low < high < 1 (got %g, %g)", r_lo, r_hi);
     *t = (eda_table){n_ratio, n_s, n_cos, sigma_s, sigma_a, g, s_max, r_lo, r_hi, NULL};
     t->cdf = malloc(sizeof(float) * (size_t)n_ratio * n_s * n_cos);
-    if (!t->cdf) return dp_fail(err, "EDA table: out of memory for %dx%dx%d", n_ratio, n_s, n_cos);
+    if (!t->cdf) return dp_fail_kind(err, DP_ERROR_MEMORY, "EDA table: out of memory for %dx%dx%d", n_ratio, n_s, n_cos);
     const double D = 1.0 / (3.0 * (sigma_a + sigma_s * (1.0 - g))); /* paper's D (docs/darts.md §6.3) */
     int done = 0, oom = 0;
 #pragma omp parallel
@@ -98,7 +98,7 @@ int eda_table_build(eda_table *t, double sigma_s, double sigma_a, double g, int 
     }
     if (oom) {
         eda_table_free(t);
-        return dp_fail(err, "EDA table: out of memory");
+        return dp_fail_kind(err, DP_ERROR_MEMORY, "EDA table: out of memory");
     }
     return 0;
 }

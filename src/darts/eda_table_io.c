@@ -77,7 +77,7 @@ int eda_table_save(const eda_table *t, const char *path, dp_error *err)
     if (fd < 0) return -1;
     if (write_all(fd, head, sizeof head) || write_all(fd, t->cdf, table_values(t) * sizeof(float))) {
         atomic_abort(fd, tmp);
-        return dp_fail(err, "%s: write failed: %s", path, strerror(errno));
+        return dp_fail_kind(err, DP_ERROR_OUTPUT, "%s: write failed: %s", path, strerror(errno));
     }
     return atomic_commit(fd, tmp, path, err);
 }
@@ -137,7 +137,8 @@ int eda_table_load(eda_table *t, const char *path, dp_error *err)
         else if (fnv1a(buf + EDA_HEADER_BYTES, n - EDA_HEADER_BYTES) != h)
             rc = dp_fail(err, "%s: EDA table payload does not match its checksum (corrupted)", path);
     }
-    if (!rc && !(t->cdf = malloc(n - EDA_HEADER_BYTES))) rc = dp_fail(err, "%s: out of memory", path);
+    if (!rc && !(t->cdf = malloc(n - EDA_HEADER_BYTES)))
+        rc = dp_fail_kind(err, DP_ERROR_MEMORY, "%s: out of memory", path);
     if (!rc) memcpy(t->cdf, buf + EDA_HEADER_BYTES, n - EDA_HEADER_BYTES);
     free(buf);
     if (rc) {

@@ -20,7 +20,8 @@ int film_init(film *f, int width, int height, const time_window *tw, dp_error *e
     }
     if (!f->sum || !f->pass || (nf > 0 && (!f->frame_sum || !f->frame_pass))) {
         film_free(f);
-        return dp_fail(err, "out of memory for a %dx%d film with %d frames", width, height, tw->frame_count);
+        return dp_fail_kind(err, DP_ERROR_MEMORY,
+                            "out of memory for a %dx%d film with %d frames", width, height, tw->frame_count);
     }
     return 0;
 }

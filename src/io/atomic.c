@@ -16,11 +16,11 @@ int atomic_open(const char *path, char *tmp_path, size_t tmp_len, dp_error *err)
     int n = snprintf(tmp_path, tmp_len, "%s.tmp.%ld", path, (long)getpid());
     if (n < 0 || (size_t)n >= tmp_len) {
         if (tmp_len) tmp_path[0] = '\0';
-        dp_fail(err, "%s: path too long", path);
+        dp_fail_kind(err, DP_ERROR_OUTPUT, "%s: path too long", path);
         return -1;
     }
     int fd = open(tmp_path, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
-    if (fd < 0) dp_fail(err, "%s: cannot open for writing: %s", path, strerror(errno));
+    if (fd < 0) dp_fail_kind(err, DP_ERROR_OUTPUT, "%s: cannot open for writing: %s", path, strerror(errno));
     return fd;
 }
 
@@ -63,7 +63,7 @@ int atomic_commit(int fd, const char *tmp_path, const char *path, dp_error *err)
         return 0;
     }
     unlink(tmp_path);
-    return dp_fail(err, "%s: %s: %s", path, what, strerror(e));
+    return dp_fail_kind(err, DP_ERROR_OUTPUT, "%s: %s: %s", path, what, strerror(e));
 }
 
 void atomic_abort(int fd, const char *tmp_path)
@@ -84,7 +84,7 @@ FILE *atomic_fopen(const char *path, const char *mode, atomic_file *af, dp_error
         int e = errno;
         if (dup_fd >= 0) close(dup_fd);
         atomic_abort(af->fd, af->tmp_path);
-        dp_fail(err, "%s: cannot open for writing: %s", path, strerror(e));
+        dp_fail_kind(err, DP_ERROR_OUTPUT, "%s: cannot open for writing: %s", path, strerror(e));
     }
     return af->f;
 }
@@ -97,7 +97,7 @@ int atomic_fclose(atomic_file *af, int failed, dp_error *err)
     if (bad) {
         int e = errno;
         atomic_abort(af->fd, af->tmp_path);
-        return dp_fail(err, "%s: write failed: %s", af->path, strerror(e));
+        return dp_fail_kind(err, DP_ERROR_OUTPUT, "%s: write failed: %s", af->path, strerror(e));
     }
     return atomic_commit(af->fd, af->tmp_path, af->path, err);
 }
@@ -117,7 +117,7 @@ static int mkdir_one(const char *dir, const char *path, dp_error *err)
     int e = errno;
     if (e == EEXIST && stat(dir, &st) == 0 && S_ISDIR(st.st_mode)) return 0;
     if (e == EEXIST) e = ENOTDIR;
-    return dp_fail(err, "%s: cannot create folder %s: %s", path, dir, strerror(e));
+    return dp_fail_kind(err, DP_ERROR_OUTPUT, "%s: cannot create folder %s: %s", path, dir, strerror(e));
 }
 
 int io_make_parent_dirs(const char *path, dp_error *err)
@@ -125,7 +125,7 @@ int io_make_parent_dirs(const char *path, dp_error *err)
     const char *slash = strrchr(path, '/');
     if (!slash || slash == path) return 0;
     char *dir = strndup(path, (size_t)(slash - path));
-    if (!dir) return dp_fail(err, "%s: out of memory", path);
+    if (!dir) return dp_fail_kind(err, DP_ERROR_MEMORY, "%s: out of memory", path);
     int rc = 0;
     for (char *p = dir + 1; rc == 0; ++p) {
         if (*p != '/' && *p != '\0') continue;

@@ -14,7 +14,8 @@ static int write_frames(FILE *f, int frame_count, double start, double width)
 int frames_csv_write(const char *path, int frame_count, double start, double width, dp_error *err)
 {
     if (frame_count < 0 || !isfinite(start) || !isfinite(width))
-        return dp_fail(err, "%s: invalid frame axis (%d frames, start %g, width %g)", path, frame_count,
+        return dp_fail_kind(err, DP_ERROR_INTERNAL,
+                            "%s: invalid frame axis (%d frames, start %g, width %g)", path, frame_count,
                        start, width);
     atomic_file af;
     FILE *f = atomic_fopen(path, "w", &af, err);

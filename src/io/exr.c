@@ -91,9 +91,9 @@ static int64_t stream_write(exr_const_context_t ctxt, void *ud, const void *buf,
     return (int64_t)done;
 }
 
-static int fail_exr(dp_error *err, const char *path, const exr_stream *s, exr_result_t rv)
+static int fail_exr(dp_error *err, dp_error_kind kind, const char *path, const exr_stream *s, exr_result_t rv)
 {
-    return dp_fail(err, "%s: %s", path, s->msg[0] ? s->msg : exr_get_default_error_message(rv));
+    return dp_fail_kind(err, kind, "%s: %s", path, s->msg[0] ? s->msg : exr_get_default_error_message(rv));
 }
 
 /* Offset of a channel in an interleaved RGB pixel; -1 for channels we do not handle. */
@@ -206,7 +206,7 @@ static exr_result_t write_pixels(exr_context_t ctx, const image_rgb *img)
 int exr_write(const char *path, const image_rgb *img, const image_meta *meta, dp_error *err)
 {
     if (!img || !img->rgb || img->width <= 0 || img->height <= 0)
-        return dp_fail(err, "%s: cannot write an empty image", path);
+        return dp_fail_kind(err, DP_ERROR_INTERNAL, "%s: cannot write an empty image", path);
     char tmp[4096];
     exr_stream s = {.fd = atomic_open(path, tmp, sizeof tmp, err)};
     if (s.fd < 0) return -1;
@@ -224,7 +224,7 @@ int exr_write(const char *path, const image_rgb *img, const image_meta *meta, dp
     }
     if (rv != EXR_OK) {
         atomic_abort(s.fd, tmp);
-        return fail_exr(err, path, &s, rv);
+        return fail_exr(err, DP_ERROR_OUTPUT, path, &s, rv);
     }
     return atomic_commit(s.fd, tmp, path, err);
 }
@@ -264,7 +264,7 @@ static int read_layout(exr_context_t ctx, exr_stream *s, const char *path, exr_l
                        path);
     if (rv == EXR_OK) rv = exr_get_data_window(ctx, 0, &dw);
     if (rv == EXR_OK) rv = exr_get_channels(ctx, 0, &cl);
-    if (rv != EXR_OK || !cl) return fail_exr(err, path, s, rv != EXR_OK ? rv : EXR_ERR_MISSING_REQ_ATTR);
+    if (rv != EXR_OK || !cl) return fail_exr(err, DP_ERROR_INPUT, path, s, rv != EXR_OK ? rv : EXR_ERR_MISSING_REQ_ATTR);
     int64_t w = (int64_t)dw.max.x - dw.min.x + 1, h = (int64_t)dw.max.y - dw.min.y + 1;
     if (w <= 0 || h <= 0 || w > INT32_MAX || h > INT32_MAX)
         return dp_fail(err, "%s: invalid data window", path);
@@ -327,10 +327,10 @@ static int read_image(exr_context_t ctx, exr_stream *s, const char *path, image_
     if (image_alloc(img, lay.width, lay.height, err) != 0) {
         char why[sizeof err->msg];
         snprintf(why, sizeof why, "%s", err ? err->msg : "");
-        return dp_fail(err, "%s: %s", path, why);
+        return dp_fail_kind(err, err ? err->kind : DP_ERROR_INPUT, "%s: %s", path, why);
     }
     exr_result_t rv = decode_pixels(ctx, img, &lay);
-    if (rv != EXR_OK) return fail_exr(err, path, s, rv);
+    if (rv != EXR_OK) return fail_exr(err, DP_ERROR_INPUT, path, s, rv);
     if (lay.grey) grey_to_rgb(img);
     return 0;
 }
@@ -355,7 +355,7 @@ static int exr_open_read(const char *path, exr_stream *s, exr_context_t *ctx, dp
     init.flags = EXR_CONTEXT_FLAG_DISABLE_CHUNK_RECONSTRUCTION;
     exr_result_t rv = exr_start_read(ctx, path, &init);
     if (rv == EXR_OK) return 0;
-    int rc = fail_exr(err, path, s, rv);
+    int rc = fail_exr(err, DP_ERROR_INPUT, path, s, rv);
     if (*ctx) exr_finish(ctx);
     close(s->fd);
     return rc;

@@ -19,7 +19,7 @@ int image_alloc(image_rgb *img, int width, int height, dp_error *err)
         return dp_fail(err, "image size %dx%d exceeds the limit of %zu pixels", width, height,
                        IMAGE_MAX_PIXELS);
     img->rgb = calloc(n * 3, sizeof *img->rgb);
-    if (!img->rgb) return dp_fail(err, "out of memory for a %dx%d image", width, height);
+    if (!img->rgb) return dp_fail_kind(err, DP_ERROR_MEMORY, "out of memory for a %dx%d image", width, height);
     img->width = width;
     img->height = height;
     return 0;
@@ -134,7 +134,7 @@ int image_compare(const image_rgb *img, const image_rgb *ref, image_error *out, 
     if (img->width != ref->width || img->height != ref->height)
         return dp_fail(err, "compare: image is %dx%d but the reference is %dx%d", img->width,
                        img->height, ref->width, ref->height);
-    if (quantile_of(ref, 0.99, &out->q99) != 0) return dp_fail(err, "compare: out of memory");
+    if (quantile_of(ref, 0.99, &out->q99) != 0) return dp_fail_kind(err, DP_ERROR_MEMORY, "compare: out of memory");
     double q = out->q99 != 0.0 ? out->q99 : 1.0;
     error_sums s = {0, 0, 0};
     size_t n = (size_t)img->width * (size_t)img->height;

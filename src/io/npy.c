@@ -51,7 +51,8 @@ int npy_open(npy_file *w, const char *path, const size_t *shape, int ndim, dp_er
 {
     unsigned char header[NPY_HEADER_MAX];
     size_t n = npy_header(header, sizeof header, shape, ndim);
-    if (!n) return dp_fail(err, "%s: cannot describe an array of %d axes in a .npy header", path, ndim);
+    if (!n) return dp_fail_kind(err, DP_ERROR_INTERNAL,
+                                "%s: cannot describe an array of %d axes in a .npy header", path, ndim);
     w->left = 1;
     for (int i = 0; i < ndim; i++) w->left *= shape[i];
     if (!atomic_fopen(path, "wb", &w->af, err)) return -1;
@@ -71,7 +72,7 @@ int npy_append(npy_file *w, const float *v, size_t n, dp_error *err)
 {
     if (n > w->left) {
         atomic_fabort(&w->af);
-        return dp_fail(err, "%s: more values than the .npy shape holds", w->af.path);
+        return dp_fail_kind(err, DP_ERROR_INTERNAL, "%s: more values than the .npy shape holds", w->af.path);
     }
     unsigned char buf[4096];
     for (size_t i = 0; i < n;) {
@@ -87,7 +88,8 @@ int npy_close(npy_file *w, dp_error *err)
 {
     if (w->left) {
         atomic_fabort(&w->af);
-        return dp_fail(err, "%s: %zu values of the .npy shape were never written", w->af.path, w->left);
+        return dp_fail_kind(err, DP_ERROR_INTERNAL,
+                            "%s: %zu values of the .npy shape were never written", w->af.path, w->left);
     }
     return atomic_fclose(&w->af, 0, err);
 }

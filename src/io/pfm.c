@@ -41,7 +41,7 @@ static int write_rows(FILE *f, const image_rgb *img)
 int pfm_write(const char *path, const image_rgb *img, dp_error *err)
 {
     if (!img || !img->rgb || img->width <= 0 || img->height <= 0)
-        return dp_fail(err, "%s: cannot write an empty image", path);
+        return dp_fail_kind(err, DP_ERROR_INTERNAL, "%s: cannot write an empty image", path);
     atomic_file af;
     FILE *f = atomic_fopen(path, "wb", &af, err);
     if (!f) return -1;
@@ -119,7 +119,7 @@ static int read_pixels(FILE *f, const char *path, const pfm_header *h, image_rgb
 {
     size_t row_bytes = (size_t)h->width * (size_t)h->channels * 4;
     unsigned char *row = malloc(row_bytes);
-    if (!row) return dp_fail(err, "%s: out of memory", path);
+    if (!row) return dp_fail_kind(err, DP_ERROR_MEMORY, "%s: out of memory", path);
     int rc = fseek(f, (long)h->data_offset, SEEK_SET);
     for (int i = 0; rc == 0 && i < h->height; ++i) {
         if (fread(row, 1, row_bytes, f) != row_bytes) rc = -1;
@@ -159,7 +159,7 @@ int pfm_read(const char *path, image_rgb *img, dp_error *err)
     if (rc == 0 && image_alloc(img, h.width, h.height, err) != 0) {
         char why[sizeof err->msg];
         snprintf(why, sizeof why, "%s", err ? err->msg : "");
-        rc = dp_fail(err, "%s: %s", path, why);
+        rc = dp_fail_kind(err, err ? err->kind : DP_ERROR_INPUT, "%s: %s", path, why);
     }
     if (rc == 0) rc = read_pixels(f, path, &h, img, err);
     fclose(f);

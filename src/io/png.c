@@ -26,7 +26,7 @@ static void preview_row(const float *src, int width, double scale, png_byte *dst
 static void png_error_to_dp(png_structp png, png_const_charp msg)
 {
     dp_error *err = png_get_error_ptr(png);
-    if (err) snprintf(err->msg, sizeof err->msg, "%s", msg);
+    dp_fail_kind(err, DP_ERROR_OUTPUT, "%s", msg);
     png_longjmp(png, 1);
 }
 
@@ -44,7 +44,7 @@ static int encode(FILE *f, const image_rgb *img, double scale, png_byte *row, dp
     png_infop info = png ? png_create_info_struct(png) : NULL;
     if (!info) {
         png_destroy_write_struct(&png, NULL);
-        return dp_fail(err, "out of memory");
+        return dp_fail_kind(err, DP_ERROR_MEMORY, "out of memory");
     }
     if (setjmp(png_jmpbuf(png))) {
         png_destroy_write_struct(&png, &info);
@@ -70,25 +70,25 @@ static int write_stream(FILE *f, const image_rgb *img, dp_error *err)
     double q = image_quantile(img, 0.99);
     double scale = q > 0.0 ? q : 1.0; /* 0 (or no usable quantile): show the values as they are */
     png_byte *row = malloc((size_t)img->width * 3);
-    int rc = row ? encode(f, img, scale, row, err) : dp_fail(err, "out of memory");
+    int rc = row ? encode(f, img, scale, row, err) : dp_fail_kind(err, DP_ERROR_MEMORY, "out of memory");
     int e = errno;
     free(row);
     if (rc != 0 && ferror(f)) /* better than libpng's text */
-        rc = dp_fail(err, "write failed: %s", strerror(e));
+        rc = dp_fail_kind(err, DP_ERROR_OUTPUT, "write failed: %s", strerror(e));
     return rc;
 }
 
 int png_write_preview(const char *path, const image_rgb *img, dp_error *err)
 {
     if (!img || !img->rgb || img->width <= 0 || img->height <= 0)
-        return dp_fail(err, "%s: cannot write an empty image", path);
+        return dp_fail_kind(err, DP_ERROR_INTERNAL, "%s: cannot write an empty image", path);
     atomic_file af;
     FILE *f = atomic_fopen(path, "wb", &af, err);
     if (!f) return -1;
     dp_error local = {{0}};
     if (write_stream(f, img, &local) != 0) {
         atomic_fabort(&af);
-        return dp_fail(err, "%s: %s", path, local.msg);
+        return dp_fail_kind(err, local.kind, "%s: %s", path, local.msg);
     }
     return atomic_fclose(&af, 0, err); /* a stream error or failed close: "write failed" */
 }

@@ -35,13 +35,14 @@ double viewer_html_bytes_max(const viewer_layout *l)
 int viewer_cube_init(viewer_cube *v, int width, int height, int frames, dp_error *err)
 {
     memset(v, 0, sizeof *v);
-    if (width <= 0 || height <= 0 || frames <= 0) return dp_fail(err, "viewer: no frames to show");
+    if (width <= 0 || height <= 0 || frames <= 0)
+        return dp_fail_kind(err, DP_ERROR_INTERNAL, "viewer: no frames to show");
     viewer_layout_of(width, height, frames, &v->l);
     v->data = calloc((size_t)v->l.embedded * frame_floats(width, height, v->l.factor), sizeof(float));
     v->hist = calloc(VIEWER_HIST_BINS, sizeof(double));
     if (v->data && v->hist) return 0;
     viewer_cube_free(v);
-    return dp_fail(err, "viewer: out of memory");
+    return dp_fail_kind(err, DP_ERROR_MEMORY, "viewer: out of memory");
 }
 
 /* The mean of the f×f block (bx, by) of img (fewer pixels at the right and bottom edges) into out[3]. */

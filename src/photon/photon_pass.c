@@ -442,7 +442,7 @@ int photon_pass(const scene *s, const photon_pass_input *in, photon_set *out, dp
     if (rc) {
         free(pt.vol.p);
         free(pt.surf.p);
-        return dp_fail(err, "%s: out of memory in the photon pass", s->path);
+        return dp_fail_kind(err, DP_ERROR_MEMORY, "%s: out of memory in the photon pass", s->path);
     }
     out->paths = pt.next + pt.chains.traced;
     out->early_exits = pt.early + pt.chains.early_exits;

@@ -81,17 +81,18 @@ static int coord_ok(double c) { return isfinite(c) && fabs(c) <= COORD_MAX; }
 static surface_photon_map *build(const photon *ph, size_t n, int use_flann, dp_error *err)
 {
     if (n > 0 && !ph) {
-        dp_fail(err, "surface photon map: no photon array for %zu photons", n);
+        dp_fail_kind(err, DP_ERROR_INTERNAL, "surface photon map: no photon array for %zu photons", n);
         return NULL;
     }
     if (n > (size_t)INT_MAX) {
-        dp_fail(err, "surface photon map: %zu photons exceed FLANN's limit of %d", n, INT_MAX);
+        dp_fail_kind(err, DP_ERROR_INTERNAL, "surface photon map: %zu photons exceed FLANN's limit of %d", n, INT_MAX);
         return NULL;
     }
     for (size_t i = 0; i < n; i++) {
         for (int c = 0; c < 3; c++) {
             if (!coord_ok(ph[i].pos[c])) {
-                dp_fail(err, "surface photon map: photon %zu has position (%g, %g, %g) (non-finite or beyond %g)",
+                dp_fail_kind(err, DP_ERROR_INTERNAL,
+                             "surface photon map: photon %zu has position (%g, %g, %g) (non-finite or beyond %g)",
                         i, (double)ph[i].pos[0], (double)ph[i].pos[1], (double)ph[i].pos[2], COORD_MAX);
                 return NULL;
             }
@@ -99,7 +100,7 @@ static surface_photon_map *build(const photon *ph, size_t n, int use_flann, dp_e
     }
     surface_photon_map *m = calloc(1, sizeof *m);
     if (!m) {
-        dp_fail(err, "surface photon map: out of memory");
+        dp_fail_kind(err, DP_ERROR_MEMORY, "surface photon map: out of memory");
         return NULL;
     }
     m->n = n;
@@ -113,7 +114,7 @@ static surface_photon_map *build(const photon *ph, size_t n, int use_flann, dp_e
     }
     m->pts = malloc(n * 3 * sizeof *m->pts);
     if (!m->pts) {
-        dp_fail(err, "surface photon map: out of memory for %zu photons", n);
+        dp_fail_kind(err, DP_ERROR_MEMORY, "surface photon map: out of memory for %zu photons", n);
         free(m);
         return NULL;
     }
@@ -123,7 +124,7 @@ static surface_photon_map *build(const photon *ph, size_t n, int use_flann, dp_e
     float speedup = 0.0f;
     m->index = flann_build_index_float(m->pts, (int)n, 3, &speedup, &p);
     if (!m->index) {
-        dp_fail(err, "surface photon map: FLANN could not build the kd-tree over %zu photons", n);
+        dp_fail_kind(err, DP_ERROR_INTERNAL, "surface photon map: FLANN could not build the kd-tree over %zu photons", n);
         free(m->pts);
         free(m);
         return NULL;

@@ -257,7 +257,8 @@ static int gather_points(const photon *ph, size_t n, point_item *pts, double *ma
     for (size_t i = 0; i < n; i++) {
         for (int a = 0; a < 3; a++) {
             float x = ph[i].pos[a];
-            if (!isfinite(x)) return dp_fail(err, "volume photon map: photon %zu has a non-finite position", i);
+            if (!isfinite(x))
+                return dp_fail_kind(err, DP_ERROR_INTERNAL, "volume photon map: photon %zu has a non-finite position", i);
             pts[i].pos[a] = x;
             if (fabs((double)x) > m) m = fabs((double)x);
         }
@@ -290,16 +291,17 @@ size_t volume_map_bytes(size_t n)
 volume_photon_map *volume_map_build(const photon *ph, size_t n, double r, dp_error *err)
 {
     if (!(r >= 0.0)) {
-        dp_fail(err, "volume photon map: the gather radius must be >= 0 (got %g)", r);
+        dp_fail_kind(err, DP_ERROR_INTERNAL, "volume photon map: the gather radius must be >= 0 (got %g)", r);
         return NULL;
     }
     if (n > UINT32_MAX || (n > 0 && !ph)) {
-        dp_fail(err, "volume photon map: %zu photons %s", n, ph ? "are more than 2^32 - 1" : "but no array");
+        dp_fail_kind(err, DP_ERROR_INTERNAL,
+                     "volume photon map: %zu photons %s", n, ph ? "are more than 2^32 - 1" : "but no array");
         return NULL;
     }
     volume_photon_map *m = calloc(1, sizeof *m);
     if (!m) {
-        dp_fail(err, "volume photon map: out of memory");
+        dp_fail_kind(err, DP_ERROR_MEMORY, "volume photon map: out of memory");
         return NULL;
     }
     m->n = n;
@@ -311,7 +313,7 @@ volume_photon_map *volume_map_build(const photon *ph, size_t n, double r, dp_err
     m->points = alloc_array(n, sizeof *m->points);
     m->photons = alloc_array(n, sizeof *m->photons);
     if (!m->boxes || !m->points || !m->photons) {
-        dp_fail(err, "volume photon map: out of memory for %zu photons", n);
+        dp_fail_kind(err, DP_ERROR_MEMORY, "volume photon map: out of memory for %zu photons", n);
         volume_map_free(m);
         return NULL;
     }

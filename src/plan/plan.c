@@ -108,7 +108,7 @@ int plan_resolve(const scene *s, render_plan *p, dp_error *err)
     p->volume_splat = !in->volume_gather_beam;
     p->medium_count = s->medium_count;
     if (s->medium_count > 0 && !(p->eda = calloc((size_t)s->medium_count, sizeof *p->eda)))
-        return dp_fail(err, "%s: out of memory for the render plan", s->path);
+        return dp_fail_kind(err, DP_ERROR_MEMORY, "%s: out of memory for the render plan", s->path);
     resolve_eda(s, p);
     resolve_darts(s, p);
     resolve_camera_side(s, p);

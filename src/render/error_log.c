@@ -44,7 +44,7 @@ static FILE *open_csv(const char *path, const char *header, dp_error *err)
     if (io_make_parent_dirs(path, err)) return NULL;
     FILE *f = fopen(path, "w");
     if (!f) {
-        dp_fail(err, "%s: cannot write the error log", path);
+        dp_fail_kind(err, DP_ERROR_OUTPUT, "%s: cannot write the error log", path);
         return NULL;
     }
     fputs(header, f);
@@ -56,7 +56,7 @@ error_log *error_log_open(const char *csv_path, const char *ref_path, int width,
                           double every, dp_error *err)
 {
     error_log *l = calloc(1, sizeof *l);
-    if (!l) return dp_fail(err, "out of memory"), NULL;
+    if (!l) return dp_fail_kind(err, DP_ERROR_MEMORY, "out of memory"), NULL;
     l->every = every;
     l->last = -1e300;
     l->last_pass = -1;
@@ -72,7 +72,7 @@ error_log *error_log_open(const char *csv_path, const char *ref_path, int width,
         l->frame_count = frame_count;
         l->frame_ref = calloc((size_t)l->frame_count, sizeof(image_rgb));
         if (!l->frame_ref) {
-            dp_fail(err, "out of memory");
+            dp_fail_kind(err, DP_ERROR_MEMORY, "out of memory");
             goto fail;
         }
         int found = 0;

@@ -1,6 +1,6 @@
 /* The progressive driver: passes until the pass count or the time budget is reached (or an interrupt),
  * with a progress line on stderr. Passes are independent draws; the film holds their weighted mean
- * (plan_pass_weight). With a cluster (include/dartspp/cluster.h) the ranks render them in rounds and the
+ * (plan_pass_weight). With a cluster (render_cluster, render.h) the ranks render them in rounds and the
  * films are summed onto rank 0. */
 #include "dartspp/darts.h"
 #include "dartspp/render.h"
@@ -105,7 +105,7 @@ static void progress_print_job(progress_line *pl, const render_stats *st, int ra
     progress_print(pl, &est, spp, limit, 0);
 }
 
-/* Several ranks (include/dartspp/cluster.h): in round k this rank renders iteration k·size + rank (while
+/* Several ranks (render_cluster, render.h): in round k this rank renders iteration k·size + rank (while
  * below spp), then rank 0 decides for all whether another round starts and whether the films are summed
  * now for after_pass (checkpoints, error logs); at the end the films and statistics are summed onto rank 0.
  * A rank that fails or is interrupted says so at the round's end and every rank stops there; the completed
@@ -131,7 +131,7 @@ static int render_rounds(const scene *s, const render_plan *p, const eda_set *ed
         int gather = c->rank == 0 && go && opt->after_pass && opt->gather_every > 0 &&
                      st->seconds - last_gather >= opt->gather_every;
         double tc = dp_seconds();
-        if (c->round(c, &go, &gather)) return dp_fail(err, "the ranks lost contact (MPI)");
+        if (c->round(c, &go, &gather)) return dp_fail_kind(err, DP_ERROR_INTERNAL, "the ranks lost contact (MPI)");
         if (gather) {
             film total;
             render_stats all;
@@ -163,7 +163,8 @@ static int render_rounds(const scene *s, const render_plan *p, const eda_set *ed
         }
         *st = all;
     }
-    if (any_failed && !failed) return dp_fail(err, "another rank failed (its message is above); the completed passes are kept");
+    if (any_failed && !failed)
+        return dp_fail_kind(err, DP_ERROR_RANK, "another rank failed (its message is above); the completed passes are kept");
     return failed ? -1 : 0;
 }
 
@@ -176,7 +177,7 @@ static int render_passes(const scene *s, const render_plan *p, const render_opti
                 !film_init(f, s->cam.width, s->cam.height, &p->window, err);
     const render_cluster *c = opt->cluster && opt->cluster->size > 1 ? opt->cluster : NULL;
     if (c && c->agree_rc(c, !ready) && ready) /* a rank without its EDA tables or film: none starts */
-        ready = !dp_fail(err, "another rank could not start the render (its message is above)");
+        ready = !dp_fail_kind(err, DP_ERROR_RANK, "another rank could not start the render (its message is above)");
     if (!ready) {
         eda_set_free(&eda);
         return -1;

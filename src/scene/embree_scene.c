@@ -32,7 +32,7 @@ static void cull_back_faces(const struct RTCFilterFunctionNArguments *args)
 int scene_build_embree(scene *s, dp_error *err)
 {
     scene_rt *rt = scene_rt_get(s);
-    if (!rt) return dp_fail(err, "%s: out of memory", s->path);
+    if (!rt) return dp_fail_kind(err, DP_ERROR_MEMORY, "%s: out of memory", s->path);
     s->ray_offset_scale = 0.0f;
     for (size_t i = 0; i < 3 * (size_t)s->vert_count; i++) s->ray_offset_scale = fmaxf(s->ray_offset_scale, fabsf(s->verts[i]));
     if (!(s->ray_offset_scale > 0.0f)) s->ray_offset_scale = 1.0f;
@@ -53,7 +53,8 @@ int scene_build_embree(scene *s, dp_error *err)
             rtcReleaseGeometry(g);
             rtcReleaseScene(sc);
             rtcReleaseDevice(dev);
-            return dp_fail(err, "%s: Embree could not allocate the geometry of '%s'", s->path, sf->name);
+            return dp_fail_kind(err, DP_ERROR_MEMORY,
+                                "%s: Embree could not allocate the geometry of '%s'", s->path, sf->name);
         }
         /* unshared vertices: each triangle's corners copied, so local index = 3·tri + corner */
         for (uint32_t t = 0; t < sf->tri_count; t++) {

@@ -127,9 +127,10 @@ static int parse_face(char *line, obj_state *o, tri_mesh *m, const char *path, l
     for (char *tok = strtok_r(line, " \t\r\n", &save); tok; tok = strtok_r(NULL, " \t\r\n", &save), n++) {
         uint32_t k[3], v;
         if (parse_corner(tok, o, k)) return dp_fail(err, "%s:%ld: bad face index '%s'", path, lineno, tok);
-        if (fetch_vertex(o, m, k, &v)) return dp_fail(err, "%s: out of memory", path);
+        if (fetch_vertex(o, m, k, &v)) return dp_fail_kind(err, DP_ERROR_MEMORY, "%s: out of memory", path);
         if (n == 0) first = v;
-        else if (n >= 2 && tri_mesh_add_tri(m, first, prev, v)) return dp_fail(err, "%s: out of memory", path);
+        else if (n >= 2 && tri_mesh_add_tri(m, first, prev, v))
+            return dp_fail_kind(err, DP_ERROR_MEMORY, "%s: out of memory", path);
         prev = v;
     }
     if (n < 3) return dp_fail(err, "%s:%ld: a face needs at least 3 vertices", path, lineno);
@@ -144,7 +145,7 @@ static int parse_numbers(const char *s, int n, float_list *l, const char *path, 
     int got = sscanf(s, "%lf %lf %lf", &x[0], &x[1], &x[2]);
     if (got < n || !isfinite(x[0]) || !isfinite(x[1]) || (n == 3 && !isfinite(x[2])))
         return dp_fail(err, "%s:%ld: bad %s line", path, lineno, what);
-    if (list_push(l, x, n)) return dp_fail(err, "%s: out of memory", path);
+    if (list_push(l, x, n)) return dp_fail_kind(err, DP_ERROR_MEMORY, "%s: out of memory", path);
     return 0;
 }
 

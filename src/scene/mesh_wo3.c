@@ -36,7 +36,7 @@ static int read_vertices(FILE *f, const char *path, uint64_t nv, tri_mesh *m, dp
         float x = lef32(v), y = lef32(v + 4), z = lef32(v + 8);
         if (!isfinite(x) || !isfinite(y) || !isfinite(z))
             return dp_fail(err, "%s: vertex %llu has a non-finite position", path, (unsigned long long)i);
-        if (tri_mesh_add_vertex(m, x, y, z)) return dp_fail(err, "%s: out of memory", path);
+        if (tri_mesh_add_vertex(m, x, y, z)) return dp_fail_kind(err, DP_ERROR_MEMORY, "%s: out of memory", path);
         float *n = &m->nrm[3 * (size_t)i], *uv = &m->uv[2 * (size_t)i];
         for (int k = 0; k < 3; k++) n[k] = lef32(v + 12 + 4 * k);
         uv[0] = lef32(v + 24);
@@ -59,7 +59,7 @@ static int read_triangles(FILE *f, const char *path, uint64_t nt, uint64_t nv, t
         if (a >= nv || b >= nv || c >= nv)
             return dp_fail(err, "%s: triangle %llu refers to vertex %u of %llu", path, (unsigned long long)i,
                            a >= nv ? a : (b >= nv ? b : c), (unsigned long long)nv);
-        if (tri_mesh_add_tri(m, a, b, c)) return dp_fail(err, "%s: out of memory", path);
+        if (tri_mesh_add_tri(m, a, b, c)) return dp_fail_kind(err, DP_ERROR_MEMORY, "%s: out of memory", path);
     }
     return 0;
 }

@@ -1,0 +1,160 @@
+/* One run of the render command (render_run): everything that can refuse it before any work
+ * (run_prepare.c), the ranks' agreement to start, the progressive render (render.c) with checkpoints and
+ * error-log rows (checkpoint.c), the run summary (summary.c) and the outputs, written to a rescue folder when
+ * the final write fails. */
+#include <stdio.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "run_internal.h"
+
+static render_run_job job; /* large (the plan's JSON, paths): not on the stack */
+
+static void say_error(const dp_error *err, const char *where)
+{
+    fprintf(stderr, "dartspp render: %s%s\n", err->msg, where);
+}
+
+static void print_written(const char *path) { printf("wrote %s\n", path); }
+
+static void start(render_run_job *j, const render_request *rq, const render_cluster *cluster)
+{
+    memset(j, 0, sizeof *j);
+    j->rq = rq;
+    j->cl = cluster && cluster->size > 1 ? cluster : NULL;
+    j->rank = j->cl ? j->cl->rank : 0;
+    j->quiet = rq->quiet || j->rank != 0; /* rank 0 speaks for the job */
+    j->ro = (render_options){.threads = rq->threads, .seed = rq->seed, .spp = rq->spp, .time_limit = rq->time_limit};
+    /* Interrupts count from here: while loading, an interrupt exits at once (nothing to keep yet). */
+    interrupt_install(&j->ro);
+}
+
+/* Rank 0's seed, pass count and time budget on every rank: the ranks render one job whatever their own
+ * command lines say (the seed as two 32-bit halves, exact in doubles). */
+static int share_options(const render_cluster *c, render_options *ro)
+{
+    double v[4] = {(double)(ro->seed >> 32), (double)(ro->seed & 0xffffffffu), (double)ro->spp, ro->time_limit};
+    if (c->share(c, v, 4)) return -1;
+    ro->seed = ((uint64_t)v[0] << 32) | (uint64_t)v[1];
+    ro->spp = (long)v[2];
+    ro->time_limit = v[3];
+    return 0;
+}
+
+/* Every rank is ready, or none renders: the ranks agree on the largest exit status so far (`status`, this
+ * rank's). Then rank 0's options on every rank and, without --threads, each rank's share of its machine's
+ * cores. Returns the job's exit status so far. */
+static int agree_to_start(render_run_job *j, int status)
+{
+    const render_cluster *cl = j->cl;
+    int all = cl->agree_rc(cl, status);
+    if (all && !status && j->rank == 0)
+        fprintf(stderr, "dartspp render: another rank could not start the render (its message is above)\n");
+    if (all) return all;
+    if (share_options(cl, &j->ro)) return dp_exit_status(DP_ERROR_INTERNAL); /* MPI reports its own failures */
+    long cores = sysconf(_SC_NPROCESSORS_ONLN);
+    if (j->ro.threads == 0 && cores > 0)
+        j->ro.threads = cores / cl->ranks_on_node > 0 ? (int)(cores / cl->ranks_on_node) : 1;
+    return 0;
+}
+
+int render_run_refused(const render_cluster *cluster, int status)
+{
+    return cluster && cluster->size > 1 ? cluster->agree_rc(cluster, status) : status;
+}
+
+/* Rank 0, before the render: the scene's notes, the plan (--verbose), the warnings and the cluster. */
+static void announce(const render_run_job *j)
+{
+    if (j->rank != 0) return;
+    if (j->s.notes) fputs(j->s.notes, stderr);
+    if (j->rq->verbose) fprintf(stderr, "plan: %s\n", j->plan_json);
+    run_warn(&j->s, &j->p);
+    if (j->cl && !j->quiet)
+        fprintf(stderr, "cluster: %d ranks (%d on this machine, %d threads each); iteration i runs on rank i mod %d\n",
+                j->cl->size, j->cl->ranks_on_node, j->ro.threads, j->cl->size);
+}
+
+static void set_up_render(render_run_job *j)
+{
+    render_options *ro = &j->ro;
+    ro->plan = &j->p;
+    ro->progress = !j->quiet;
+    ro->after_pass = checkpoint_after_pass;
+    ro->after_pass_ctx = &j->cp;
+    ro->cluster = j->cl;
+    /* with several ranks the films are summed for checkpoints and log rows only when one is due */
+    double log_every = j->rq->log_every;
+    ro->gather_every = j->cp.every > 0 ? j->cp.every : 0.0;
+    if (j->cp.log && (ro->gather_every == 0.0 || log_every < ro->gather_every))
+        ro->gather_every = log_every > 0 ? log_every : 1e-9;
+}
+
+/* The completed passes to the output, or to a rescue folder when that fails: finished work is never thrown
+ * away. 0, or -1 with err (the write that failed) when the images had to go elsewhere, or nowhere. */
+static int write_outputs(const render_run_job *j, const film *f, dp_error *err)
+{
+    const char *integrator = j->p.type_name;
+    int skip = j->rq->skip;
+    if (!render_write_outputs(f, j->out, integrator, j->plan_json, skip, print_written, err)) return 0;
+    say_error(err, "");
+    char rescue[OUTPUT_PATH_MAX];
+    dp_error rescue_err = *err;
+    if (render_write_rescue(f, j->out, integrator, j->plan_json, skip, print_written, rescue, sizeof rescue, &rescue_err))
+        fprintf(stderr, "dartspp render: no rescue folder took the images either (%s): they are lost\n", rescue_err.msg);
+    else
+        fprintf(stderr, "dartspp render: the images of the %ld completed passes were written to %s instead\n",
+                f->passes, rescue);
+    return -1;
+}
+
+/* The render, the error log's last row, the summary and the outputs. Returns
+ * the exit status: the first error's (the render's, the error log's, the final write's), else that of an
+ * interrupt, else 0. */
+static int render_and_write(render_run_job *j)
+{
+    film f;
+    render_stats st;
+    dp_error err, werr;
+    int failed = render_scene(&j->s, &j->ro, &f, &st, &err) != 0;
+    if (failed) {
+        /* a rank stopped by another rank's error leaves the telling to that rank and to rank 0 */
+        if (j->rank == 0 || err.kind != DP_ERROR_RANK) say_error(&err, j->rank ? " (a rank other than 0)" : "");
+    } else if (j->cp.log && error_log_pass(j->cp.log, &f, &st, 1, &err)) {
+        say_error(&err, "");
+        failed = 1;
+    }
+    if (!failed && j->rank == 0) run_print_summary(j, &st);
+    if (j->rank != 0) {
+        /* nothing to write here: rank 0 holds the summed film */
+    } else if (f.passes > 0) {
+        if (write_outputs(j, &f, &werr) && !failed) {
+            err = werr;
+            failed = 1;
+        }
+    } else if (st.interrupted)
+        fprintf(stderr, "dartspp render: interrupted before the first pass completed: nothing written\n");
+    film_free(&f);
+    if (failed) return dp_exit_status(err.kind);
+    return st.interrupted ? dp_exit_status(DP_ERROR_INTERRUPTED) : 0;
+}
+
+int render_run(const render_request *rq, const render_cluster *cluster)
+{
+    render_run_job *j = &job;
+    start(j, rq, cluster);
+    dp_error err;
+    int status = 0;
+    if (run_prepare(j, &err)) {
+        say_error(&err, "");
+        status = dp_exit_status(err.kind);
+    }
+    if (j->cl) status = agree_to_start(j, status);
+    if (!status) {
+        announce(j);
+        set_up_render(j);
+        status = render_and_write(j);
+    }
+    run_release(j);
+    return status;
+}

@@ -1,0 +1,58 @@
+/* Inside the render module: one run of the render command (render_run), shared by run.c (the sequence),
+ * run_prepare.c (everything before any work), checkpoint.c, summary.c, warnings.c and interrupt.c. */
+#ifndef DARTSPP_RENDER_RUN_INTERNAL_H
+#define DARTSPP_RENDER_RUN_INTERNAL_H
+
+#include "dartspp/render.h"
+
+/* After every pass (render_options.after_pass): a row of the error log when one is due, and every `every`
+ * seconds of rendering a checkpoint, the outputs of all completed passes written atomically (an
+ * interrupted or killed render keeps the last complete set). */
+typedef struct {
+    const render_plan *p;
+    const char *plan_json;
+    const char *out;
+    double every, last;  /* seconds between checkpoints (0: none), and when the last one was written */
+    int quiet;
+    int skip;            /* render_write_outputs */
+    error_log *log;      /* --log: error against --reference (may be NULL) */
+} checkpoints;
+
+int checkpoint_after_pass(void *ctx, const film *f, const render_stats *st, dp_error *err);
+
+/* What one run works on: the request, the scene, its plan, and where the images go. */
+typedef struct {
+    const render_request *rq;
+    const render_cluster *cl; /* several ranks; NULL: this process alone */
+    int rank;
+    int quiet;                /* the request's --quiet; every rank but 0 is quiet */
+    int prepared;             /* run_prepare succeeded: the scene and the plan are held */
+    scene s;
+    render_plan p;
+    char plan_json[8192];
+    char out[OUTPUT_PATH_MAX];
+    memory_estimate mem;
+    double load_seconds;      /* scene_load: JSON, meshes, textures, Embree build */
+    checkpoints cp;
+    render_options ro;
+} render_run_job;
+
+/* Everything that can refuse the render before any work (run_prepare.c): 0, or -1 with err of kind
+ * DP_ERROR_INPUT whatever the cause (nothing has been rendered), the job holding nothing. */
+int run_prepare(render_run_job *j, dp_error *err);
+/* Frees what run_prepare took (the error log, the plan and the scene). */
+void run_release(render_run_job *j);
+
+/* Warnings about the scene before the render: parts of it the chosen integrator or DARTS samplers render
+ * with a known bias or not at all (warnings.c). */
+void run_warn(const scene *s, const render_plan *p);
+
+/* The run summary on stdout: scene, gate, passes and rates, the photon-pass samplers, statistics, memory
+ * and the error log's overhead (summary.c). */
+void run_print_summary(const render_run_job *j, const render_stats *st);
+
+/* SIGINT and SIGTERM from here on (interrupt.c): the first one sets ro->stop once ro->passes_started is set
+ * (the pass in progress is dropped, the completed passes are written), else the process exits at once. */
+void interrupt_install(render_options *ro);
+
+#endif

@@ -1,0 +1,121 @@
+/* Before any work of a run: the scene loaded, its plan resolved, the outputs checked, the memory guard passed
+ * and the error log's reference read. Any of them can refuse the render, and a refusal is bad input whatever
+ * its cause (exit 2): nothing has been rendered yet. */
+#include <stdio.h>
+#include <string.h>
+
+#include "run_internal.h"
+
+static int refuse(dp_error *err)
+{
+    err->kind = DP_ERROR_INPUT;
+    return -1;
+}
+
+/* --output, else the scene's hdr_output_file, else <scene stem>.exr; relative to the working folder. */
+static void output_path(const render_request *rq, const scene *s, char *out, size_t n)
+{
+    if (rq->output) snprintf(out, n, "%s", rq->output);
+    else if (s->renderer.hdr_output_file[0]) snprintf(out, n, "%s", s->renderer.hdr_output_file);
+    else {
+        const char *base = strrchr(rq->scene_path, '/');
+        base = base ? base + 1 : rq->scene_path;
+        const char *dot = strrchr(base, '.');
+        snprintf(out, n, "%.*s.exr", (int)(dot ? dot - base : (long)strlen(base)), base);
+    }
+}
+
+static int load_scene(render_run_job *j, dp_error *err)
+{
+    const render_request *rq = j->rq;
+    scene_load_options lo = {.sets = rq->sets, .set_count = rq->set_count, .verbose = rq->verbose};
+    double t0 = dp_seconds();
+    if (scene_load(rq->scene_path, &lo, &j->s, err)) return -1;
+    j->load_seconds = dp_seconds() - t0;
+    return 0;
+}
+
+static int resolve_plan(render_run_job *j, dp_error *err)
+{
+    if (plan_resolve(&j->s, &j->p, err)) return -1;
+    if (plan_json(&j->p, &j->s, j->plan_json, sizeof j->plan_json))
+        return dp_fail_kind(err, DP_ERROR_INTERNAL, "%s: plan too long", j->s.path);
+    return 0;
+}
+
+/* Rank 0 writes the outputs, so rank 0 checks where they go. */
+static int check_outputs(render_run_job *j, dp_error *err)
+{
+    if (j->rank != 0) return 0;
+    return render_outputs_check(j->out, j->s.cam.width, j->s.cam.height, j->p.window.frame_count, j->rq->skip, err);
+}
+
+/* The memory guard: the plan's estimate against the limit, naming the key that drives it when it does not
+ * fit. Every rank on this machine needs as much. */
+static int check_memory(render_run_job *j, dp_error *err)
+{
+    const render_request *rq = j->rq;
+    int ranks_on_node = j->cl ? j->cl->ranks_on_node : 1;
+    render_memory_estimate(&j->s, &j->p, rq->reference != NULL, &j->mem);
+    const memory_estimate *m = &j->mem;
+    double limit = rq->max_memory > 0 ? rq->max_memory : memory_available();
+    if (ranks_on_node > 1 && limit > 0) limit /= ranks_on_node;
+    if (!(limit > 0) || m->total <= limit) return 0;
+    const memory_item *big = memory_largest(m);
+    char need[32], have[32], item[32], drives[256] = "";
+    memory_format_bytes(m->total, need, sizeof need);
+    memory_format_bytes(limit, have, sizeof have);
+    if (big) {
+        memory_format_bytes(big->bytes, item, sizeof item);
+        snprintf(drives, sizeof drives, "; %s drives it (%s: %s)", big->key, big->what, item);
+    }
+    return dp_fail(err, "%s: the render needs about %s of memory, more than the %s %s%s%s", j->s.path, need, have,
+                   rq->max_memory > 0 ? "allowed by --max-memory" : "available",
+                   ranks_on_node > 1 ? " to each of the ranks on this machine" : "", drives);
+}
+
+/* Checkpoints are rank 0's, every --checkpoint seconds, else as the scene says. */
+static void set_up_checkpoints(render_run_job *j)
+{
+    const render_request *rq = j->rq;
+    j->cp = (checkpoints){.p = &j->p, .plan_json = j->plan_json, .out = j->out, .quiet = j->quiet, .skip = rq->skip,
+                          .every = j->rank != 0 ? 0 : rq->checkpoint >= 0 ? rq->checkpoint : j->p.checkpoint_seconds};
+}
+
+/* The error log is rank 0's; its reference is read here, before any rank renders. */
+static int open_error_log(render_run_job *j, dp_error *err)
+{
+    const render_request *rq = j->rq;
+    if (j->rank != 0 || !rq->log) return 0;
+    j->cp.log = error_log_open(rq->log, rq->reference, j->s.cam.width, j->s.cam.height, j->p.window.frame_count,
+                               rq->log_every, err);
+    return j->cp.log ? 0 : -1;
+}
+
+int run_prepare(render_run_job *j, dp_error *err)
+{
+    if (load_scene(j, err)) return refuse(err);
+    int rc = resolve_plan(j, err);
+    output_path(j->rq, &j->s, j->out, sizeof j->out);
+    if (!rc) rc = check_outputs(j, err) || check_memory(j, err);
+    if (!rc) {
+        set_up_checkpoints(j);
+        rc = open_error_log(j, err);
+    }
+    if (rc) {
+        plan_free(&j->p);
+        scene_free(&j->s);
+        return refuse(err);
+    }
+    j->prepared = 1;
+    return 0;
+}
+
+void run_release(render_run_job *j)
+{
+    if (!j->prepared) return;
+    error_log_close(j->cp.log);
+    plan_free(&j->p);
+    scene_free(&j->s);
+    j->prepared = 0;
+}

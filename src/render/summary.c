@@ -1,0 +1,146 @@
+/* The run summary on stdout: the scene and its gate, passes and ray rates, which photon-pass samplers ran,
+ * the photon statistics, the cluster's overhead, the memory and the error log's. */
+#include <stdio.h>
+#include <sys/resource.h>
+
+#include "dartspp/darts.h"
+#include "run_internal.h"
+
+/* Where the camera sees a surface it continues through: how control vertices are split, and strict mode. */
+static void print_continued_surfaces(const scene *s, const darts_plan *d)
+{
+    printf("; behind continued surfaces (the camera sees '%s'):", d->side.first);
+    if (d->cv_multi) {
+        printf(" control vertices %.0f %% straight", 100.0 * d->cv_share[0]);
+        for (int k = 0; k < d->side.mirror_count; k++)
+            printf(", %.0f %% at the mirror image in '%s'", 100.0 * d->cv_share[1 + k],
+                   s->surfaces[d->side.mirror_surface[k]].name);
+        printf(", %.0f %% defensive free flight", 100.0 * d->cv_defensive);
+    }
+    if (d->strict) printf("%s strict mode keeps every surface photon a camera path could gather", d->cv_multi ? ";" : "");
+}
+
+static void print_unwarped(const scene *s, const darts_plan *d)
+{
+    printf("; camera-unwarped time: control vertices %s", d->control_vertices ? "on the light leg's equal-time "
+           "spheres" : d->unwarped_mirror_off ? "off (the camera sees a continued surface, whose later camera "
+           "segments count)" : "off");
+    if (s->integrator.enable_guiding) printf(", DA distance sampling off (it aims at the camera's ellipsoid)");
+}
+
+/* EDA per medium, and the media where DARTS does not sample (they do not scatter). */
+static void print_media(const scene *s, const render_plan *p)
+{
+    for (int i = 0; i < s->medium_count; i++)
+        if (p->eda[i].asked_unwarped) printf("; EDA off in '%s' (camera-unwarped time)", s->media[i].name);
+    const char *sep = "; EDA direction sampling in ";
+    for (int i = 0; i < s->medium_count; i++) {
+        if (!p->eda[i].on) continue;
+        printf("%s'%s' (alpha %g)", sep, s->media[i].name, p->eda[i].alpha);
+        sep = ", ";
+    }
+    printf("%s", sep[0] == ';' ? "; EDA off" : "");
+    sep = "; no DARTS sampling in the non-scattering media ";
+    for (int i = 0; i < s->medium_count; i++) {
+        if (medium_scatters(&s->media[i])) continue;
+        printf("%s'%s'", sep, s->media[i].name);
+        sep = ", ";
+    }
+}
+
+/* Which photon-pass samplers run (docs/design.md §4.3: the summary says which parts are active). */
+static void print_samplers(const scene *s, const render_plan *p)
+{
+    const darts_plan *d = &p->darts;
+    if (!d->active) {
+        printf("photon pass: baseline (free-flight distances, photons at scattering vertices)%s\n",
+               (d->distance_sampling || d->elliptical_asked) ? "; DARTS samplers off: the scene has no medium or no gate" : "");
+        return;
+    }
+    printf("photon pass: DARTS, %s target bins; DA distance sampling %s; elliptical control vertices %s (residual %s); "
+           "strict time %s", p->window.frame_count ? "per-frame" : "gate", d->distance_sampling ? "on" : "off",
+           d->unwarped ? "off (camera-unwarped time)" : d->control_vertices ? "on"
+           : d->elliptical_asked ? "off: refractive index not uniform" : "off",
+           d->residual == RESIDUAL_EXPONENTIAL ? "exponential" : "uniform", d->strict ? "on" : "off");
+    if (d->side.seen && d->mirrors == DARTS_MIRRORS_FULL) print_continued_surfaces(s, d);
+    if (d->unwarped) print_unwarped(s, d);
+    print_media(s, p);
+    printf("\n");
+}
+
+/* The scene, its integrator and size, and the gate or frames. */
+static void print_scene(const scene *s, const render_plan *p, double load_seconds)
+{
+    const time_window *tw = &p->window;
+    printf("scene %s (loaded in %.2f s: %u triangles, %d textures): %s, %dx%d, ", s->path, load_seconds, s->tri_count,
+           s->texture_count, p->type_name, s->cam.width, s->cam.height);
+    if (!tw->gated) printf("steady state (no gate)\n");
+    else if (tw->frame_count) printf("%d frames of width %g from %g (%s optical path length)\n", tw->frame_count, tw->width,
+                                     tw->start, tw->camera_unwarp ? "camera-unwarped" : "camera-warped");
+    else printf("gate [%g, %g) (%s optical path length)\n", tw->start, time_window_end(tw),
+                tw->camera_unwarp ? "camera-unwarped" : "camera-warped");
+}
+
+/* The light paths: early exits, the volume budget, surface chains, rates, times and radii. */
+static void print_photon_stats(const render_stats *st)
+{
+    if (st->early_exits > 0)
+        printf("early exit: %.1f%% of the light paths ended as soon as no photon could reach their bin\n",
+               100.0 * st->early_exits / st->photon_paths);
+    if (st->aimed_paths > 0 && st->aimed_paths < st->photon_paths)
+        printf("volume budget: full after %.1f%% of the light paths; the rest fed only the surface map "
+               "(free flight, no control vertices)\n",
+               100.0 * st->aimed_paths / st->photon_paths);
+    if (st->chain_paths > 0)
+        printf("surface chains: %.1f%% of the light paths; %.2f%% of the independent ones stored a surface photon "
+               "that can count; %.1f%% of the small steps accepted\n",
+               100.0 * st->chain_paths / st->photon_paths, 100.0 * st->chain_visible / fmax(st->chain_large, 1.0),
+               100.0 * st->chain_accepted / fmax(st->chain_small, 1.0));
+    if (st->photon_paths > 0)
+        printf("photon points: %.3g photon paths (%.2f M/s in the photon pass), %.3g photons stored; "
+               "time in photon pass %.2f s, map builds %.2f s, sensor pass %.2f s; last radii r_vol %.4g, R_surf %.4g\n",
+               st->photon_paths, st->t_photon > 0 ? st->photon_paths / st->t_photon * 1e-6 : 0.0, st->stored_photons,
+               st->t_photon, st->t_maps, st->t_gather, st->r_vol, st->r_surf);
+}
+
+/* Several ranks: the film reductions and rank 0's time in them. */
+static void print_cluster(const scene *s, const render_plan *p, const render_stats *st)
+{
+    double px = (double)s->cam.width * s->cam.height;
+    char each[32];
+    memory_format_bytes(px * 3 * sizeof(double) + px * 3 * sizeof(float) * p->window.frame_count + 12 * sizeof(double),
+                        each, sizeof each);
+    printf("cluster: %ld film reductions of %s from each rank; rank 0 spent %.3f s in the rounds' agreement and "
+           "the reductions (%.2f%% of the render); photon-pass and sensor-pass times above are summed over the ranks\n",
+           st->reductions, each, st->t_cluster, st->seconds > 0 ? 100.0 * st->t_cluster / st->seconds : 0.0);
+}
+
+static void print_summary(const scene *s, const render_plan *p, const render_stats *st, double load_seconds)
+{
+    print_scene(s, p, load_seconds);
+    printf("rendered %ld passes in %.2f s (%.2f M camera rays/s, %.2f M rays/s)%s; non-finite samples suppressed: %ld\n",
+           st->passes, st->seconds, st->seconds > 0 ? st->camera_rays / st->seconds * 1e-6 : 0.0,
+           st->seconds > 0 ? st->rays / st->seconds * 1e-6 : 0.0, st->interrupted ? " (interrupted)" : "", st->nonfinite);
+    if (p->type == INTEGRATOR_PHOTON_POINTS) print_samplers(s, p);
+    print_photon_stats(st);
+    if (st->reductions > 0) print_cluster(s, p, st);
+}
+
+static void print_memory(const memory_estimate *m)
+{
+    struct rusage ru;
+    char est[32], peak[32] = "unknown";
+    memory_format_bytes(m->total, est, sizeof est);
+    if (getrusage(RUSAGE_SELF, &ru) == 0) memory_format_bytes(ru.ru_maxrss * 1024.0, peak, sizeof peak);
+    printf("memory: estimated %s before the render, peak resident %s\n", est, peak);
+}
+
+void run_print_summary(const render_run_job *j, const render_stats *st)
+{
+    print_summary(&j->s, &j->p, st, j->load_seconds);
+    print_memory(&j->mem);
+    const error_log *log = j->cp.log;
+    if (log)
+        printf("error log: %s (%.3f s spent logging, %.2f%% of the render)\n", j->rq->log, error_log_overhead(log),
+               st->seconds > 0 ? 100.0 * error_log_overhead(log) / st->seconds : 0.0);
+}
