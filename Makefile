@@ -77,7 +77,7 @@ build/dartspp: $(CLI_SRC) build/libdartspp.a
 # dartspp-mpi: the same program with the render shared by MPI ranks (include/dartspp/cluster.h)
 # (two sources in one command: -MMD would keep only the second one's headers, so -MM lists both first)
 build/dartspp-mpi: $(CLI_SRC) $(MPI_SRC) build/libdartspp.a
-	OMPI_CC=$(CC) $(MPICC) $(CFLAGS) -DDARTSPP_MPI -MM -MP -MT $@ -MF $@.d $(CLI_SRC) $(MPI_SRC)
+	OMPI_CC=$(CC) $(MPICC) $(CFLAGS) -DDARTSPP_MPI -MM -MP -MT $@ $(CLI_SRC) $(MPI_SRC) > $@.d.tmp && mv $@.d.tmp $@.d
 	OMPI_CC=$(CC) $(MPICC) $(CFLAGS) $(LTO) -DDARTSPP_MPI $(CLI_SRC) $(MPI_SRC) build/libdartspp.a $(LDLIBS) -o $@
 
 build/san/obj/%.o: src/%.c | $(DEPS_STAMP)
@@ -99,7 +99,7 @@ build/san/tests/%: build/san/test-obj/%.o $(FIX_OBJ) build/san/libdartspp.a
 	@mkdir -p $(dir $@)
 	$(CC) $(CFLAGS) $(SAN_FLAGS) $< $(FIX_OBJ) build/san/libdartspp.a $(LDLIBS) -lcmocka -o $@
 
-.SECONDARY: $(TEST_OBJ)
+.SECONDARY: $(TEST_OBJ) $(FIX_OBJ)
 
 # The README's test command. Unit, estimator and end-to-end tests, all under ASan + UBSan.
 test: build/dartspp build/dartspp-mpi build/san/dartspp $(TEST_BIN)
