@@ -20,16 +20,36 @@ LIB_SRC  = $(filter-out src/cli/main.c src/cluster/%,$(wildcard src/*/*.c))
 MPI_SRC  = src/cluster/cluster_mpi.c
 MPICC   ?= mpicc
 CLI_SRC  = src/cli/main.c
+# tests/test_*.c are the test programs, one binary each; the other tests/*.c are the fixtures they share,
+# compiled once and linked into every test program.
 TEST_SRC = $(wildcard tests/test_*.c)
+FIX_SRC  = $(filter-out $(TEST_SRC),$(wildcard tests/*.c))
+# Header dependencies: every compile writes the headers it read into a .d file beside its output (-MMD -MP),
+# which this Makefile includes at the end, so a header edit rebuilds exactly what includes it.
+DEPFLAGS = -MMD -MP
 
 # release build
 OBJ      = $(LIB_SRC:src/%.c=build/obj/%.o)
 # sanitizer build: the tests and a sanitized dartspp run under ASan + UBSan
 SAN_FLAGS = -O1 -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=undefined
 SAN_OBJ  = $(LIB_SRC:src/%.c=build/san/obj/%.o)
+TEST_OBJ = $(TEST_SRC:tests/%.c=build/san/test-obj/%.o)
+FIX_OBJ  = $(FIX_SRC:tests/%.c=build/san/test-obj/%.o)
 TEST_BIN = $(TEST_SRC:tests/%.c=build/san/tests/%)
 
-.PHONY: all deps test run clean stress reference bench-quick
+# The quick tier (`make check`, for the edit-test loop), declared here and nowhere else: the unit tests (a new
+# unit-test program belongs in the first lines), then one small consistency render per integrator, each against an
+# independent reference: the path tracer (test_single_scatter: every pixel against quadrature) and baseline and
+# DARTS photon points (test_photon_single_scatter: image totals against quadrature), with the path tracer's end to
+# end checks (test_render). `make test` runs every test program, these included. Its time: tests/README.md.
+QUICK_TESTS = test_bsdf test_bsdf_models test_darts test_eda test_free_flight test_replay test_radius_schedule \
+              test_surface_map test_volume_map test_plan test_transform_mesh test_texture test_paper_scenes \
+              test_scene_values test_scene_errors test_fuzz_readers test_exr test_image_files test_metrics \
+              test_atomic_writes test_cube \
+              test_render test_single_scatter test_photon_single_scatter
+QUICK_BIN   = $(QUICK_TESTS:%=build/san/tests/%)
+
+.PHONY: all deps test check run clean stress reference bench-quick
 all: build/dartspp build/dartspp-mpi
 
 deps: $(DEPS_STAMP)
@@ -44,45 +64,58 @@ $(DEPS_STAMP): Makefile
 	fi
 	@mkdir -p build && touch $@
 
-build/obj/%.o: src/%.c $(wildcard include/dartspp/*.h src/*/*.h) | $(DEPS_STAMP)
+build/obj/%.o: src/%.c | $(DEPS_STAMP)
 	@mkdir -p $(dir $@)
-	$(CC) $(CFLAGS) $(LTO) -c $< -o $@
+	$(CC) $(CFLAGS) $(DEPFLAGS) $(LTO) -c $< -o $@
 
 build/libdartspp.a: $(OBJ)
 	$(if $(LTO),gcc-ar,$(AR)) rcs $@ $^
 
 build/dartspp: $(CLI_SRC) build/libdartspp.a
-	$(CC) $(CFLAGS) $(LTO) $< build/libdartspp.a $(LDLIBS) -o $@
+	$(CC) $(CFLAGS) $(DEPFLAGS) $(LTO) $< build/libdartspp.a $(LDLIBS) -o $@
 
 # dartspp-mpi: the same program with the render shared by MPI ranks (include/dartspp/cluster.h)
+# (two sources in one command: -MMD would keep only the second one's headers, so -MM lists both first)
 build/dartspp-mpi: $(CLI_SRC) $(MPI_SRC) build/libdartspp.a
+	OMPI_CC=$(CC) $(MPICC) $(CFLAGS) -DDARTSPP_MPI -MM -MP -MT $@ $(CLI_SRC) $(MPI_SRC) > $@.d.tmp && mv $@.d.tmp $@.d
 	OMPI_CC=$(CC) $(MPICC) $(CFLAGS) $(LTO) -DDARTSPP_MPI $(CLI_SRC) $(MPI_SRC) build/libdartspp.a $(LDLIBS) -o $@
 
-build/san/obj/%.o: src/%.c $(wildcard include/dartspp/*.h src/*/*.h) | $(DEPS_STAMP)
+build/san/obj/%.o: src/%.c | $(DEPS_STAMP)
 	@mkdir -p $(dir $@)
-	$(CC) $(CFLAGS) $(SAN_FLAGS) -c $< -o $@
+	$(CC) $(CFLAGS) $(SAN_FLAGS) $(DEPFLAGS) -c $< -o $@
 
 build/san/libdartspp.a: $(SAN_OBJ)
 	$(AR) rcs $@ $^
 
 build/san/dartspp: $(CLI_SRC) build/san/libdartspp.a
-	$(CC) $(CFLAGS) $(SAN_FLAGS) $< build/san/libdartspp.a $(LDLIBS) -o $@
+	$(CC) $(CFLAGS) $(SAN_FLAGS) $(DEPFLAGS) $< build/san/libdartspp.a $(LDLIBS) -o $@
 
-build/san/tests/%: tests/%.c tests/test_util.h build/san/libdartspp.a
+# Test programs and fixtures are compiled to objects, then linked: a library edit relinks the programs.
+build/san/test-obj/%.o: tests/%.c | $(DEPS_STAMP)
 	@mkdir -p $(dir $@)
-	$(CC) $(CFLAGS) $(SAN_FLAGS) $< build/san/libdartspp.a $(LDLIBS) -lcmocka -o $@
+	$(CC) $(CFLAGS) $(SAN_FLAGS) $(DEPFLAGS) -c $< -o $@
+
+build/san/tests/%: build/san/test-obj/%.o $(FIX_OBJ) build/san/libdartspp.a
+	@mkdir -p $(dir $@)
+	$(CC) $(CFLAGS) $(SAN_FLAGS) $< $(FIX_OBJ) build/san/libdartspp.a $(LDLIBS) -lcmocka -o $@
+
+.SECONDARY: $(TEST_OBJ) $(FIX_OBJ)
 
 # The README's test command. Unit, estimator and end-to-end tests, all under ASan + UBSan.
 test: build/dartspp build/dartspp-mpi build/san/dartspp $(TEST_BIN)
-	@tests/run_tests.sh build/san/tests
+	@tests/run_tests.sh $(TEST_BIN)
+
+# The quick tier (QUICK_TESTS above), with the same closing line as `make test`.
+check: build/san/dartspp $(QUICK_BIN)
+	@tests/run_tests.sh $(QUICK_BIN)
 
 # The whole stress matrix (extreme media, anisotropy, gates, scales, geometry): the estimator-level cases of
 # tests/test_darts.c and tests/test_eda.c, the renders of tests/test_stress.c and all 18 material cases of
-# tests/test_materials.c (how long: tests/README.md). `make test` runs a fast subset of each. DARTSPP_STRESS_ONLY=text picks render cases by name.
+# tests/test_materials.c, under ASan (its time: tests/README.md). `make test` runs a fast subset of each.
+# DARTSPP_STRESS_ONLY=text picks render cases by name.
 STRESS_TESTS = build/san/tests/test_darts build/san/tests/test_eda build/san/tests/test_stress build/san/tests/test_materials
 stress: $(STRESS_TESTS)
-	@rm -rf build/san/stress && mkdir -p build/san/stress && cp $(STRESS_TESTS) build/san/stress/
-	@DARTSPP_STRESS=full tests/run_tests.sh build/san/stress
+	@DARTSPP_STRESS=full tests/run_tests.sh $(STRESS_TESTS)
 
 # The demo: fog-filled Cornell box, pulsed point light, a gate where multiple scattering dominates.
 run: build/dartspp
@@ -92,9 +125,12 @@ run: build/dartspp
 reference: build/dartspp
 	bench/reference.sh $(SCENE) $(or $(TIME),600) $(or $(OUT),refs/$(basename $(notdir $(SCENE)))-pt.exr)
 
-# Benchmarks in under 5 minutes on 2 cores: reference, equal-time table, convergence plot, transient curve.
+# A tour of the benchmarks on 2 cores (bench/quick.sh): reference, equal-time table, convergence plot, transient curve.
 bench-quick: build/dartspp
 	bench/quick.sh
 
 clean:
 	rm -rf build out
+
+-include $(OBJ:.o=.d) $(SAN_OBJ:.o=.d) $(TEST_OBJ:.o=.d) $(FIX_OBJ:.o=.d) build/dartspp.d build/dartspp-mpi.d \
+         build/san/dartspp.d

@@ -1,16 +1,22 @@
 #!/usr/bin/env bash
-# Runs every cmocka test binary in a folder and prints one closing line "N passed, M failed, K skipped".
+# Runs cmocka test programs and prints one closing line "N passed, M failed, K skipped": the programs named
+# (`make test`, `make check`), or every test_* program in a folder (default build/san/tests).
 # A skipped test (cmocka's skip(): e.g. the paper's scenes are not beside the checkout) is named with the
 # reason it printed and is not a failure. Exit status 0 iff nothing failed and something passed.
 set -u
-dir=${1:-build/san/tests}
+if [ $# -eq 0 ] || { [ $# -eq 1 ] && [ -d "$1" ]; }; then
+  set -- "${1:-build/san/tests}"/test_*
+fi
 export ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=0}
 export UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}
 export CMOCKA_MESSAGE_OUTPUT=stdout
 passed=0; failed=0; skipped=0; broken=""
 start=$(date +%s)
-for t in "$dir"/test_*; do
-  [ -x "$t" ] || continue
+for t in "$@"; do
+  if [ ! -e "$t" ]; then # named but not built
+    echo "$t: no such test program"; failed=$((failed + 1)); broken="$broken $(basename "$t")"; continue
+  fi
+  [ -f "$t" ] && [ -x "$t" ] || continue
   name=$(basename "$t")
   t0=$(date +%s)
   out=$("$t" 2>&1); rc=$?

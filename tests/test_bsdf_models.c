@@ -251,7 +251,7 @@ static void test_names_lobes_defaults(void **state)
 
 static void expect_rejected(bsdf *b, const char *what)
 {
-    dp_error err = {{0}};
+    dp_error err = {0};
     snprintf(b->name, sizeof b->name, "shiny_thing");
     if (bsdf_prepare(b, &err) == 0) fail_msg("bsdf_prepare accepted %s", what);
     if (!strstr(err.msg, "shiny_thing")) fail_msg("error for %s does not name the bsdf: %s", what, err.msg);

@@ -206,14 +206,6 @@ static void demo_scene(const char *wall, const char *const *sets, int nsets, sce
     *dir_out = dir;
 }
 
-static void drop_dir(char *dir)
-{
-    char cmd[700];
-    snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir);
-    (void)!system(cmd);
-    free(dir);
-}
-
 static void test_bit_identical_without_mirrors(void **state)
 {
     (void)state;
@@ -239,7 +231,7 @@ static void test_bit_identical_without_mirrors(void **state)
         memcpy(sums[m], f.sum, n * sizeof(double));
         film_free(&f);
         scene_free(&s);
-        drop_dir(dir);
+        test_rmtree(dir);
     }
     double total = 0.0;
     for (size_t i = 0; i < n; i++) total += sums[0][i];
@@ -312,7 +304,7 @@ static void render_totals(const char *wall, const char *method, long passes, uin
     assert_int_equal(st.nonfinite, 0);
     film_free(&f);
     scene_free(&s);
-    drop_dir(dir);
+    test_rmtree(dir);
 }
 
 #define Z_CRIT 4.0

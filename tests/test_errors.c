@@ -21,7 +21,7 @@ static void test_exit_status_of_each_kind(void **state)
 static void test_fail_sets_kind_and_message(void **state)
 {
     (void)state;
-    dp_error err = {{0}};
+    dp_error err = {0};
     assert_int_equal(err.kind, DP_ERROR_INPUT);
     assert_int_equal(dp_fail_kind(&err, DP_ERROR_MEMORY, "%s: out of memory", "x"), -1);
     assert_int_equal(err.kind, DP_ERROR_MEMORY);
@@ -36,7 +36,7 @@ static void test_fail_sets_kind_and_message(void **state)
 static void test_io_errors_have_their_kind(void **state)
 {
     (void)state;
-    dp_error err = {{0}};
+    dp_error err = {0};
     image_rgb img = {0};
     assert_int_not_equal(image_read("/nonexistent/a.exr", &img, &err), 0);
     assert_int_equal(err.kind, DP_ERROR_INPUT);

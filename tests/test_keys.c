@@ -4,17 +4,12 @@
  * (the `dartspp.plan` of every EXR); a key the chosen integrator does not read is reported; every bound and
  * choice of the table is enforced with a message naming the file and key; docs/keys.md is the output of
  * `dartspp keys --markdown`. */
-#include "test_util.h"
+#include "fixtures.h"
 
 #include <cjson/cJSON.h>
 #include <dirent.h>
 
 #include "dartspp/plan.h"
-
-#define ASSERT_NOTE(notes, needle)                                                                               \
-    do {                                                                                                          \
-        if (!strstr((notes), (needle))) fail_msg("expected \"%s\" in:\n%s", (needle), (notes));                  \
-    } while (0)
 
 #define BASE_SCENE "scenes/fogbox/fogbox.json" /* photon points (DARTS), gated, a small Cornell box */
 #define KEYS_DOC "docs/keys.md"
@@ -159,13 +154,9 @@ static int loader_accepts_in_file(const char *section, const char *key, const ch
 /* Adds the integrator and renderer key names of one scene file to names (section.key, no duplicates). */
 static void collect_file_keys(const char *path, char names[][80], int *n, int max)
 {
-    FILE *f = fopen(path, "rb");
-    if (!f) return;
-    static char text[1 << 20];
-    size_t len = fread(text, 1, sizeof text - 1, f);
-    fclose(f);
-    text[len] = 0;
+    char *text = read_all(path, NULL);
     cJSON *root = cJSON_Parse(text);
+    free(text);
     for (int sec = KEY_SECTION_INTEGRATOR; root && sec <= KEY_SECTION_RENDERER; sec++) {
         const cJSON *obj = cJSON_GetObjectItem(root, scene_key_section_name(sec));
         for (const cJSON *it = obj ? obj->child : NULL; it; it = it->next)
@@ -280,19 +271,19 @@ static void test_unread_keys_reported(void **state)
     char notes[8192];
     const char *pt_guided[] = {"type=path_tracer", "enable_guiding=true", "enable_elliptical=true"};
     notes_of(pt_guided, 3, 0, notes, sizeof notes);
-    ASSERT_NOTE(notes, "warning: " BASE_SCENE ": integrator.enable_guiding: the path_tracer integrator does not read");
-    ASSERT_NOTE(notes, "integrator.enable_elliptical: the path_tracer integrator does not read");
+    ASSERT_CONTAINS(notes, "warning: " BASE_SCENE ": integrator.enable_guiding: the path_tracer integrator does not read");
+    ASSERT_CONTAINS(notes, "integrator.enable_elliptical: the path_tracer integrator does not read");
     const char *pt_plain[] = {"type=path_tracer", "enable_guiding=false"};
     notes_of(pt_plain, 2, 1, notes, sizeof notes);
     if (strstr(notes, "enable_guiding: the path_tracer")) fail_msg("a key at its default warned:\n%s", notes);
-    ASSERT_NOTE(notes, "ignored key: integrator.enable_guiding (not read by path_tracer)");
+    ASSERT_CONTAINS(notes, "ignored key: integrator.enable_guiding (not read by path_tracer)");
     const char *pp_rr[] = {"enable_rr=false"};
     notes_of(pp_rr, 1, 0, notes, sizeof notes);
-    ASSERT_NOTE(notes, "integrator.enable_rr: the progressive_transient_photon_map integrator does not read");
+    ASSERT_CONTAINS(notes, "integrator.enable_rr: the progressive_transient_photon_map integrator does not read");
     const char *pp_read[] = {"enable_guiding=false", "scene_bvh=true"};
     notes_of(pp_read, 2, 1, notes, sizeof notes);
     if (strstr(notes, "enable_guiding")) fail_msg("a key photon points read was reported:\n%s", notes);
-    ASSERT_NOTE(notes, "ignored key: renderer.scene_bvh (accepted from the format, not read by dartspp)");
+    ASSERT_CONTAINS(notes, "ignored key: renderer.scene_bvh (accepted from the format, not read by dartspp)");
 }
 
 /* The paper's DARTS path-tracer scene: its DARTS keys are reported as not read (until the path tracer reads them). */
@@ -306,8 +297,8 @@ static void test_paper_path_trace_darts_keys_reported(void **state)
     dp_error err = {0};
     scene_load_options opt = {0};
     assert_int_equal(scene_load(path, &opt, &s, &err), 0);
-    ASSERT_NOTE(s.notes, "integrator.enable_guiding: the path_tracer integrator does not read");
-    ASSERT_NOTE(s.notes, "integrator.enable_elliptical: the path_tracer integrator does not read");
+    ASSERT_CONTAINS(s.notes, "integrator.enable_guiding: the path_tracer integrator does not read");
+    ASSERT_CONTAINS(s.notes, "integrator.enable_elliptical: the path_tracer integrator does not read");
     scene_free(&s);
 }
 
@@ -348,7 +339,7 @@ static void test_object_keys_nobody_reads(void **state)
     snprintf(notes, sizeof notes, "%s", s.notes ? s.notes : "");
     scene_free(&s);
     print_message("%s", notes);
-    for (size_t i = 0; i < sizeof expected / sizeof *expected; i++) ASSERT_NOTE(notes, expected[i]);
+    for (size_t i = 0; i < sizeof expected / sizeof *expected; i++) ASSERT_CONTAINS(notes, expected[i]);
     for (size_t i = 0; i < sizeof read / sizeof *read; i++)
         if (strstr(notes, read[i])) fail_msg("%s was read, yet listed as ignored", read[i]);
 }
@@ -425,20 +416,18 @@ static void test_bounds_and_choices_enforced(void **state)
 static void test_keys_doc_is_generated(void **state)
 {
     (void)state;
-    static char printed[1 << 16], doc[1 << 17];
+    static char printed[1 << 16];
     assert_int_equal(test_run(DARTSPP_BIN " keys --markdown", printed, sizeof printed), 0);
-    FILE *f = fopen(KEYS_DOC, "rb");
-    assert_non_null(f);
-    size_t len = fread(doc, 1, sizeof doc - 1, f);
-    fclose(f);
-    doc[len] = 0;
+    char *doc = read_all(KEYS_DOC, NULL);
     const char *begin_mark = "<!-- begin: dartspp keys --markdown -->\n", *end_mark = "<!-- end: dartspp keys --markdown -->";
     char *begin = strstr(doc, begin_mark), *end = begin ? strstr(begin, end_mark) : NULL;
     assert_non_null(begin);
     assert_non_null(end);
     begin += strlen(begin_mark);
     *end = 0;
-    if (strcmp(begin, printed))
+    int same = !strcmp(begin, printed);
+    free(doc);
+    if (!same)
         fail_msg(KEYS_DOC " differs from `dartspp keys --markdown`: run `make docs-keys` (or paste its output)");
 }
 

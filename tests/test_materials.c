@@ -5,7 +5,7 @@
  * The scene (mat_scene_text): a fog cube [-1,1]³ (σs 0.3, σa 0.03, HG g 0.2) holding a floor panel of the
  * material under test (a quad; for the dielectrics with refraction a glass cube on a Lambertian floor), a
  * Lambertian back wall, and a point light in a small clear pocket (a point light in the fog gives next-event
- * estimation from phase-sampled vertices infinite variance, see test_photon_points.c). The camera is outside
+ * estimation from phase-sampled vertices infinite variance, see render_fixtures.c). The camera is outside
  * the fog cube (no volume photon near it: no heavy tail in the per-pass totals) looking down at the floor. A
  * Lambertian shade just below the light keeps the light from seeing the floor and the cube: light reaches the
  * material only through the fog or the wall, so every path has a non-delta vertex from which the path tracer
@@ -19,7 +19,7 @@
  * its direct highlight comes from the sensor pass's next-event estimation at continued glossy lobes (main,
  * ec6ae0a); before that commit photon points had no estimate of light → near-specular surface → camera.
  *
- * Noise: the per-pass tile totals are independent samples (test_photon_points.c, pass_totals); the standard
+ * Noise: the per-pass tile totals are independent samples (render_fixtures.h, pass_totals); the standard
  * errors come from their spread (path tracer 4 × 2048 passes, photon points 2 × 128 passes): about 2-3 % per
  * tile for each method, 0.5 % for the channel totals. Bonferroni: Z_CRIT = 4.65 over the 19 × 18 checks.
  *
@@ -28,7 +28,7 @@
  * across edges. Interior terms are second order (R² curvature of the irradiance: < 0.1 %). First-order terms:
  * (a) the floor/back-wall junction and the glass cube's footprint, where a gather disc loses its part beyond
  * the edge and picks up the other surface's photons: net about 0.12·R per unit edge length (derivation in
- * test_photon_points.c), against a tile 0.5-0.9 scene units wide: <= 0.9 % of the surface part of a tile
+ * test_photon_consistency.c), against a tile 0.5-0.9 scene units wide: <= 0.9 % of the surface part of a tile
  * along the edge; (b) the shade's shadow edge on the back wall and the highlight's flanks move energy across a
  * tile boundary only within R of it: (1/π)·R·(contrast)/(tile width) <= 0.3·0.036/0.5 ≈ 2 % for a full-contrast
  * edge lying on a tile boundary. Measured offline: with both radii halved (gather 0.03, volume 0.02; 256
@@ -55,7 +55,7 @@
  *     (channel 2 total -29.1 %; 17 of 19 checks fail). The other half of (4), the photon pass without the
  *     adjoint shading-normal correction, cannot show here: quads and cubes have shading normal = geometric
  *     normal, where the correction is exactly 1. */
-#include "test_util.h"
+#include "render_fixtures.h"
 
 #include <time.h>
 
@@ -63,36 +63,7 @@
 #include "dartspp/render.h"
 
 /* ---------------------------------------------------------------------------------------------------- */
-/* helpers (as in test_photon_points.c)                                                                 */
-
-typedef struct {
-    char *dir;
-    char path[512];
-} tmp_scene;
-
-static void tmp_scene_write(tmp_scene *t, const char *text)
-{
-    t->dir = test_tmpdir();
-    assert_non_null(t->dir);
-    snprintf(t->path, sizeof t->path, "%s/scene.json", t->dir);
-    test_write_file(t->path, text);
-}
-
-static void tmp_scene_remove(tmp_scene *t)
-{
-    char cmd[600];
-    snprintf(cmd, sizeof cmd, "rm -rf %s", t->dir);
-    (void)!system(cmd);
-    free(t->dir);
-    t->dir = NULL;
-}
-
-static void load_scene(const char *path, scene *s)
-{
-    dp_error err;
-    scene_load_options lo = {0};
-    if (scene_load(path, &lo, s, &err)) fail_msg("%s", err.msg);
-}
+/* helpers (scene files in a temp folder: render_fixtures.h)                                            */
 
 #ifndef RES
 #define RES 16
@@ -103,7 +74,7 @@ static void load_scene(const char *path, scene *s)
 
 /* Per-pass tile totals: the passes of a progressive render are independent draws (random numbers keyed by
  * seed and pass), so their per-pass tile totals are independent samples whose spread gives the standard
- * error of the mean (see test_photon_points.c, pass_totals). */
+ * error of the mean (see render_fixtures.h, pass_totals). */
 typedef struct {
     long n, cap;
     double *x;       /* x[i·NV + v] */
@@ -268,7 +239,7 @@ static void mat_scene(const mat_case *mc, const char *integrator, tmp_scene *t, 
     mat_scene_text(text, sizeof text, mc, integrator);
     tmp_scene_write(t, text);
     write_checker(t->dir);
-    load_scene(t->path, s);
+    load_scene(t->path, NULL, 0, s);
 }
 
 static const mat_case CASES[] = {
@@ -337,7 +308,7 @@ static double now_s(void)
  * 304 checks; z = 4.65 has a two-sided normal tail of 3.3e-6, about 1e-3 for the whole file. The per-pass
  * totals are sums over 16 pixels of a 16 × 16 image and pass counts are 256 and 8192: the means are normal
  * to a good approximation (the camera is outside the fog, so no volume photon comes near it; see
- * test_photon_points.c on the heavy tail otherwise). */
+ * render_fixtures.c on the heavy tail otherwise). */
 #define Z_CRIT 4.65
 
 /* Kernel-bias budget per tile, relative to the path tracer's tile value (see the comment at the top). */

@@ -1,9 +1,7 @@
 /* Path tracer end to end: determinism across thread counts, frames against the union gate, finite
  * outputs of the command line on our fog Cornell box (scenes/cbox-fog, the paper's fog box rebuilt from
  * quads and cubes) and the demo scene. */
-#include "test_util.h"
-
-#include "dartspp/render.h"
+#include "render_fixtures.h"
 
 /* What a test allocates lives here, so that the teardown frees it even when an assertion fails part-way
  * (LeakSanitizer then reports nothing but the real failure). scene_free, film_free and image_free accept
@@ -31,13 +29,6 @@ static int teardown_fx(void **state)
     return 0;
 }
 
-static void load(const char *path, const char *const *sets, int nsets, scene *s)
-{
-    dp_error err;
-    scene_load_options lo = {.sets = sets, .set_count = nsets};
-    if (scene_load(path, &lo, s, &err)) fail_msg("%s", err.msg);
-}
-
 static void render(const scene *s, int threads, uint64_t seed, long passes, film *f)
 {
     dp_error err;
@@ -54,7 +45,7 @@ static void test_threads_bit_identical(void **state)
     (void)state;
     const char *sets[] = {"transient_time_center=14", "transient_time_width=2"};
     scene *s = &fx.scenes[0];
-    load(CBOX_FOG "/path_tracer.json", sets, 2, s);
+    load_scene(CBOX_FOG "/path_tracer.json", sets, 2, s);
     s->cam.width = 48;
     s->cam.height = 40;
     film *a = &fx.films[0], *b = &fx.films[1], *c = &fx.films[2];
@@ -79,9 +70,9 @@ static void test_frames_sum_to_union_gate(void **state)
     const char *gate[] = {"transient_time_center=8", "transient_time_width=2", "type=path_tracer"};
     const char *gate1[] = {"transient_time_center=7.25", "transient_time_width=0.5", "type=path_tracer"};
     scene *sf = &fx.scenes[0], *sg = &fx.scenes[1], *s1 = &fx.scenes[2];
-    load("scenes/fogbox/fogbox.json", frames, 4, sf);
-    load("scenes/fogbox/fogbox.json", gate, 3, sg);
-    load("scenes/fogbox/fogbox.json", gate1, 3, s1);
+    load_scene("scenes/fogbox/fogbox.json", frames, 4, sf);
+    load_scene("scenes/fogbox/fogbox.json", gate, 3, sg);
+    load_scene("scenes/fogbox/fogbox.json", gate1, 3, s1);
     sf->cam.width = sg->cam.width = s1->cam.width = 32;
     sf->cam.height = sg->cam.height = s1->cam.height = 32;
     film *ff = &fx.films[0], *fg = &fx.films[1], *f1 = &fx.films[2];
@@ -149,9 +140,9 @@ static void test_pass_weights(void **state)
                          "include_surfaces=false", "radius_schedule=3d"};
     const char *eq[] = {"type=progressive_transient_photon_map", "pass_weights=equal"};
     const char *pt[] = {"type=path_tracer"};
-    load("scenes/fogbox/fogbox.json", pp, 5, &fx.scenes[0]);
-    load("scenes/fogbox/fogbox.json", vol, 6, &fx.scenes[1]);
-    load("scenes/fogbox/fogbox.json", eq, 2, &fx.scenes[2]);
+    load_scene("scenes/fogbox/fogbox.json", pp, 5, &fx.scenes[0]);
+    load_scene("scenes/fogbox/fogbox.json", vol, 6, &fx.scenes[1]);
+    load_scene("scenes/fogbox/fogbox.json", eq, 2, &fx.scenes[2]);
     render_plan p[3], q;
     dp_error err;
     for (int k = 0; k < 3; k++)
@@ -167,7 +158,7 @@ static void test_pass_weights(void **state)
     }
     assert_true(plan_pass_weight(&p[0], 200) < 0.25); /* the weights do fall */
     scene_free(&fx.scenes[2]);
-    load("scenes/fogbox/fogbox.json", pt, 1, &fx.scenes[2]);
+    load_scene("scenes/fogbox/fogbox.json", pt, 1, &fx.scenes[2]);
     if (plan_resolve(&fx.scenes[2], &q, &err)) fail_msg("%s", err.msg);
     assert_float_equal(plan_pass_weight(&q, 50), 1.0, 0.0);
     for (int k = 0; k < 3; k++) plan_free(&p[k]);

@@ -27,7 +27,7 @@
  *      camera-light time (degenerate first ellipses), light on the central camera ray, the radii of
  *      iteration 1e5.
  *   6. transient frames with DARTS: every frame finite and >= 0, frames entirely before the earliest arrival
- *      exactly zero (the frames' values: tests/test_photon_points.c, DARTS frames against the path tracer).
+ *      exactly zero (the frames' values: tests/test_photon_frames.c, DARTS frames against the path tracer).
  * No expected value comes from an earlier run of this code: exact zeros follow from causality, the scale
  * test's tolerance from the spread over seeds measured here. */
 #include "test_util.h"
@@ -255,7 +255,7 @@ static void run_case(const stress_case *c, const char *dir, case_result *res, fi
         test_write_file(kept, text);
     }
     scene s;
-    dp_error err = {{0}};
+    dp_error err = {0};
     scene_load_options lo = {0};
     double t0 = dp_seconds();
     int rc = scene_load(path, &lo, &s, &err);
@@ -667,7 +667,7 @@ static void test_scale_invariance(void **state)
         e.photon_count = 12000;
         if (case_selected(&e)) scale_invariance_check(&e, K, dir);
         /* the path tracer with the light in a clear pocket (next-event estimation from the fog has finite
-         * variance only when the light is not in the fog, see test_photon_points.c) */
+         * variance only when the light is not in the fog, see render_fixtures.c) */
         stress_case t = case_default("scale: light pocket path tracer");
         t.geo = GEO_LIGHT_POCKET;
         t.integ = INTEG_PATH_TRACER;

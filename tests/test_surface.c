@@ -28,14 +28,6 @@ static void load_text(const char *text, char **dir, scene *s)
     if (scene_load(path, &lo, s, &err)) fail_msg("%s", err.msg);
 }
 
-static void remove_dir(char *dir)
-{
-    char cmd[700];
-    snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir);
-    (void)!system(cmd);
-    free(dir);
-}
-
 /* ---- 1. the rule ---- */
 
 static void test_photon_split_rule(void **state)
@@ -146,7 +138,7 @@ static void time_case(const char *interior, const char *integrator, int frame)
     assert_true(share > 0.9);
     film_free(&f);
     scene_free(&s);
-    remove_dir(dir);
+    test_rmtree(dir);
 }
 
 static void test_time_through_dielectric(void **state)
@@ -227,7 +219,7 @@ static void glass_totals(const char *glass, const char *integrator, int runs, lo
         se[k] = sqrt(fmax(0.0, (sum2[k] - runs * mean[k] * mean[k]) / (runs - 1)) / runs);
     }
     scene_free(&s);
-    remove_dir(dir);
+    test_rmtree(dir);
 }
 
 static void adjoint_case(const char *glass)

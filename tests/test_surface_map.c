@@ -163,7 +163,7 @@ static vec3 room_query(dp_rng *r, int i)
 
 static surface_photon_map *build_ok(const photon *ph, size_t n)
 {
-    dp_error err = {{0}};
+    dp_error err = {0};
     surface_photon_map *m = build_map(ph, n, &err);
     if (!m) fail_msg("build_map(%zu): %s", n, err.msg);
     return m;
@@ -291,7 +291,7 @@ static void test_k_larger_than_n(void **state)
 static void test_empty_map(void **state)
 {
     (void)state;
-    dp_error err = {{0}};
+    dp_error err = {0};
     surface_photon_map *m = build_map(NULL, 0, &err);
     assert_non_null(m);
     int idx[4];
@@ -445,7 +445,7 @@ static void test_build_rejects_bad_positions(void **state)
     (void)state;
     photon ph[3] = {at(0, 0, 0), at(1, 1, 1), at(2, 2, 2)};
     ph[1].pos[2] = NAN;
-    dp_error err = {{0}};
+    dp_error err = {0};
     assert_null(build_map(ph, 3, &err));
     assert_non_null(strstr(err.msg, "photon 1"));
     ph[1].pos[2] = 1e30f;

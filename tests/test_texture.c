@@ -8,52 +8,11 @@
  * - shading normals: interpolated vertex normals of `smooth` meshes, transformed by the normal matrix and put
  *   on ng's side; `recompute_normals` splits vertices at cos(0.15π) (primitives/TriangleMesh.cpp);
  * - `backface_culling`: a ray from behind passes through, for scene_intersect and scene_transmittance. */
-#include "test_util.h"
+#include "fixtures.h"
 
 #include <stb/stb_image_write.h>
 
 #include "dartspp/scene.h"
-
-/* ---- fixture: one temp folder and the scenes of a test, released even after a failure ---- */
-
-#define FX_SCENES 4
-static struct {
-    scene scenes[FX_SCENES];
-    int live[FX_SCENES];
-    char *dir;
-} fx;
-
-static const char *fx_dir(void)
-{
-    if (!fx.dir) fx.dir = test_tmpdir();
-    if (!fx.dir) fail_msg("cannot create a temp folder");
-    return fx.dir;
-}
-
-static int teardown_fx(void **state)
-{
-    (void)state;
-    for (int i = 0; i < FX_SCENES; i++)
-        if (fx.live[i]) scene_free(&fx.scenes[i]);
-    if (fx.dir) {
-        char cmd[1200];
-        snprintf(cmd, sizeof cmd, "rm -rf '%s'", fx.dir);
-        if (system(cmd) != 0) print_message("warning: could not remove %s\n", fx.dir);
-    }
-    free(fx.dir);
-    memset(&fx, 0, sizeof fx);
-    return 0;
-}
-
-static void write_in_dir(const char *name, const void *data, size_t n)
-{
-    char path[1200];
-    snprintf(path, sizeof path, "%s/%s", fx_dir(), name);
-    FILE *f = fopen(path, "wb");
-    if (!f) fail_msg("cannot write %s", path);
-    if (n) assert_int_equal(fwrite(data, 1, n, f), n);
-    fclose(f);
-}
 
 /* A scene with the given bsdfs and primitives (JSON array items) and a camera; NULL with err on failure. */
 static scene *load_scene(const char *bsdfs, const char *prims, dp_error *err)

@@ -1,54 +1,13 @@
 /* Transforms and meshes through the public API: small scenes written to a temp folder, then s.verts,
  * s.tris and s.surfaces inspected. Expected positions and normals are worked out by hand from
  * docs/scene-format.md §1 (.wo3), §2.2 (transform) and §2.5 (quad, cube) and Tungsten's Mat4f::rotYXZ. */
-#include "test_util.h"
+#include "fixtures.h"
 
 #include "dartspp/scene.h"
 
 #include <math.h>
 
 #define POS_TOL 1e-5 /* vertices are stored as float */
-
-/* ---- fixture: one temp folder and the scenes loaded in a test, released even after a failure ---- */
-
-#define FX_SCENES 4
-static struct {
-    scene scenes[FX_SCENES];
-    int live[FX_SCENES];
-    char *dir;
-} fx;
-
-static const char *fx_dir(void)
-{
-    if (!fx.dir) fx.dir = test_tmpdir();
-    if (!fx.dir) fail_msg("cannot create a temp folder");
-    return fx.dir;
-}
-
-static int teardown_fx(void **state)
-{
-    (void)state;
-    for (int i = 0; i < FX_SCENES; i++)
-        if (fx.live[i]) scene_free(&fx.scenes[i]);
-    if (fx.dir) {
-        char cmd[1200];
-        snprintf(cmd, sizeof cmd, "rm -rf '%s'", fx.dir);
-        if (system(cmd) != 0) print_message("warning: could not remove %s\n", fx.dir);
-    }
-    free(fx.dir);
-    memset(&fx, 0, sizeof fx);
-    return 0;
-}
-
-static void write_in_dir(const char *name, const void *data, size_t n)
-{
-    char path[1200];
-    snprintf(path, sizeof path, "%s/%s", fx_dir(), name);
-    FILE *f = fopen(path, "wb");
-    if (!f) fail_msg("cannot write %s", path);
-    if (n) assert_int_equal(fwrite(data, 1, n, f), n);
-    fclose(f);
-}
 
 /* A scene with the given primitives (JSON array items), a lambert BSDF "w" and a camera on -z looking +z.
  * Returns the loaded scene, or NULL with err filled. */

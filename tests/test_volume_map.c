@@ -118,7 +118,7 @@ static photon *grid_cloud(int k)
 
 static volume_photon_map *build_or_fail(const photon *ph, size_t n, double r)
 {
-    dp_error err = {{0}};
+    dp_error err = {0};
     volume_photon_map *m = volume_map_build(ph, n, r, &err);
     if (!m) fail_msg("volume_map_build: %s", err.msg);
     assert_int_equal(volume_map_size(m), n);
@@ -221,7 +221,7 @@ static void test_bad_input(void **state)
 {
     (void)state;
     photon *ph = random_cloud(10, 3);
-    dp_error err = {{0}};
+    dp_error err = {0};
     assert_null(volume_map_build(ph, 10, -1.0, &err));
     assert_non_null(strstr(err.msg, "radius"));
     assert_null(volume_map_build(ph, 10, NAN, &err));

@@ -33,10 +33,8 @@ typedef enum {
 } dp_error_kind;
 
 typedef struct {
-    struct { /* one member, so that `dp_error e = {{0}}` stays a plain zero initialiser */
-        dp_error_kind kind;
-        char msg[1024];
-    };
+    dp_error_kind kind;
+    char msg[1024];
 } dp_error;
 
 /* printf-style, kind DP_ERROR_INPUT; returns -1 so callers can `return dp_fail(err, ...)`. */

@@ -85,7 +85,7 @@ int png_write_preview(const char *path, const image_rgb *img, dp_error *err)
     atomic_file af;
     FILE *f = atomic_fopen(path, "wb", &af, err);
     if (!f) return -1;
-    dp_error local = {{0}};
+    dp_error local = {0};
     if (write_stream(f, img, &local) != 0) {
         atomic_fabort(&af);
         return dp_fail_kind(err, local.kind, "%s: %s", path, local.msg);

@@ -1,0 +1,125 @@
+/* Render-level fixtures shared by the test programs, defined in tests/render_fixtures.c (linked into every
+ * test program): scene files in a temp folder, renders and their per-pass totals, the scenes of the
+ * photon-points tests (the fog box and the fog slab) and single photon passes. */
+#ifndef DARTSPP_TEST_RENDER_FIXTURES_H
+#define DARTSPP_TEST_RENDER_FIXTURES_H
+
+#include "test_util.h"
+
+#include "dartspp/darts.h"
+#include "dartspp/gather.h"
+#include "dartspp/photon.h"
+#include "dartspp/render.h"
+
+/* ---- scene files in a temp folder ---- */
+
+typedef struct {
+    char *dir;
+    char path[512];
+} tmp_scene;
+
+/* Writes text to <a fresh temp folder>/scene.json. */
+void tmp_scene_write(tmp_scene *t, const char *text);
+/* Removes the folder of tmp_scene_write. */
+void tmp_scene_remove(tmp_scene *t);
+/* Loads the scene file with nsets `--set` overrides (sets may be NULL when nsets is 0); fails the test with
+ * the loader's message. */
+void load_scene(const char *path, const char *const *sets, int nsets, scene *s);
+
+/* ---- renders and their per-pass totals ---- */
+
+/* Per-pass image totals. The passes of a progressive render are independent draws (their random numbers
+ * are keyed by seed and pass), so the per-pass totals of one or several renders are independent samples of
+ * the estimator's image total: their spread gives the standard error of the mean total with hundreds of
+ * degrees of freedom, where a few seeds would give two or three. The radii shrink from pass to pass, so the
+ * samples are not identically distributed; the pooled sample variance then exceeds the variance of their
+ * mean by the spread of the per-pass expectations, which only makes the standard error conservative. */
+typedef struct {
+    int images;   /* 1 + frames: image 0 is the gate image (frame mode: the union window), image 1 + k frame k */
+    long n, cap;  /* passes recorded */
+    double *x;    /* x[(i·images + m)·3 + c]: pass i, image m, channel c */
+    double *last; /* the film's totals after the previous pass, images × 3 */
+} pass_totals;
+
+void pass_totals_init(pass_totals *t, int frames);
+void pass_totals_free(pass_totals *t);
+/* Mean over the recorded passes of image m, channel c (c = 3: the sum of the channels), and its standard
+ * error from the spread of the passes. */
+void pass_totals_mean_se(const pass_totals *t, int m, int c, double *mean, double *se);
+
+/* What a render records after each pass: the per-pass totals, and optionally the mean image after pass
+ * snap_pass (for the error of an early iteration count, from the same passes). */
+typedef struct {
+    pass_totals *t;
+    long snap_pass;
+    double *snap;
+} pass_probe;
+
+/* render_options.after_pass for a pass_probe (ctx). */
+int pass_probe_after(void *ctx, const film *f, const render_stats *st, dp_error *err);
+/* Mean image of a render as doubles (film sum / weight sum), 3 values per pixel; with probe, its per-pass
+ * totals and snapshot are recorded too. The caller frees it. */
+double *render_probe(const scene *s, int threads, uint64_t seed, long passes, pass_probe *probe);
+/* A render of `passes` passes into f (the caller frees it); every pass ran and no sample was non-finite. */
+void render_passes(const scene *s, int threads, uint64_t seed, long passes, film *f, render_stats *st);
+/* Mean image of a render as doubles (film sum / weight sum), 3 values per pixel. */
+double *render_mean(const scene *s, int threads, uint64_t seed, long passes);
+/* Renders `seeds` renders (seeds seed0, seed0 + 1, ...) of `passes` passes, recording their per-pass totals
+ * into t (initialised here for the scene's frames). */
+void render_totals(const scene *s, uint64_t seed0, int seeds, long passes, pass_totals *t);
+
+/* ---- the photon-points tests' scenes ---- */
+
+/* Photon-pass keys: the DARTS samplers (as the paper's scenes turn them on) or none. */
+#define DARTS_KEYS_TEXT "\"enable_guiding\": true, \"enable_elliptical\": true, \"strict_time_width\": true"
+extern const char *const DARTS_KEYS;
+extern const char *const BASELINE_KEYS;
+
+/* The box's materials and its five Lambertian walls (2 × 2 × 2, open towards -z), opening the primitives list. */
+#define BOX_WALLS                                                                                                  \
+    "  \"bsdfs\": [ { \"name\": \"white\", \"type\": \"lambert\", \"albedo\": 0.7 },"                                  \
+    "               { \"name\": \"red\", \"type\": \"lambert\", \"albedo\": [0.7, 0.15, 0.1] },"                       \
+    "               { \"name\": \"green\", \"type\": \"lambert\", \"albedo\": [0.15, 0.6, 0.2] } ],"                   \
+    "  \"primitives\": ["                                                                                           \
+    "    { \"type\": \"quad\", \"bsdf\": \"white\", \"transform\": { \"position\": [0, 0, 0], \"scale\": [2, 1, 2] } }," \
+    "    { \"type\": \"quad\", \"bsdf\": \"white\", \"transform\": { \"position\": [0, 2, 0], \"scale\": [2, 1, 2],"      \
+    "      \"rotation\": [180, 0, 0] } },"                                                                         \
+    "    { \"type\": \"quad\", \"bsdf\": \"white\", \"transform\": { \"position\": [0, 1, 1], \"scale\": [2, 1, 2],"      \
+    "      \"rotation\": [-90, 0, 0] } },"                                                                         \
+    "    { \"type\": \"quad\", \"bsdf\": \"green\", \"transform\": { \"position\": [-1, 1, 0], \"scale\": [2, 1, 2],"     \
+    "      \"rotation\": [0, 0, -90] } },"                                                                         \
+    "    { \"type\": \"quad\", \"bsdf\": \"red\", \"transform\": { \"position\": [1, 1, 0], \"scale\": [2, 1, 2],"        \
+    "      \"rotation\": [0, 0, 90] } },"
+
+
+/* The fog box (render_fixtures.c tells its design): res × res pixels, the integrator's keys, HG g, the
+ * camera in the fog or in vacuum outside an index-matched fog cube. */
+void box_scene_text_cam(char *text, size_t len, int res, const char *integrator, double g, int camera_in_fog);
+/* The fog box with g = 0.3 and the camera in the fog. */
+void box_scene_text(char *text, size_t len, int res, const char *integrator);
+/* The box's fog made grey (σs 0.45, σa 0.05 in every channel), in place. */
+void box_scene_make_grey(char *text);
+
+/* The light of slab_scene_text; two pulsed lights for the transient tests (issue 21). */
+#define SLAB_LIGHT "{ \"type\": \"point\", \"emission\": [4, 4, 4], \"transform\": { \"position\": [0.6, 0.4, -2.5] } }"
+/* The fog slab (render_fixtures.c tells its design) lit by `lights` (JSON primitives), integrator `type`,
+ * the time keys `time` and the photon-pass keys `darts`. */
+void slab_scene_text_lights(char *text, size_t len, double speed, const char *type, const char *time,
+                            const char *darts, const char *lights);
+/* The fog slab lit by SLAB_LIGHT. */
+void slab_scene_text(char *text, size_t len, double speed, const char *type, const char *time, const char *darts);
+
+/* ---- the progressive radius schedule and the photon pass ---- */
+
+/* r0 · (Π_{j=1..i} (j+α)/(j+1))^{1/dims}, the radius of iteration i, by Γ functions. */
+double radius_closed_form(double r0, double alpha, long i, int dims);
+/* Field by field: the struct has padding, whose bytes are indeterminate. */
+void assert_photon_identical(const photon *a, const photon *b);
+/* One photon pass of the scene's plan without EDA tables, its DARTS surface tests widened for gathers of
+ * radius surface_radius. */
+int run_photon_pass(const scene *s, uint64_t seed, long iteration, double surface_radius, photon_set *out,
+                    dp_error *err);
+/* The DARTS guide of the scene's plan. */
+void scene_guide(const scene *s, darts_guide *g);
+
+#endif

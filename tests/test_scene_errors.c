@@ -1,0 +1,297 @@
+/* Bad scene input ends with a message naming the file and the key: through the command line (exit status 2,
+ * no output written; mirror warnings on a render that runs) and in process (bad values, coefficients that
+ * overflow once combined, bad BSDF keys). Small scenes written by the test, each one change away from a
+ * valid base scene. */
+#include "fixtures.h"
+
+/* ---- bad input through the command line ---- */
+
+typedef struct {
+    const char *what;
+    const char *from, *to;  /* one replacement in BASE_SCENE (from == NULL: unchanged) */
+    const char *set;        /* extra `--set` argument, or NULL */
+    const char *needles[3]; /* must all appear in the output, besides the scene path */
+} bad_case;
+
+static void test_cli_bad_input(void **state)
+{
+    (void)state;
+    if (access(DARTSPP_BIN, X_OK) != 0)
+        fail_msg("%s does not exist or is not executable: build it first (make build/san/dartspp)", DARTSPP_BIN);
+    static const bad_case cases[] = {
+        {"unknown primitive type", "\"type\": \"quad\"", "\"type\": \"sphere\"", NULL,
+         {"primitives[0]", "sphere", "supported: mesh, quad, cube, point"}},
+        {"unknown BSDF type", "\"type\": \"lambert\"", "\"type\": \"oren_nayar\"", NULL,
+         {"bsdfs[0]", "unsupported BSDF 'oren_nayar'", "supported: lambert"}},
+        {"missing mesh file", "\"type\": \"quad\"", "\"type\": \"mesh\", \"file\": \"meshes/missing_floor.wo3\"", NULL,
+         {"primitives[0]", "file", "missing_floor.wo3"}},
+        {"negative sigma_s", "\"sigma_s\": 0.1", "\"sigma_s\": -0.1", NULL, {"media[0]", "sigma_s", NULL}},
+        {"non-finite sigma_a", "\"sigma_a\": 0.01", "\"sigma_a\": 1e999", NULL, {"media[0]", "sigma_a", NULL}},
+        {"negative gate width", "\"transient_time_width\": 0.5", "\"transient_time_width\": -0.5", NULL,
+         {"transient_time_width", "must be >= 0", NULL}},
+        {"frames of width 0", "\"transient_time_width\": 0.5", "\"transient_time_width\": 0, \"frame_num\": 3", NULL,
+         {"transient_time_width", NULL, NULL}},
+        {"unknown integrator", "\"type\": \"path_tracer\"", "\"type\": \"bidirectional_path_tracer\"", NULL,
+         {"integrator", "type", "bidirectional_path_tracer"}},
+        {"unknown bsdf name", "\"bsdf\": \"white\"", "\"bsdf\": \"whte\"", NULL, {"primitives[0]", "bsdf", "whte"}},
+        {"unknown medium name", "\"ext_medium\": \"fog\"", "\"ext_medium\": \"smoke\"", NULL,
+         {"primitives[1]", "ext_medium", "smoke"}},
+        {"--set unknown key", NULL, NULL, "nosuchkey=1", {"nosuchkey", NULL, NULL}},
+        {"malformed JSON", "\"spp\": 1", "\"spp\": @1", NULL, {NULL, NULL, NULL}},
+    };
+    const size_t ncases = sizeof cases / sizeof cases[0];
+    const char *dir = fx_dir();
+
+    /* the base scene itself is valid, so each failure below comes from the one change made */
+    {
+        dp_error err;
+        scene *s = fx_load_text("base.json", BASE_SCENE, NULL, &err);
+        if (!s) fail_msg("test bug: the base scene does not load: %s", err.msg);
+        fx_drop(s);
+    }
+
+    int failures = 0;
+    char *out = fx_keep(malloc(16384));
+    for (size_t i = 0; i < ncases; i++) {
+        const bad_case *bc = &cases[i];
+        char path[1100], exr[1100], cmd[3000], lc[1200] = "";
+        char *text = bc->from ? replace1(BASE_SCENE, bc->from, bc->to) : strdup(BASE_SCENE);
+        assert_non_null(text);
+        snprintf(path, sizeof path, "%s/bad_%02zu.json", dir, i);
+        snprintf(exr, sizeof exr, "%s/out_%02zu.exr", dir, i);
+        const char *at = strchr(text, '@');
+        if (at) {
+            /* line:col of the stray '@', worked out from the text (1-based) */
+            int line = 1;
+            const char *bol = text;
+            for (const char *p = text; p < at; p++)
+                if (*p == '\n') {
+                    line++;
+                    bol = p + 1;
+                }
+            snprintf(lc, sizeof lc, "%s:%d:%d", path, line, (int)(at - bol) + 1);
+        }
+        write_bytes(path, text, strlen(text));
+        free(text);
+        snprintf(cmd, sizeof cmd, "%s render '%s' --spp 1 --quiet --output '%s'%s%s", DARTSPP_BIN, path, exr,
+                 bc->set ? " --set " : "", bc->set ? bc->set : "");
+        int rc = test_run(cmd, out, 16384);
+        int ok = rc == 2 && strstr(out, path) != NULL;
+        for (int k = 0; k < 3; k++)
+            if (bc->needles[k] && !strstr(out, bc->needles[k])) ok = 0;
+        if (lc[0] && !strstr(out, lc)) ok = 0;
+        int wrote = access(exr, F_OK) == 0;
+        if (!ok || wrote) {
+            failures++;
+            print_message("[%s] exit status %d (expected 2)%s; the output must contain the scene path", bc->what, rc,
+                          wrote ? ", an output image was written" : "");
+            for (int k = 0; k < 3; k++)
+                if (bc->needles[k]) print_message(", \"%s\"", bc->needles[k]);
+            if (lc[0]) print_message(", \"%s\"", lc);
+            print_message(". Output:\n%s\n", out);
+        }
+    }
+    if (failures) fail_msg("%d of %zu bad inputs were not reported as required", failures, ncases);
+}
+
+/* Mirrors: the render still runs (exit 0), and the warning names the scene, the mirror surface and the
+ * assumption that breaks - for the path tracer (no connection to point lights through a mirror) and for
+ * DARTS with darts_mirrors "straight" (straight camera leg) - and stays silent where neither applies: DARTS
+ * with darts_mirrors "full" (the default) is unbiased behind the mirror (test_darts_mirror), DA alone too. */
+static void test_cli_mirror_warnings(void **state)
+{
+    (void)state;
+    if (access(DARTSPP_BIN, X_OK) != 0)
+        fail_msg("%s does not exist or is not executable: build it first (make build/san/dartspp)", DARTSPP_BIN);
+    static const char *pt_says = "the path tracer cannot connect to point lights", *darts_says = "DARTS time bounds";
+    static const char *pp = "\"type\": \"progressive_transient_photon_map\", \"photon_count\": 2000, "
+                            "\"volume_photon_count\": 1000, \"volume_gather_radius\": 0.2, \"gather_radius\": 0.2, "
+                            "\"enable_guiding\": true, \"enable_elliptical\": true";
+    static const struct {
+        const char *what;
+        int mirror, photons;
+        const char *set;
+        int pt_warns, darts_warns;
+    } cases[] = {
+        {"lambert floor, path tracer", 0, 0, "", 0, 0},
+        {"mirror floor, path tracer", 1, 0, "", 1, 0},
+        {"mirror floor, DARTS (full)", 1, 1, "", 0, 0},
+        {"mirror floor, DARTS strict (full)", 1, 1, " --set enable_elliptical=false --set strict_time_width=true", 0, 0},
+        {"mirror floor, DARTS straight", 1, 1, " --set darts_mirrors=straight", 0, 1},
+        {"mirror floor, DARTS strict straight", 1, 1,
+         " --set darts_mirrors=straight --set enable_elliptical=false --set strict_time_width=true", 0, 1},
+        {"mirror floor, DA only straight", 1, 1, " --set darts_mirrors=straight --set enable_elliptical=false", 0, 0},
+        {"lambert floor, DARTS", 0, 1, "", 0, 0},
+    };
+    const char *dir = fx_dir();
+    char *out = fx_keep(malloc(16384));
+    int failures = 0;
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        char *a = cases[i].mirror ? replace1(BASE_SCENE, "\"type\": \"lambert\"", "\"type\": \"mirror\"")
+                                  : strdup(BASE_SCENE);
+        char *text = cases[i].photons ? replace1(a, "\"type\": \"path_tracer\"", pp) : strdup(a);
+        free(a);
+        char path[1100], exr[1100], cmd[3000];
+        snprintf(path, sizeof path, "%s/mirror_%02zu.json", dir, i);
+        snprintf(exr, sizeof exr, "%s/mirror_%02zu.exr", dir, i);
+        write_bytes(path, text, strlen(text));
+        free(text);
+        snprintf(cmd, sizeof cmd, "%s render '%s' --spp 1 --quiet --output '%s'%s", DARTSPP_BIN, path, exr, cases[i].set);
+        int rc = test_run(cmd, out, 16384);
+        int pt = strstr(out, pt_says) != NULL, darts = strstr(out, darts_says) != NULL;
+        int named = !(pt || darts) || (strstr(out, path) && strstr(out, "'floor'"));
+        if (rc != 0 || pt != cases[i].pt_warns || darts != cases[i].darts_warns || !named) {
+            failures++;
+            print_message("[%s] exit %d, path-tracer warning %d (want %d), DARTS warning %d (want %d), names scene "
+                          "and surface %d. Output:\n%s\n", cases[i].what, rc, pt, cases[i].pt_warns, darts,
+                          cases[i].darts_warns, named, out);
+        }
+    }
+    if (failures) fail_msg("%d mirror-warning cases wrong", failures);
+}
+
+/* ---- bad input in process ---- */
+
+/* In-process: the same message contract for a few more bad values (no binary needed). */
+static void test_bad_values_in_process(void **state)
+{
+    (void)state;
+    static const struct {
+        const char *from, *to, *key;
+    } cases[] = {
+        {"\"sigma_s\": 0.1", "\"sigma_s\": [0.1, -1e-9, 0.1]", "sigma_s"},
+        {"\"sigma_s\": 0.1", "\"sigma_s\": \"lots\"", "sigma_s"},
+        {"\"sigma_s\": 0.1", "\"sigma_s\": [0.1, 0.1]", "sigma_s"},
+        {"\"fov\": 45", "\"fov\": 180", "fov"},
+        {"\"fov\": 45", "\"fov\": 0", "fov"},
+        {"\"resolution\": [8, 8]", "\"resolution\": [0, 8]", "resolution"},
+        {"\"renderer\": {\"spp\": 1, \"timeout\": \"0\"}", "\"renderer\": {\"spp\": 1, \"timeout\": \"soon\"}", "timeout"},
+        {"\"renderer\": {\"spp\": 1, \"timeout\": \"0\"}", "\"renderer\": {\"spp\": -3}", "spp"},
+        {"\"albedo\": 0.5", "\"albedo\": -0.5", "albedo"},
+        {"\"power\": 100", "\"power\": -100", "power"},
+        {"\"isotropic\"", "\"rayleigh\"", "phase_function"},
+        {"\"type\": \"homogeneous\"", "\"type\": \"voxel\"", "type"},
+        {"\"scale\": [4, 1, 4]", "\"scale\": [4, 1e999, 4]", "scale"},
+        {"\"look_at\": [0, 0, 0]", "\"look_at\": [0, 1, -4]", "transform"}, /* look_at == position */
+        {"\"transform\": {\"scale\": [4, 1, 4]}", "\"transform\": [1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0]", "transform"},
+        {"\"camera\"", "\"kamera\"", "camera"}, /* no camera at all */
+        /* pulses (issue 21): finite and >= 0; camera_unwarp a boolean */
+        {"\"power\": 100", "\"power\": 100, \"pulse_start\": -0.5", "pulse_start"},
+        {"\"power\": 100", "\"power\": 100, \"pulse_start\": 1e999", "pulse_start"},
+        {"\"power\": 100", "\"power\": 100, \"pulse_width\": -1e-12", "pulse_width"},
+        {"\"power\": 100", "\"power\": 100, \"pulse_width\": 1e999", "pulse_width"},
+        {"\"power\": 100", "\"power\": 100, \"pulse_width\": \"short\"", "pulse_width"},
+        {"\"max_bounces\": 4,", "\"max_bounces\": 4, \"camera_unwarp\": \"yes\",", "camera_unwarp"},
+    };
+    int failures = 0;
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        char *text = replace1(BASE_SCENE, cases[i].from, cases[i].to);
+        dp_error err;
+        char name[64];
+        snprintf(name, sizeof name, "v%02zu.json", i);
+        scene *s = fx_load_text(name, text, NULL, &err);
+        free(text);
+        if (s) {
+            fx_drop(s);
+            print_message("[%s -> %s] loaded, expected an error naming '%s'\n", cases[i].from, cases[i].to, cases[i].key);
+            failures++;
+        } else if (!strstr(err.msg, name) || !strstr(err.msg, cases[i].key)) {
+            print_message("[%s -> %s] the message lacks the file or '%s': %s\n", cases[i].from, cases[i].to,
+                          cases[i].key, err.msg);
+            failures++;
+        }
+    }
+    if (failures) fail_msg("%d bad values not reported as required", failures);
+}
+
+/* A coefficient that is finite as written but overflows once the loader combines it (sigma x density,
+ * 1 / speed_of_light): docs/design.md §4.5 forbids non-finite coefficients, so the load must fail or stay finite. */
+static void test_derived_coefficients_stay_finite(void **state)
+{
+    (void)state;
+    static const struct {
+        const char *from, *to;
+    } cases[] = {
+        {"\"sigma_s\": 0.1", "\"sigma_s\": 1e300, \"density\": 1e300"},
+        {"\"sigma_s\": 0.1", "\"sigma_s\": 0.1, \"speed_of_light\": 1e-320"},
+        {"\"max_bounces\": 4", "\"max_bounces\": 4, \"vaccum_speed_of_light\": 1e-320"},
+    };
+    int failures = 0;
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        char *text = replace1(BASE_SCENE, cases[i].from, cases[i].to);
+        dp_error err;
+        memset(&err, 0, sizeof err);
+        scene *s = fx_load_text("ovf.json", text, NULL, &err);
+        free(text);
+        if (!s) {
+            if (!err.msg[0]) {
+                print_message("[%s] failed without a message\n", cases[i].to);
+                failures++;
+            }
+            continue;
+        }
+        int finite = isfinite(s->integrator.vacuum_eta);
+        for (int m = 0; m < s->medium_count; m++)
+            finite = finite && v3_is_finite(s->media[m].sigma_s) && v3_is_finite(s->media[m].sigma_t) &&
+                     isfinite(s->media[m].eta);
+        if (!finite) {
+            print_message("[%s] loaded with a non-finite coefficient: sigma_t %g, eta %g, vacuum eta %g\n",
+                          cases[i].to, s->media[0].sigma_t.x, s->media[0].eta, s->integrator.vacuum_eta);
+            failures++;
+        }
+        fx_drop(s);
+    }
+    if (failures) fail_msg("%d scenes loaded with non-finite medium/vacuum coefficients", failures);
+}
+
+/* BSDF keys with bad values: the message names the file and the key. */
+static void test_bsdf_key_errors(void **state)
+{
+    (void)state;
+    static const char from[] = "{\"name\": \"white\", \"type\": \"lambert\", \"albedo\": 0.5}";
+    static const struct {
+        const char *to, *key, *word;
+    } cases[] = {
+        {"{\"name\": \"white\", \"type\": \"rough_conductor\", \"distribution\": \"phong\"}", "bsdfs[0].distribution", "phong"},
+        {"{\"name\": \"white\", \"type\": \"rough_conductor\", \"material\": \"Unobtainium\"}", "bsdfs[0].material", "Unobtainium"},
+        {"{\"name\": \"white\", \"type\": \"conductor\", \"material\": 3}", "bsdfs[0].material", "material"},
+        {"{\"name\": \"white\", \"type\": \"velvet\"}", "bsdfs[0].type", "unsupported BSDF 'velvet'"},
+        {"{\"name\": \"white\", \"type\": \"rough_plastic\", \"roughness\": \"rough.png\"}", "bsdfs[0].roughness", "roughness"},
+        {"{\"name\": \"white\", \"type\": \"dielectric\", \"ior\": \"glass\"}", "bsdfs[0].ior", "ior"},
+        {"{\"name\": \"white\", \"type\": \"plastic\", \"sigma_a\": [1, 2]}", "bsdfs[0].sigma_a", "sigma_a"},
+        {"{\"name\": \"white\", \"type\": \"lambert\", \"albedo\": {\"type\": \"checker\"}}", "bsdfs[0].albedo", "albedo"},
+    };
+    int failures = 0;
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        char *text = replace1(BASE_SCENE, from, cases[i].to);
+        dp_error err;
+        char name[64];
+        snprintf(name, sizeof name, "b%02zu.json", i);
+        scene *s = fx_load_text(name, text, NULL, &err);
+        free(text);
+        if (s) {
+            fx_drop(s);
+            print_message("[%s] loaded, expected an error naming '%s'\n", cases[i].to, cases[i].key);
+            failures++;
+        } else if (!strstr(err.msg, name) || !strstr(err.msg, cases[i].key) || !strstr(err.msg, cases[i].word)) {
+            print_message("[%s] the message lacks the file, '%s' or '%s': %s\n", cases[i].to, cases[i].key,
+                          cases[i].word, err.msg);
+            failures++;
+        }
+    }
+    if (failures) fail_msg("%d bad BSDF keys not reported as required", failures);
+}
+
+#define T(f) cmocka_unit_test_teardown(f, teardown_fx)
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        T(test_cli_bad_input),
+        T(test_cli_mirror_warnings),
+        T(test_bad_values_in_process),
+        T(test_derived_coefficients_stay_finite),
+        T(test_bsdf_key_errors),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
