@@ -64,9 +64,10 @@ $(DEPS_STAMP): Makefile
 	fi
 	@mkdir -p build && touch $@
 
-build/obj/%.o: src/%.c | $(DEPS_STAMP)
+build/obj/%.o: src/%.c build/obj/%.d | $(DEPS_STAMP)
 	@mkdir -p $(dir $@)
 	$(CC) $(CFLAGS) $(DEPFLAGS) $(LTO) -c $< -o $@
+	@touch $@
 
 build/libdartspp.a: $(OBJ)
 	$(if $(LTO),gcc-ar,$(AR)) rcs $@ $^
@@ -80,9 +81,10 @@ build/dartspp-mpi: $(CLI_SRC) $(MPI_SRC) build/libdartspp.a
 	OMPI_CC=$(CC) $(MPICC) $(CFLAGS) -DDARTSPP_MPI -MM -MP -MT $@ $(CLI_SRC) $(MPI_SRC) > $@.d.tmp && mv $@.d.tmp $@.d
 	OMPI_CC=$(CC) $(MPICC) $(CFLAGS) $(LTO) -DDARTSPP_MPI $(CLI_SRC) $(MPI_SRC) build/libdartspp.a $(LDLIBS) -o $@
 
-build/san/obj/%.o: src/%.c | $(DEPS_STAMP)
+build/san/obj/%.o: src/%.c build/san/obj/%.d | $(DEPS_STAMP)
 	@mkdir -p $(dir $@)
 	$(CC) $(CFLAGS) $(SAN_FLAGS) $(DEPFLAGS) -c $< -o $@
+	@touch $@
 
 build/san/libdartspp.a: $(SAN_OBJ)
 	$(AR) rcs $@ $^
@@ -91,9 +93,10 @@ build/san/dartspp: $(CLI_SRC) build/san/libdartspp.a
 	$(CC) $(CFLAGS) $(SAN_FLAGS) $(DEPFLAGS) $< build/san/libdartspp.a $(LDLIBS) -o $@
 
 # Test programs and fixtures are compiled to objects, then linked: a library edit relinks the programs.
-build/san/test-obj/%.o: tests/%.c | $(DEPS_STAMP)
+build/san/test-obj/%.o: tests/%.c build/san/test-obj/%.d | $(DEPS_STAMP)
 	@mkdir -p $(dir $@)
 	$(CC) $(CFLAGS) $(SAN_FLAGS) $(DEPFLAGS) -c $< -o $@
+	@touch $@
 
 build/san/tests/%: build/san/test-obj/%.o $(FIX_OBJ) build/san/libdartspp.a
 	@mkdir -p $(dir $@)
@@ -132,5 +135,11 @@ bench-quick: build/dartspp
 clean:
 	rm -rf build out
 
+# An object whose .d file is missing (a build folder from before dependencies were tracked, or a deleted
+# .d) is rebuilt: the .d files are prerequisites with an empty rule (GNU make manual, "Automatic
+# Prerequisites"; the object is touched after the compile so that it stays newer than its .d).
+DEP_FILES = $(OBJ:.o=.d) $(SAN_OBJ:.o=.d) $(TEST_OBJ:.o=.d) $(FIX_OBJ:.o=.d)
+$(DEP_FILES): ;
+.PRECIOUS: $(DEP_FILES)
 -include $(OBJ:.o=.d) $(SAN_OBJ:.o=.d) $(TEST_OBJ:.o=.d) $(FIX_OBJ:.o=.d) build/dartspp.d build/dartspp-mpi.d \
          build/san/dartspp.d

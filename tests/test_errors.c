@@ -43,19 +43,19 @@ static void test_io_errors_have_their_kind(void **state)
     assert_int_equal(image_alloc(&img, 2, 2, &err), 0);
     const char *paths[] = {"/proc/no-such-folder/a.exr", "/proc/no-such-folder/a.pfm"};
     for (int i = 0; i < 2; i++) {
-        err = (dp_error){{0}};
+        err = (dp_error){0};
         assert_int_not_equal(image_write(paths[i], &img, NULL, &err), 0);
         assert_int_equal(err.kind, DP_ERROR_OUTPUT);
     }
-    err = (dp_error){{0}};
+    err = (dp_error){0};
     assert_int_not_equal(png_write_preview("/proc/no-such-folder/a.png", &img, &err), 0);
     assert_int_equal(err.kind, DP_ERROR_OUTPUT);
-    err = (dp_error){{0}};
+    err = (dp_error){0};
     assert_int_not_equal(io_make_parent_dirs("/proc/no-such-folder/sub/a.exr", &err), 0);
     assert_int_equal(err.kind, DP_ERROR_OUTPUT);
     image_free(&img);
     eda_table t;
-    err = (dp_error){{0}};
+    err = (dp_error){0};
     assert_int_not_equal(eda_table_load(&t, "/nonexistent/table.bin", &err), 0);
     assert_int_equal(err.kind, DP_ERROR_INPUT);
 }
