@@ -49,7 +49,7 @@ QUICK_TESTS = test_bsdf test_bsdf_models test_darts test_eda test_free_flight te
               test_render test_single_scatter test_photon_single_scatter
 QUICK_BIN   = $(QUICK_TESTS:%=build/san/tests/%)
 
-.PHONY: all deps test check run clean stress reference bench-quick
+.PHONY: all deps test check run clean stress reference bench-quick docs-keys
 all: build/dartspp build/dartspp-mpi
 
 deps: $(DEPS_STAMP)
@@ -119,6 +119,11 @@ check: build/san/dartspp $(QUICK_BIN)
 STRESS_TESTS = build/san/tests/test_darts build/san/tests/test_eda build/san/tests/test_stress build/san/tests/test_materials
 stress: $(STRESS_TESTS)
 	@DARTSPP_STRESS=full tests/run_tests.sh $(STRESS_TESTS)
+
+# docs/keys.md between its markers is the output of `dartspp keys --markdown` (tests/test_keys.c checks it).
+docs-keys: build/dartspp
+	@{ sed '/^<!-- begin: dartspp keys --markdown -->$$/q' docs/keys.md; ./build/dartspp keys --markdown; \
+	   sed -n '/^<!-- end: dartspp keys --markdown -->$$/,$$p' docs/keys.md; } > docs/keys.md.tmp && mv docs/keys.md.tmp docs/keys.md
 
 # The demo: fog-filled Cornell box, pulsed point light, a gate where multiple scattering dominates.
 run: build/dartspp

@@ -428,7 +428,7 @@ static void test_keys_doc_is_generated(void **state)
     int same = !strcmp(begin, printed);
     free(doc);
     if (!same)
-        fail_msg(KEYS_DOC " differs from `dartspp keys --markdown`: run `make docs-keys` (or paste its output)");
+        fail_msg(KEYS_DOC " differs from `dartspp keys --markdown`: run `make docs-keys`");
 }
 
 int main(void)
