@@ -45,7 +45,7 @@ TEST_BIN = $(TEST_SRC:tests/%.c=build/san/tests/%)
 QUICK_TESTS = test_bsdf test_bsdf_models test_darts test_eda test_free_flight test_replay test_radius_schedule \
               test_surface_map test_volume_map test_plan test_transform_mesh test_texture test_paper_scenes \
               test_scene_values test_scene_errors test_fuzz_readers test_exr test_image_files test_metrics \
-              test_atomic_writes test_cube \
+              test_atomic_writes test_cube test_keys test_docs test_errors \
               test_render test_single_scatter test_photon_single_scatter
 QUICK_BIN   = $(QUICK_TESTS:%=build/san/tests/%)
 
