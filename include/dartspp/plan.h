@@ -1,6 +1,7 @@
 /* dartspp plan: the scene's integrator and renderer keys (after --set) resolved once into a typed render
- * plan. The keys are parsed and range-checked where they are read (scene/settings.c, errors naming file and
- * key); every decision derived from them — which DARTS samplers run, EDA per medium and its α, the radii of
+ * plan. The keys are declared in the key table (src/scene/keys.c) and read and range-checked by the loader
+ * (errors naming file and key); the plan keeps them as resolved (render_plan.keys), and every decision
+ * derived from them — which DARTS samplers run, EDA per medium and its α, the radii of
  * each iteration, the surface slack, the bounce limits — is taken here and only here. The stages (photon
  * pass, gather, DARTS samplers, film) take what they need from the plan, never from scene.integrator. */
 #ifndef DARTSPP_PLAN_H
