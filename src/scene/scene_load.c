@@ -425,8 +425,11 @@ static int parse_camera(json_ctx *c, const cJSON *root, scene *s)
             w = cJSON_GetArrayItem(res, 0)->valuedouble;
             h = cJSON_GetArrayItem(res, 1)->valuedouble;
         } else return jfail(c, "camera", "resolution", "expected [width, height]");
+        if (w != floor(w) || h != floor(h))
+            return jfail(c, "camera", "resolution", "expected whole numbers of pixels (got %.17g x %.17g)", w, h);
         if (!(w >= 1 && h >= 1 && w <= 65536 && h <= 65536 && w * h <= 1 << 28))
-            return jfail(c, "camera", "resolution", "must be between 1 and 65536 per side (got %g x %g)", w, h);
+            return jfail(c, "camera", "resolution", "must be 1 to 65536 pixels per side and at most 2^28 (268435456) "
+                         "pixels in all (got %g x %g)", w, h);
         cam->width = (int)w;
         cam->height = (int)h;
     }
