@@ -45,7 +45,7 @@ static void render_usage(FILE *f)
                "                      [--output PATH.exr|.pfm] [--checkpoint SECONDS] [--set key=value ...]\n"
                "                      [--reference REF.exr --log RUN.csv [--log-every SECONDS]]\n"
                "                      [--max-memory SIZE] [--no-cube] [--no-viewer] [--verbose] [--quiet]\n"
-               "  --threads N     worker threads, 1 to %d (default: all cores)\n"
+               "  --threads N     worker threads, 0 (all cores, the default) to %d\n"
                "  --seed S        an integer 0 to 18446744073709551615 (default 1)\n"
                "  --spp N         progressive passes; --time SECONDS: a wall-time budget\n"
                "See docs/cli.md for every option, the outputs and the exit status.\n", MAX_THREADS);
