@@ -265,6 +265,33 @@ static void test_numbers_and_help(void **state)
     if (failures) fail_msg("%d command lines not handled as required", failures);
 }
 
+/* Issue 32: a render without --output wrote the demo's 45 files (image, preview, frames, cube, viewer) into the
+ * working folder (the repository root for the README's commands). Now they go into one folder named after
+ * the scene, in the working folder, and nothing else appears there. */
+static void test_default_output_folder(void **state)
+{
+    const char *d = *state;
+    char cwd[1024], cmd[4096], out[8192];
+    assert_non_null(getcwd(cwd, sizeof cwd));
+    snprintf(cmd, sizeof cmd, "cd '%s' && '%s/" DARTSPP_BIN "' render '%s/" DEMO "' --spp 1 --quiet --set resolution=8 "
+             "--set frame_num=3", d, cwd, cwd);
+    int rc = test_run(cmd, out, sizeof out);
+    print_message("  exit %d: ", rc);
+    print_tail(out);
+    assert_int_equal(rc, 0);
+    snprintf(cmd, sizeof cmd, "ls -A '%s'", d);
+    assert_int_equal(test_run(cmd, out, sizeof out), 0);
+    print_message("  the working folder holds: %s", out);
+    assert_string_equal(out, "fogbox\n");
+    static const char *const files[] = {"fogbox.exr", "fogbox.png", "fogbox_0000.exr", "fogbox_0002.exr",
+                                        "fogbox_frames.csv", "fogbox_cube.npy", "fogbox_viewer.html"};
+    for (size_t i = 0; i < sizeof files / sizeof files[0]; i++) {
+        char path[1200];
+        snprintf(path, sizeof path, "%s/fogbox/%s", d, files[i]);
+        if (!file_exists(path)) fail_msg("%s was not written", path);
+    }
+}
+
 /* Starts `dartspp render` with extra arguments (NULL-terminated after the scene), waits until it has been
  * in its first pass for `settle` seconds, sends sig, and checks that it ends within EXIT_BOUND_S having
  * stopped the pass in progress. Returns the seconds from the signal to the exit. */
@@ -445,6 +472,7 @@ int main(void)
         cmocka_unit_test_setup_teardown(test_refused_before_any_work, setup_dir, teardown_dir),
         cmocka_unit_test_setup_teardown(test_error_exits_without_leaks, setup_dir, teardown_dir),
         cmocka_unit_test_setup_teardown(test_numbers_and_help, setup_dir, teardown_dir),
+        cmocka_unit_test_setup_teardown(test_default_output_folder, setup_dir, teardown_dir),
         cmocka_unit_test_setup_teardown(test_interrupt_inside_long_photon_pass, setup_dir, teardown_dir),
         cmocka_unit_test_setup_teardown(test_interrupt_inside_long_sensor_pass, setup_dir, teardown_dir),
         cmocka_unit_test_setup_teardown(test_interrupt_keeps_completed_passes, setup_dir, teardown_dir),
