@@ -135,7 +135,7 @@ static const scene_key table[] = {
     {.name = "checkpoint_interval", RE(checkpoint_seconds), .type = KEY_DURATION, .read_by = ALL,
      .def_text = "none", .meaning = "Interval of checkpoint writes (--checkpoint overrides)"},
     {.name = "hdr_output_file", RE(hdr_output_file), .type = KEY_STRING, .read_by = ALL, .def_text = "<scene>.exr",
-     .meaning = "Output image when --output is not given"},
+     .meaning = "Output image when --output is not given; a relative path goes into a folder named after the scene"},
     {.name = "output_file", RE(output_file), .type = KEY_STRING, .def_text = "",
      .meaning = "The authors' LDR preview; dartspp writes none"},
     NOT_READ("spp_step", KEY_SECTION_RENDERER, "Tungsten's passes per step; not read"),
