@@ -210,6 +210,88 @@ static void test_error_exits_without_leaks(void **state)
     }
 }
 
+/* Issue 32: numbers on the command line are what they say. A seed is an exact integer from 0 to 2^64 - 1:
+ * before, 1.5 became 1 and every seed past 2^64 - 1 was clamped to it (so "different" seeds rendered the
+ * same image); a thread count is a whole number up to 1024 (10000 threads were accepted on 2 cores: 13x
+ * slower). Each ends at once with exit 2 and a message naming the option, writing nothing. And
+ * `render --help` prints the render usage on stdout and exits 0 (it was "an unknown option"). */
+static void test_numbers_and_help(void **state)
+{
+    const char *d = *state;
+    char cmd[2048], out[8192];
+    static const char *const bad[][2] = {
+        {"--seed 1.5", "--seed"},
+        {"--seed 18446744073709551616", "2^64"},
+        {"--seed 1e30", "--seed"},
+        {"--seed -1", "--seed"},
+        {"--seed 0x10", "--seed"},
+        {"--threads 10000", "1024"},
+        {"--threads 2.5", "--threads"},
+        {"--threads -2", "--threads"},
+    };
+    int failures = 0;
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+        snprintf(cmd, sizeof cmd, DARTSPP_BIN " render " DEMO " --spp 1 --quiet --set resolution=8 %s --output %s/a.exr",
+                 bad[i][0], d);
+        int rc = test_run(cmd, out, sizeof out);
+        print_message("  %-32s exit %d: ", bad[i][0], rc);
+        print_tail(out);
+        if (rc != 2 || !strstr(out, bad[i][1])) failures++;
+        char exr[700];
+        snprintf(exr, sizeof exr, "%s/a.exr", d);
+        if (file_exists(exr)) {
+            print_message("  %s wrote %s\n", bad[i][0], exr);
+            failures++;
+            unlink(exr);
+        }
+    }
+    /* the largest seed is legal, and seeds that differ only past 2^53 (where a double would merge them) render */
+    static const char *const good[] = {"--seed 18446744073709551615", "--seed 9007199254740993", "--threads 1"};
+    for (size_t i = 0; i < sizeof good / sizeof good[0]; i++) {
+        snprintf(cmd, sizeof cmd, DARTSPP_BIN " render " DEMO " --spp 1 --quiet --set resolution=8 --no-cube --no-viewer "
+                 "%s --output %s/g%zu.exr", good[i], d, i);
+        int rc = test_run(cmd, out, sizeof out);
+        print_message("  %-32s exit %d\n", good[i], rc);
+        if (rc != 0) {
+            print_tail(out);
+            failures++;
+        }
+    }
+    snprintf(cmd, sizeof cmd, "(" DARTSPP_BIN " render --help 2>/dev/null)");
+    int rc = test_run(cmd, out, sizeof out);
+    print_message("  render --help: exit %d: ", rc);
+    print_tail(out);
+    if (rc != 0 || !strstr(out, "usage: dartspp render") || !strstr(out, "--seed")) failures++;
+    if (failures) fail_msg("%d command lines not handled as required", failures);
+}
+
+/* Issue 32: a render without --output wrote the demo's 45 files (image, preview, frames, cube, viewer) into the
+ * working folder (the repository root for the README's commands). Now they go into one folder named after
+ * the scene, in the working folder, and nothing else appears there. */
+static void test_default_output_folder(void **state)
+{
+    const char *d = *state;
+    char cwd[1024], cmd[4096], out[8192];
+    assert_non_null(getcwd(cwd, sizeof cwd));
+    snprintf(cmd, sizeof cmd, "cd '%s' && '%s/" DARTSPP_BIN "' render '%s/" DEMO "' --spp 1 --quiet --set resolution=8 "
+             "--set frame_num=3", d, cwd, cwd);
+    int rc = test_run(cmd, out, sizeof out);
+    print_message("  exit %d: ", rc);
+    print_tail(out);
+    assert_int_equal(rc, 0);
+    snprintf(cmd, sizeof cmd, "ls -A '%s'", d);
+    assert_int_equal(test_run(cmd, out, sizeof out), 0);
+    print_message("  the working folder holds: %s", out);
+    assert_string_equal(out, "fogbox\n");
+    static const char *const files[] = {"fogbox.exr", "fogbox.png", "fogbox_0000.exr", "fogbox_0002.exr",
+                                        "fogbox_frames.csv", "fogbox_cube.npy", "fogbox_viewer.html"};
+    for (size_t i = 0; i < sizeof files / sizeof files[0]; i++) {
+        char path[1200];
+        snprintf(path, sizeof path, "%s/fogbox/%s", d, files[i]);
+        if (!file_exists(path)) fail_msg("%s was not written", path);
+    }
+}
+
 /* Starts `dartspp render` with extra arguments (NULL-terminated after the scene), waits until it has been
  * in its first pass for `settle` seconds, sends sig, and checks that it ends within EXIT_BOUND_S having
  * stopped the pass in progress. Returns the seconds from the signal to the exit. */
@@ -389,6 +471,8 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test_setup_teardown(test_refused_before_any_work, setup_dir, teardown_dir),
         cmocka_unit_test_setup_teardown(test_error_exits_without_leaks, setup_dir, teardown_dir),
+        cmocka_unit_test_setup_teardown(test_numbers_and_help, setup_dir, teardown_dir),
+        cmocka_unit_test_setup_teardown(test_default_output_folder, setup_dir, teardown_dir),
         cmocka_unit_test_setup_teardown(test_interrupt_inside_long_photon_pass, setup_dir, teardown_dir),
         cmocka_unit_test_setup_teardown(test_interrupt_inside_long_sensor_pass, setup_dir, teardown_dir),
         cmocka_unit_test_setup_teardown(test_interrupt_keeps_completed_passes, setup_dir, teardown_dir),

@@ -282,6 +282,127 @@ static void test_bsdf_key_errors(void **state)
     if (failures) fail_msg("%d bad BSDF keys not reported as required", failures);
 }
 
+/* Issue 32, silent nonsense: values the loader truncated or clamped are refused with the file and the keys
+ * (a count of light paths that is not whole, frames of -1 or 2.5, a fractional resolution, min_bounces above
+ * max_bounces, which was clamped to it), the resolution's message states both of its rules, and counts
+ * written as the paper's files write them (1e6, 1000000.0) still load. */
+static void test_whole_numbers_and_bounces(void **state)
+{
+    (void)state;
+    static const struct {
+        const char *from, *to, *needles[2];
+    } bad[] = {
+        {"\"max_bounces\": 4,", "\"max_bounces\": 4, \"photon_count\": 2.5,", {"integrator.photon_count", "2.5"}},
+        {"\"max_bounces\": 4,", "\"max_bounces\": 4, \"volume_photon_count\": 7.5,", {"integrator.volume_photon_count", "7.5"}},
+        {"\"max_bounces\": 4,", "\"max_bounces\": 4, \"frame_num\": -1,", {"integrator.frame_num", "-1"}},
+        {"\"max_bounces\": 4,", "\"max_bounces\": 4, \"frame_num\": 2.5,", {"integrator.frame_num", "2.5"}},
+        {"\"resolution\": [8, 8]", "\"resolution\": [64.5, 64]", {"camera.resolution", "64.5"}},
+        {"\"resolution\": [8, 8]", "\"resolution\": 7.25", {"camera.resolution", "7.25"}},
+        {"\"resolution\": [8, 8]", "\"resolution\": [65536, 65536]", {"65536 pixels per side", "2^28"}},
+        {"\"max_bounces\": 4,", "\"max_bounces\": 4, \"min_bounces\": 5,", {"integrator.min_bounces", "max_bounces (4)"}},
+    };
+    int failures = 0;
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+        char *text = replace1(BASE_SCENE, bad[i].from, bad[i].to);
+        dp_error err;
+        char name[64];
+        snprintf(name, sizeof name, "w%02zu.json", i);
+        scene *s = fx_load_text(name, text, NULL, &err);
+        free(text);
+        if (s) {
+            print_message("[%s] loaded, expected an error naming '%s'\n", bad[i].to, bad[i].needles[0]);
+            fx_drop(s);
+            failures++;
+        } else if (!strstr(err.msg, name) || !strstr(err.msg, bad[i].needles[0]) || !strstr(err.msg, bad[i].needles[1])) {
+            print_message("[%s] the message lacks the file, '%s' or '%s': %s\n", bad[i].to, bad[i].needles[0],
+                          bad[i].needles[1], err.msg);
+            failures++;
+        } else print_message("[%s] %s\n", bad[i].to, err.msg);
+    }
+    static const char *const counts[] = {"1e6", "1000000.0", "1000000"};
+    for (size_t i = 0; i < 3; i++) {
+        char to[128], name[64];
+        snprintf(to, sizeof to, "\"max_bounces\": 4, \"photon_count\": %s, \"min_bounces\": 4,", counts[i]);
+        snprintf(name, sizeof name, "c%zu.json", i);
+        char *text = replace1(BASE_SCENE, "\"max_bounces\": 4,", to);
+        dp_error err;
+        scene *s = fx_load_text(name, text, NULL, &err);
+        free(text);
+        if (!s) {
+            print_message("[photon_count %s, min_bounces = max_bounces] refused: %s\n", counts[i], err.msg);
+            failures++;
+        } else {
+            if (s->integrator.photon_count != 1e6 || s->integrator.min_bounces != 4) failures++;
+            fx_drop(s);
+        }
+    }
+    if (failures) fail_msg("%d values not handled as required", failures);
+}
+
+/* Issue 32: scenes that load and can only render black, or gain energy, say so before the render (the
+ * scene's notes, printed before it starts): no light, a light of zero power, a gate that ends before the
+ * earliest arrival of any light path (the base scene's light is sqrt(17) = 4.123 from the camera in fog of
+ * η = 1, and the gate [5.75, 6.25) is reachable), a gate that ends before the pulse starts, an albedo above 1.
+ * Legal scenes that are not dark stay silent. */
+static void test_dark_scene_warnings(void **state)
+{
+    (void)state;
+    static const char light[] = ",\n    {\"name\": \"light\", \"type\": \"point\", \"transform\": {\"position\": [0, 2, 0]}, "
+                                "\"power\": 100,\n     \"ext_medium\": \"fog\"}";
+    static const struct {
+        const char *what, *from, *to, *needles[3]; /* needles[0] NULL: no warning at all */
+        int unwarp;                                /* camera_unwarp: true as well */
+    } cases[] = {
+        {"no light", light, "", {"no light", "black", NULL}, 0},
+        {"zero power", "\"power\": 100", "\"power\": 0", {"light 'light'", "zero power", "black"}, 0},
+        {"zero emission", "\"power\": 100", "\"emission\": [0, 0, 0]", {"light 'light'", "zero power", NULL}, 0},
+        {"gate before the light can arrive", "\"transient_time_center\": 6", "\"transient_time_center\": 3",
+         {"gate ends at 3.25", "earliest arrival is 4.12", "light 'light'"}, 0},
+        {"frames before the light can arrive", "\"transient_time_center\": 6",
+         "\"start_time\": 0, \"frame_num\": 8", {"frames ends at 4", "4.12", "black"}, 0},
+        {"gate before the pulse", "\"power\": 100", "\"power\": 100, \"pulse_start\": 10",
+         {"gate ends at 6.25", "pulse_start 10", "black"}, 0},
+        /* unwarped, the camera leg does not count: the gate [0.75, 1.25) is reachable, one before the pulse is not */
+        {"unwarped gate before the warped arrival", "\"transient_time_center\": 6", "\"transient_time_center\": 1",
+         {NULL, NULL, NULL}, 1},
+        {"unwarped gate before the pulse", "\"power\": 100", "\"power\": 100, \"pulse_start\": 7",
+         {"gate ends at 6.25", "before any light emits", "black"}, 1},
+        {"albedo 5", "\"albedo\": 0.5", "\"albedo\": 5", {"bsdfs[0].albedo", "bsdf 'white'", "above 1"}, 0},
+        {"albedo [0.5, 1.2, 0.5]", "\"albedo\": 0.5", "\"albedo\": [0.5, 1.2, 0.5]", {"bsdf 'white'", "above 1", NULL}, 0},
+        {"base scene", NULL, NULL, {NULL, NULL, NULL}, 0},
+        {"gate just reachable", "\"transient_time_center\": 6", "\"transient_time_center\": 4", {NULL, NULL, NULL}, 0},
+        {"albedo 1", "\"albedo\": 0.5", "\"albedo\": 1", {NULL, NULL, NULL}, 0},
+        {"steady state (gate width 0)", "\"transient_time_width\": 0.5", "\"transient_time_width\": 0", {NULL, NULL, NULL}, 0},
+    };
+    int failures = 0;
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        char *text = cases[i].from ? replace1(BASE_SCENE, cases[i].from, cases[i].to) : strdup(BASE_SCENE);
+        if (cases[i].unwarp) {
+            char *t2 = replace1(text, "\"max_bounces\": 4,", "\"max_bounces\": 4, \"camera_unwarp\": true,");
+            free(text);
+            text = t2;
+        }
+        dp_error err;
+        char name[64];
+        snprintf(name, sizeof name, "d%02zu.json", i);
+        scene *s = fx_load_text(name, text, NULL, &err);
+        free(text);
+        if (!s) {
+            print_message("[%s] refused: %s\n", cases[i].what, err.msg);
+            failures++;
+            continue;
+        }
+        const char *notes = s->notes ? s->notes : "";
+        int ok = cases[i].needles[0] ? strstr(notes, "warning") && strstr(notes, name) != NULL : !strstr(notes, "warning");
+        for (int k = 0; k < 3; k++)
+            if (cases[i].needles[k] && !strstr(notes, cases[i].needles[k])) ok = 0;
+        print_message("[%s] %s%s", cases[i].what, ok ? "" : "NOT AS REQUIRED: ", notes[0] ? notes : "(no notes)\n");
+        if (!ok) failures++;
+        fx_drop(s);
+    }
+    if (failures) fail_msg("%d scenes not warned about as required", failures);
+}
+
 #define T(f) cmocka_unit_test_teardown(f, teardown_fx)
 
 int main(void)
@@ -292,6 +413,8 @@ int main(void)
         T(test_bad_values_in_process),
         T(test_derived_coefficients_stay_finite),
         T(test_bsdf_key_errors),
+        T(test_whole_numbers_and_bounces),
+        T(test_dark_scene_warnings),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -287,6 +287,84 @@ static void test_corrupt_texture(void **state)
     }
 }
 
+/* Issue 32: stb_image reads zeros past the end of a file without failing, so a truncated or header-only
+ * texture decoded as a mostly black image. Files cut byte by byte from the pattern's TGA (uncompressed and
+ * RLE) and PNG must each be an error naming the scene, the key and the file; the whole files, and a whole
+ * TGA followed by a TGA 2.0 footer, still load. */
+static void test_truncated_texture(void **state)
+{
+    (void)state;
+    write_tga("whole.tga", 0);
+    write_png("whole.png");
+    char path[1200];
+    size_t tga_len, png_len;
+    snprintf(path, sizeof path, "%s/whole.tga", fx_dir());
+    unsigned char *tga = fx_keep(read_all(path, &tga_len));
+    snprintf(path, sizeof path, "%s/whole.png", fx_dir());
+    unsigned char *png = fx_keep(read_all(path, &png_len));
+    assert_int_equal(tga_len, 18 + TW * TH * 3);
+    /* an RLE TGA (type 10) of the pattern: one raw packet per row (0x80 | count - 1 repeats, count - 1 raw) */
+    unsigned char rle[18 + TH * (1 + TW * 3)];
+    memcpy(rle, tga, 18);
+    rle[2] = 10;
+    for (int r = 0; r < TH; r++) {
+        rle[18 + r * (1 + TW * 3)] = TW - 1;
+        memcpy(rle + 18 + r * (1 + TW * 3) + 1, tga + 18 + r * TW * 3, TW * 3);
+    }
+    static const char footer[] = "\0\0\0\0\0\0\0\0TRUEVISION-XFILE.";
+    unsigned char tga_footer[sizeof rle + 64];
+    memcpy(tga_footer, tga, tga_len);
+    memcpy(tga_footer + tga_len, footer, sizeof footer); /* the 26-byte footer, its final 0 included */
+    const struct {
+        const char *name;
+        const unsigned char *bytes;
+        size_t len;
+        int ok;
+    } cases[] = {
+        {"header_only.tga", tga, 18, 0},
+        {"half.tga", tga, 18 + TW * TH * 3 / 2, 0},
+        {"one_short.tga", tga, tga_len - 1, 0},
+        {"header_only_rle.tga", rle, 18, 0},
+        {"half_rle.tga", rle, 18 + (1 + TW * 3) + 3, 0},
+        {"no_iend.png", png, png_len - 12, 0},
+        {"half.png", png, png_len / 2, 0},
+        {"whole_again.tga", tga, tga_len, 1},
+        {"whole_rle.tga", rle, sizeof rle, 1},
+        {"footer.tga", tga_footer, tga_len + sizeof footer, 1},
+        {"whole_again.png", png, png_len, 1},
+    };
+    int failures = 0;
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        write_in_dir(cases[i].name, cases[i].bytes, cases[i].len);
+        char bsdfs[256];
+        snprintf(bsdfs, sizeof bsdfs, "{\"name\": \"t\", \"type\": \"lambert\", \"albedo\": \"%s\"}", cases[i].name);
+        dp_error err;
+        scene *s = load_scene(bsdfs, "{\"type\": \"quad\", \"bsdf\": \"t\"}", &err);
+        if (s) {
+            int same = s->texture_count == 1 && s->textures[0].width == TW && s->textures[0].height == TH;
+            for (int k = 0; same && k < TH; k++)
+                for (int x = 0; x < TW; x++) {
+                    vec3 want = texel(x, k);
+                    const float *got = &s->textures[0].rgb[3 * (k * TW + x)];
+                    if (got[0] != (float)want.x || got[1] != (float)want.y || got[2] != (float)want.z) same = 0;
+                }
+            fx_drop(s);
+            if (!cases[i].ok || !same) {
+                print_message("%s (%zu bytes): loaded%s\n", cases[i].name, cases[i].len,
+                              cases[i].ok ? " with texels other than the pattern's" : ", expected an error");
+                failures++;
+            }
+        } else if (cases[i].ok) {
+            print_message("%s (%zu bytes, whole): refused: %s\n", cases[i].name, cases[i].len, err.msg);
+            failures++;
+        } else if (!strstr(err.msg, cases[i].name) || !strstr(err.msg, "bsdfs[0].albedo") || !strstr(err.msg, "scene.json")) {
+            print_message("%s: the message must name the scene, the key and the file: %s\n", cases[i].name, err.msg);
+            failures++;
+        } else print_message("%s (%zu bytes): %s\n", cases[i].name, cases[i].len, err.msg);
+    }
+    if (failures) fail_msg("%d of %zu texture files not handled as required", failures, sizeof cases / sizeof cases[0]);
+}
+
 /* ---- shading normals ---- */
 
 /* One triangle (0,0,0), (1,0,0), (0,1,0) (ng = +z) with the given vertex normals. */
@@ -468,6 +546,7 @@ int main(void)
         T(test_builtin_and_missing_uvs),
         T(test_missing_texture),
         T(test_corrupt_texture),
+        T(test_truncated_texture),
         T(test_smooth_normals),
         T(test_wo3_normals),
         T(test_recompute_normals_split),

@@ -202,6 +202,7 @@ typedef struct {
     const char *def_text;        /* default of string, duration and shape keys, as documented */
     double lo, hi;               /* range of numbers and integers, as bounds says */
     unsigned bounds;             /* KEY_LO | KEY_HI | KEY_LO_OPEN */
+    int integral;                /* KEY_NUMBER: a whole number (a count that files write as 1000000.0) */
     const char *const *choices;  /* KEY_CHOICE: NULL-terminated */
     size_t offset, size;         /* the resolved value in integrator_settings or renderer_settings */
     const char *meaning;

@@ -21,6 +21,36 @@ static double parse_bytes(const char *v)
     return d;
 }
 
+/* An exact unsigned decimal integer (digits only, no sign, fraction or exponent) up to max; 0 or -1. */
+static int parse_uint(const char *val, unsigned long long max, unsigned long long *out)
+{
+    if (!val || !*val) return -1;
+    for (const char *p = val; *p; p++)
+        if (*p < '0' || *p > '9') return -1;
+    char *end;
+    errno = 0;
+    unsigned long long u = strtoull(val, &end, 10);
+    if (*end || errno == ERANGE || u > max) return -1;
+    *out = u;
+    return 0;
+}
+
+/* The most threads a render accepts: more than this are no speed-up on any machine this runs on, only
+ * memory (per-thread buffers) and scheduling overhead. */
+#define MAX_THREADS 1024
+
+static void render_usage(FILE *f)
+{
+    fprintf(f, "usage: dartspp render SCENE.json [--threads N] [--seed S] [--spp N] [--time SECONDS]\n"
+               "                      [--output PATH.exr|.pfm] [--checkpoint SECONDS] [--set key=value ...]\n"
+               "                      [--reference REF.exr --log RUN.csv [--log-every SECONDS]]\n"
+               "                      [--max-memory SIZE] [--no-cube] [--no-viewer] [--verbose] [--quiet]\n"
+               "  --threads N     worker threads, 0 (all cores, the default) to %d\n"
+               "  --seed S        an integer 0 to 18446744073709551615 (default 1)\n"
+               "  --spp N         progressive passes; --time SECONDS: a wall-time budget\n"
+               "See docs/cli.md for every option, the outputs and the exit status.\n", MAX_THREADS);
+}
+
 static int bad_arg(const char *opt, const char *val, const char *why)
 {
     fprintf(stderr, "dartspp render: %s %s: %s\n", opt, val ? val : "", why);
@@ -50,11 +80,21 @@ static int parse_args(int argc, char **argv, render_request *rq, const char **se
         else if (!strcmp(o, "--quiet")) rq->quiet = 1;
         else if (!strcmp(o, "--no-cube")) rq->skip |= RENDER_SKIP_CUBE;
         else if (!strcmp(o, "--no-viewer")) rq->skip |= RENDER_SKIP_VIEWER;
-        else if (!strcmp(o, "--threads") || !strcmp(o, "--seed") || !strcmp(o, "--spp") || !strcmp(o, "--time")) {
+        else if (!strcmp(o, "--seed") || !strcmp(o, "--threads")) {
+            unsigned long long u;
+            int seed = !strcmp(o, "--seed");
+            if (parse_uint(v, seed ? UINT64_MAX : (unsigned long long)MAX_THREADS, &u)) {
+                if (seed) return bad_arg(o, v, "expected an integer from 0 to 18446744073709551615 (2^64 - 1)");
+                char why[160];
+                snprintf(why, sizeof why, "expected a whole number of threads from 0 (all cores) to %d", MAX_THREADS);
+                return bad_arg(o, v, why);
+            }
+            if (seed) rq->seed = (uint64_t)u;
+            else rq->threads = (int)u;
+            i++;
+        } else if (!strcmp(o, "--spp") || !strcmp(o, "--time")) {
             if (parse_number(o, v, 0, &d)) return bad_arg(o, v, "expected a non-negative number");
-            if (!strcmp(o, "--threads")) rq->threads = (int)d;
-            else if (!strcmp(o, "--seed")) rq->seed = (uint64_t)d;
-            else if (!strcmp(o, "--spp")) rq->spp = (long)d;
+            if (!strcmp(o, "--spp")) rq->spp = (long)d;
             else rq->time_limit = d;
             i++;
         } else if (!strcmp(o, "--checkpoint")) {
@@ -91,6 +131,11 @@ int cli_render(int argc, char **argv) { return cli_render_cluster(argc, argv, NU
 
 int cli_render_cluster(int argc, char **argv, const render_cluster *cluster)
 {
+    for (int i = 0; i < argc; i++)
+        if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h")) {
+            if (!cluster || cluster->rank == 0) render_usage(stdout);
+            return 0;
+        }
     render_request rq;
     const char **sets = calloc((size_t)argc + 1, sizeof(char *));
     int rc = parse_args(argc, argv, &rq, sets);

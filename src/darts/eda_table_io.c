@@ -186,10 +186,11 @@ int eda_table_cached(eda_table *t, const char *dir, double sigma_s, double sigma
     fprintf(stderr, "EDA table: building %s\n", path);
     if (eda_table_build(t, sigma_s, sigma_a, g, n_ratio, n_s, n_cos, s_max, r_lo, r_hi, build_progress, NULL, err))
         return -1;
-    fprintf(stderr, "%sEDA table: built in %.1f s, stored for later renders\n", isatty(2) ? "\r" : "", dp_seconds() - t0);
+    fprintf(stderr, "%sEDA table: built in %.1f s\n", isatty(2) ? "\r" : "", dp_seconds() - t0);
     if (eda_table_save(t, path, err)) {
         eda_table_free(t);
         return -1;
     }
+    fprintf(stderr, "EDA table: stored for later renders\n");
     return 0;
 }

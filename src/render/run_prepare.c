@@ -12,17 +12,22 @@ static int refuse(dp_error *err)
     return -1;
 }
 
-/* --output, else the scene's hdr_output_file, else <scene stem>.exr; relative to the working folder. */
+/* --output (relative to the working folder); else the scene's hdr_output_file, else <scene stem>.exr, in a
+ * folder named after the scene's stem in the working folder (an absolute hdr_output_file as it is): a render
+ * without --output writes its image, preview, frames, cube and viewer into one folder of its own instead of
+ * dropping them among the user's files (docs/cli.md §3.1). */
 static void output_path(const render_request *rq, const scene *s, char *out, size_t n)
 {
+    const char *base = strrchr(rq->scene_path, '/');
+    base = base ? base + 1 : rq->scene_path;
+    const char *dot = strrchr(base, '.');
+    int stem = (int)(dot && dot > base ? dot - base : (long)strlen(base));
+    /* a scene file without an extension is named like the folder would be: the folder gets "-out" */
+    const char *tag = dot && dot > base ? "" : "-out";
     if (rq->output) snprintf(out, n, "%s", rq->output);
-    else if (s->renderer.hdr_output_file[0]) snprintf(out, n, "%s", s->renderer.hdr_output_file);
-    else {
-        const char *base = strrchr(rq->scene_path, '/');
-        base = base ? base + 1 : rq->scene_path;
-        const char *dot = strrchr(base, '.');
-        snprintf(out, n, "%.*s.exr", (int)(dot ? dot - base : (long)strlen(base)), base);
-    }
+    else if (s->renderer.hdr_output_file[0] == '/') snprintf(out, n, "%s", s->renderer.hdr_output_file);
+    else if (s->renderer.hdr_output_file[0]) snprintf(out, n, "%.*s%s/%s", stem, base, tag, s->renderer.hdr_output_file);
+    else snprintf(out, n, "%.*s%s/%.*s.exr", stem, base, tag, stem, base);
 }
 
 static int load_scene(render_run_job *j, dp_error *err)

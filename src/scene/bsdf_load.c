@@ -43,6 +43,10 @@ static int parse_albedo(json_ctx *c, const cJSON *v, const char *where, scene *s
     if (cJSON_IsObject(a)) return jfail(c, where, "albedo", "texture objects are not supported (give the file name)");
     if (jget_vec3(c, v, where, "albedo", b->albedo, &b->albedo)) return -1;
     if (b->albedo.x < 0 || b->albedo.y < 0 || b->albedo.z < 0) return jfail(c, where, "albedo", "must be >= 0");
+    if (b->albedo.x > 1 || b->albedo.y > 1 || b->albedo.z > 1)
+        jwarn(c, "%s.albedo: bsdf '%s' has albedo (%g, %g, %g), above 1 in a channel: it reflects more light than "
+                 "it receives, so the render gains energy (an albedo is a fraction, 0 to 1)", where, b->name,
+              b->albedo.x, b->albedo.y, b->albedo.z);
     return 0;
 }
 

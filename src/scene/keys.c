@@ -56,9 +56,9 @@ static const scene_key table[] = {
     {.name = "enable_rr", IN(enable_rr), .type = KEY_BOOL, .read_by = PT, .changes_image = 1, .def = 1,
      .meaning = "Russian roulette on the path throughput"},
     /* ---- integrator: photon points ---- */
-    {.name = "photon_count", IN(photon_count), .type = KEY_NUMBER, .read_by = PP, .changes_image = 1, .def = 1e6,
+    {.name = "photon_count", IN(photon_count), .type = KEY_NUMBER, .integral = 1, .read_by = PP, .changes_image = 1, .def = 1e6,
      AT_LEAST(0), .meaning = "Light paths per iteration, and the surface photon budget"},
-    {.name = "volume_photon_count", IN(volume_photon_count), .type = KEY_NUMBER, .read_by = PP, .changes_image = 1,
+    {.name = "volume_photon_count", IN(volume_photon_count), .type = KEY_NUMBER, .integral = 1, .read_by = PP, .changes_image = 1,
      .def = 1e6, AT_LEAST(0), .meaning = "Volume photon budget per iteration"},
     {.name = "gather_photon_count", IN(gather_photon_count), .type = KEY_INT, .read_by = PP, .changes_image = 1,
      .def = 20, IN_RANGE(1, 256), .meaning = "Surface photons gathered per camera hit (k nearest)"},
@@ -135,7 +135,7 @@ static const scene_key table[] = {
     {.name = "checkpoint_interval", RE(checkpoint_seconds), .type = KEY_DURATION, .read_by = ALL,
      .def_text = "none", .meaning = "Interval of checkpoint writes (--checkpoint overrides)"},
     {.name = "hdr_output_file", RE(hdr_output_file), .type = KEY_STRING, .read_by = ALL, .def_text = "<scene>.exr",
-     .meaning = "Output image when --output is not given"},
+     .meaning = "Output image when --output is not given; a relative path goes into a folder named after the scene"},
     {.name = "output_file", RE(output_file), .type = KEY_STRING, .def_text = "",
      .meaning = "The authors' LDR preview; dartspp writes none"},
     NOT_READ("spp_step", KEY_SECTION_RENDERER, "Tungsten's passes per step; not read"),
@@ -206,7 +206,7 @@ void scene_key_range_text(const scene_key *k, char *out, size_t n)
             len += (size_t)snprintf(out + len, n - len, "%s%s", i ? ", " : "", k->choices[i]);
     } else if (k->type == KEY_SHAPE3) snprintf(out, n, "each in [%g, %g], the last ≥ %g", k->lo, k->hi, k->lo + 1);
     else if ((k->bounds & KEY_LO) && (k->bounds & KEY_HI)) snprintf(out, n, "[%g, %g]", k->lo, k->hi);
-    else if (k->bounds & KEY_LO) snprintf(out, n, "%s %g", k->bounds & KEY_LO_OPEN ? ">" : "≥", k->lo);
+    else if (k->bounds & KEY_LO) snprintf(out, n, "%s %g%s", k->bounds & KEY_LO_OPEN ? ">" : "≥", k->lo, k->integral ? ", whole" : "");
     else if (k->bounds & KEY_HI) snprintf(out, n, "≤ %g", k->hi);
     else if (k->type == KEY_NUMBER) snprintf(out, n, "finite");
     else snprintf(out, n, "—");

@@ -425,8 +425,11 @@ static int parse_camera(json_ctx *c, const cJSON *root, scene *s)
             w = cJSON_GetArrayItem(res, 0)->valuedouble;
             h = cJSON_GetArrayItem(res, 1)->valuedouble;
         } else return jfail(c, "camera", "resolution", "expected [width, height]");
+        if (w != floor(w) || h != floor(h))
+            return jfail(c, "camera", "resolution", "expected whole numbers of pixels (got %.17g x %.17g)", w, h);
         if (!(w >= 1 && h >= 1 && w <= 65536 && h <= 65536 && w * h <= 1 << 28))
-            return jfail(c, "camera", "resolution", "must be between 1 and 65536 per side (got %g x %g)", w, h);
+            return jfail(c, "camera", "resolution", "must be 1 to 65536 pixels per side and at most 2^28 (268435456) "
+                         "pixels in all (got %g x %g)", w, h);
         cam->width = (int)w;
         cam->height = (int)h;
     }
@@ -456,6 +459,53 @@ static void set_dir(scene *s, const char *path)
     snprintf(s->dir, sizeof s->dir, "%s", dirname(tmp));
 }
 
+/* Scenes that load and can only render black: no light, lights of zero power, or a gate that ends before the
+ * earliest time any light path can reach the camera (the pulse start plus the straight light-to-camera
+ * distance times the smallest time per length of the scene's regions; a camera-unwarped time leaves out the
+ * camera segment, so there only the pulse start bounds it). Warnings, since the file is legal. */
+static void warn_dark_scene(json_ctx *c, const scene *s)
+{
+    if (s->light_count == 0) {
+        jwarn(c, "primitives: the scene has no light (a primitive of type \"point\" with power or emission): the "
+                 "image will be black");
+        return;
+    }
+    int lit = 0;
+    for (int i = 0; i < s->light_count; i++) {
+        const point_light *L = &s->lights[i];
+        if (L->intensity.x > 0 || L->intensity.y > 0 || L->intensity.z > 0) lit++;
+        else jwarn(c, "primitives: light '%s' has zero power: it emits nothing", L->name);
+    }
+    if (!lit) {
+        jwarn(c, "primitives: every light has zero power: the image will be black");
+        return;
+    }
+    const time_window *tw = &s->integrator.window;
+    if (!tw->gated) return;
+    double eta = s->integrator.vacuum_eta;
+    for (int m = 0; m < s->medium_count; m++)
+        if (s->media[m].eta < eta) eta = s->media[m].eta;
+    double earliest = INFINITY, dist = 0;
+    const point_light *first = NULL;
+    for (int i = 0; i < s->light_count; i++) {
+        const point_light *L = &s->lights[i];
+        if (!(L->intensity.x > 0 || L->intensity.y > 0 || L->intensity.z > 0)) continue;
+        double d = tw->camera_unwarp ? 0.0 : v3_len(v3_sub(L->pos, s->cam.pos)), t = L->pulse_start + d * eta;
+        if (t < earliest) earliest = t, dist = d, first = L;
+    }
+    double end = time_window_end(tw);
+    if (!first || end > earliest) return;
+    if (tw->camera_unwarp)
+        jwarn(c, "integrator: the time %s ends at %g, before any light emits (the earliest pulse_start is %g, light "
+                 "'%s'): the image will be black", tw->frame_count > 0 ? "window of the frames" : "gate", end, earliest,
+              first->name);
+    else
+        jwarn(c, "integrator: the time %s ends at %g, before any light path can reach the camera: the earliest "
+                 "arrival is %g (light '%s': pulse_start %g + distance to the camera %g x the smallest time per "
+                 "length %g): the image will be black", tw->frame_count > 0 ? "window of the frames" : "gate", end,
+              earliest, first->name, first->pulse_start, dist, eta);
+}
+
 static int parse_all(json_ctx *c, cJSON *root, scene *s, const scene_load_options *opt)
 {
     if (!cJSON_IsObject(root)) return jfail(c, "(top level)", NULL, "expected a JSON object");
@@ -467,6 +517,7 @@ static int parse_all(json_ctx *c, cJSON *root, scene *s, const scene_load_option
     if (!rc) rc = parse_camera(c, root, s);
     if (!rc) rc = settings_parse(c, root, s);
     if (!rc) jnote_unread_keys(c, root, "", 0);
+    if (!rc) warn_dark_scene(c, s);
     cJSON_Delete((cJSON *)names);
     return rc;
 }

@@ -24,8 +24,9 @@ static int override_resolution(json_ctx *c, cJSON *root, const char *set, const 
     char *end;
     long w = strtol(text, &end, 10), h = w;
     if (*end == 'x') h = strtol(end + 1, &end, 10);
-    if (end == text || *end || w < 1 || h < 1 || w > 65536 || h > 65536)
-        return dp_fail(c->err, "%s: --set %s: expected resolution=W or resolution=WxH (1 to 65536)", c->file, set);
+    if (end == text || *end || w < 1 || h < 1 || w > 65536 || h > 65536 || w * h > (1L << 28))
+        return dp_fail(c->err, "%s: --set %s: expected resolution=W or resolution=WxH (1 to 65536 per side, at most "
+                       "2^28 pixels in all)", c->file, set);
     cJSON *cam = cJSON_GetObjectItemCaseSensitive(root, "camera");
     if (!cJSON_IsObject(cam)) return jfail(c, "camera", NULL, "expected an object");
     cJSON_DeleteItemFromObjectCaseSensitive(cam, "resolution");
@@ -119,6 +120,8 @@ static int read_number_key(json_ctx *c, const scene_key *k, const char *where, c
 {
     double d;
     if (jget_number(c, obj, where, k->name, key_default(k, s), &d) || check_range(c, k, where, d)) return -1;
+    if (k->type == KEY_NUMBER && k->integral && d != floor(d))
+        return jfail(c, where, k->name, "expected a whole number, it counts paths or photons (got %.17g)", d);
     if (k->type == KEY_NUMBER) {
         *(double *)key_field(k, s) = d;
         return 0;
@@ -250,7 +253,9 @@ static int resolve_window(json_ctx *c, const cJSON *v, integrator_settings *in)
 static int resolve_integrator(json_ctx *c, const cJSON *v, integrator_settings *in)
 {
     snprintf(in->type_name, sizeof in->type_name, "%s", integrator_type_name((integrator_type)in->type));
-    if (in->min_bounces > in->max_bounces) in->min_bounces = in->max_bounces;
+    if (in->min_bounces > in->max_bounces)
+        return jfail(c, "integrator", "min_bounces", "%ld is more than max_bounces (%ld): no path would count",
+                     in->min_bounces, in->max_bounces);
     in->vacuum_eta = 1.0 / in->vacuum_speed;
     if (!isfinite(in->vacuum_eta))
         return jfail(c, "integrator", "vaccum_speed_of_light", "too small (got %g)", in->vacuum_speed);

@@ -23,13 +23,75 @@ static void gamma_table(float lut[256])
     for (int i = 0; i < 256; i++) lut[i] = (float)(floor(255.0 * pow(i / 255.0, 2.2)) / 255.0);
 }
 
+/* The file's bytes as stb_image's callbacks, noting a read past their end: stb_image's decoders read zeros
+ * past the end of the data without failing, so a truncated or header-only file (a TGA above all) would
+ * decode "fine" as a mostly black image. A refill that finds nothing left, a bulk read that comes up short
+ * (stb's refills ask for 128 bytes and may get fewer at the end) or a skip past the end means the image
+ * promised more bytes than the file holds. */
+typedef struct {
+    const unsigned char *data;
+    size_t size, pos;
+    int past_end;
+} texture_bytes;
+
+static int bytes_read(void *user, char *out, int size)
+{
+    texture_bytes *b = user;
+    size_t want = size > 0 ? (size_t)size : 0, n = b->size - b->pos < want ? b->size - b->pos : want;
+    if (n < want && (n == 0 || want != 128)) b->past_end = 1;
+    memcpy(out, b->data + b->pos, n);
+    b->pos += n;
+    return (int)n;
+}
+
+static void bytes_skip(void *user, int n)
+{
+    texture_bytes *b = user;
+    if (n < 0) b->pos = (size_t)-n > b->pos ? 0 : b->pos - (size_t)-n;
+    else if ((size_t)n > b->size - b->pos) {
+        b->past_end = 1;
+        b->pos = b->size;
+    } else b->pos += (size_t)n;
+}
+
+static int bytes_eof(void *user)
+{
+    const texture_bytes *b = user;
+    return b->pos >= b->size;
+}
+
 static int decode(json_ctx *c, const char *where, const char *key, const char *file, texture *t)
 {
     int w = 0, h = 0, n = 0;
-    unsigned char *px = stbi_load(t->path, &w, &h, &n, 3);
-    if (!px) {
+    size_t size = 0;
+    FILE *f = fopen(t->path, "rb");
+    unsigned char *data = NULL;
+    if (f && fseek(f, 0, SEEK_END) == 0) {
+        long len = ftell(f);
+        if (len >= 0 && (unsigned long)len < (unsigned long)INT_MAX && fseek(f, 0, SEEK_SET) == 0) {
+            size = (size_t)len;
+            data = malloc(size ? size : 1);
+            if (data && fread(data, 1, size, f) != size) {
+                free(data);
+                data = NULL;
+            }
+        }
+    }
+    if (f) fclose(f);
+    if (!data) return jfail(c, where, key, "cannot read texture '%s' (%s)", file, t->path);
+    texture_bytes bytes = {data, size, 0, 0};
+    const stbi_io_callbacks io = {bytes_read, bytes_skip, bytes_eof};
+    unsigned char *px = stbi_load_from_callbacks(&io, &bytes, &w, &h, &n, 3);
+    free(data);
+    if (!px && !bytes.past_end) {
         const char *why = stbi_failure_reason();
-        return jfail(c, where, key, "cannot decode texture '%s' (%s): %s", file, t->path, why ? why : "unknown reason");
+        return jfail(c, where, key, "cannot decode texture '%s' (%s): %s", file, t->path, why && *why ? why : "unknown reason");
+    }
+    if (!px) return jfail(c, where, key, "cannot decode texture '%s' (%s): the file is truncated (%zu bytes)", file, t->path, size);
+    if (bytes.past_end) {
+        stbi_image_free(px);
+        return jfail(c, where, key, "texture '%s' (%s) is truncated: its header promises %d x %d pixels, more than "
+                     "the file's %zu bytes hold", file, t->path, w, h, size);
     }
     if (w < 1 || h < 1 || (size_t)w * (size_t)h > ((size_t)1 << 28)) {
         stbi_image_free(px);
