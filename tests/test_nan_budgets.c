@@ -66,46 +66,54 @@ static void test_cli_gather_radius_zero(void **state)
 /* A 3x1 film with 2 frames, sums set by hand: a NaN channel in the gate image's pixel 0 and +Inf in frame 1's
  * pixel 2; weight sum 2. Those two pixels are written as 0 in all three channels, the others as sum / 2. Then a
  * steady film whose double sum 1e300 is beyond the float range. */
+static film films[2]; /* freed by the teardown, also after a failed assertion */
+static image_rgb film_img;
+
+static int teardown_films(void **state)
+{
+    (void)state;
+    film_free(&films[0]);
+    film_free(&films[1]);
+    image_free(&film_img);
+    return 0;
+}
+
 static void test_film_image_writes_nonfinite_as_zero(void **state)
 {
     (void)state;
-    film f;
+    film *f = &films[0], *f2 = &films[1];
+    image_rgb *img = &film_img;
     dp_error err;
     time_window tw = {.gated = 1, .start = 0, .width = 1, .frame_count = 2};
-    assert_int_equal(film_init(&f, 3, 1, &tw, &err), 0);
+    assert_int_equal(film_init(f, 3, 1, &tw, &err), 0);
     for (int i = 0; i < 9; i++) {
-        f.sum[i] = i + 1;
-        f.frame_sum[i] = (float)(10 + i);
-        f.frame_sum[9 + i] = (float)(20 + i);
+        f->sum[i] = i + 1;
+        f->frame_sum[i] = (float)(10 + i);
+        f->frame_sum[9 + i] = (float)(20 + i);
     }
-    f.sum[1] = NAN;
-    f.frame_sum[9 + 7] = INFINITY;
-    f.passes = 2;
-    f.weight_sum = 2.0;
-    image_rgb img;
-    assert_int_equal(film_nonfinite_pixels(&f), 2);
-    assert_int_equal(film_image(&f, -1, &img, &err), 0);
+    f->sum[1] = NAN;
+    f->frame_sum[9 + 7] = INFINITY;
+    f->passes = 2;
+    f->weight_sum = 2.0;
+    assert_int_equal(film_nonfinite_pixels(f), 2);
+    assert_int_equal(film_image(f, -1, img, &err), 0);
     const float gate[9] = {0, 0, 0, 2, 2.5f, 3, 3.5f, 4, 4.5f};
-    for (int i = 0; i < 9; i++) assert_true(img.rgb[i] == gate[i]);
-    image_free(&img);
-    assert_int_equal(film_image(&f, 1, &img, &err), 0);
+    for (int i = 0; i < 9; i++) assert_true(img->rgb[i] == gate[i]);
+    image_free(img);
+    assert_int_equal(film_image(f, 1, img, &err), 0);
     const float frame1[9] = {10, 10.5f, 11, 11.5f, 12, 12.5f, 0, 0, 0};
-    for (int i = 0; i < 9; i++) assert_true(img.rgb[i] == frame1[i]);
-    image_free(&img);
+    for (int i = 0; i < 9; i++) assert_true(img->rgb[i] == frame1[i]);
+    image_free(img);
     /* beyond the float range: a double sum of 1e300 is Inf in float32 */
-    film f2;
     time_window steady = {0};
-    assert_int_equal(film_init(&f2, 2, 1, &steady, &err), 0);
-    f2.sum[3] = 1e300;
-    f2.sum[0] = 7;
-    f2.weight_sum = 1.0;
-    f2.passes = 1;
-    assert_int_equal(film_nonfinite_pixels(&f2), 1);
-    assert_int_equal(film_image(&f2, -1, &img, &err), 0);
-    assert_true(img.rgb[0] == 7.0f && img.rgb[3] == 0.0f && img.rgb[4] == 0.0f && img.rgb[5] == 0.0f);
-    image_free(&img);
-    film_free(&f2);
-    film_free(&f);
+    assert_int_equal(film_init(f2, 2, 1, &steady, &err), 0);
+    f2->sum[3] = 1e300;
+    f2->sum[0] = 7;
+    f2->weight_sum = 1.0;
+    f2->passes = 1;
+    assert_int_equal(film_nonfinite_pixels(f2), 1);
+    assert_int_equal(film_image(f2, -1, img, &err), 0);
+    assert_true(img->rgb[0] == 7.0f && img->rgb[3] == 0.0f && img->rgb[4] == 0.0f && img->rgb[5] == 0.0f);
 }
 
 /* Pixels with a non-zero channel in the image at path; fails on a non-finite value. */
@@ -271,7 +279,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test_teardown(test_radius_zero_refused, teardown_fx),
         cmocka_unit_test_teardown(test_cli_gather_radius_zero, test_teardown_tmpdir),
-        cmocka_unit_test(test_film_image_writes_nonfinite_as_zero),
+        cmocka_unit_test_teardown(test_film_image_writes_nonfinite_as_zero, teardown_films),
         cmocka_unit_test_teardown(test_cli_nonfinite_pixels_never_written, test_teardown_tmpdir),
         cmocka_unit_test_teardown(test_cli_zero_budget_flag_alone_refused, test_teardown_tmpdir),
         cmocka_unit_test_teardown(test_cli_negative_timeout_warns, test_teardown_tmpdir),
