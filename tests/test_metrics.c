@@ -1,5 +1,7 @@
 /* Quantiles and the error metrics of the io module (compare, the mean of an image) against values worked out
- * by hand and the sorted definition; non-finite values excluded, a zero reference, mismatched sizes. */
+ * by hand and the sorted definition; non-finite values excluded, a zero reference, mismatched sizes. Issue 32:
+ * the commands `compare`, `patch-mean` and `merge` refuse what they cannot measure (non-finite pixels, a patch
+ * with no finite pixel, an output that is one of merge's inputs) with a message naming the file and exit 2. */
 #include "fixtures.h"
 
 /* ---- quantile and metrics ---- */
@@ -220,6 +222,126 @@ static void test_compare_size_mismatch(void **state)
     image_free(&ref);
 }
 
+/* ---- the commands on images that cannot be measured (issue 32, item 2) ---- */
+
+/* Writes a 2x2 PFM <dir>/<name> holding the 12 values v. */
+static void write_pfm(char *path, size_t n, const char *dir, const char *name, const float *v)
+{
+    image_rgb img;
+    dp_error err;
+    join(path, n, dir, name);
+    fill(&img, 2, 2, v);
+    assert_int_equal(image_write(path, &img, NULL, &err), 0);
+    image_free(&img);
+}
+
+/* An all-NaN image against a finite reference was MSE 0, exit 0, "(of 4 compared)": now exit 2 naming the file
+ * that holds the NaN or Inf pixels, in either place. A finite pair is scored over all 4 pixels (hand values:
+ * every channel off by 1, so MSE 1). */
+static void test_cli_compare_refuses_nonfinite(void **state)
+{
+    char *dir = *state = tmpdir_or_fail();
+    char nan_img[512], inf_ref[512], ones[512], zeros[512], cmd[2048], out[4096];
+    float v[12];
+    for (int i = 0; i < 12; i++) v[i] = NAN;
+    write_pfm(nan_img, sizeof nan_img, dir, "nan.pfm", v);
+    for (int i = 0; i < 12; i++) v[i] = 0.0f;
+    write_pfm(zeros, sizeof zeros, dir, "zeros.pfm", v);
+    v[4] = INFINITY; /* pixel 1: x 1, y 0 */
+    write_pfm(inf_ref, sizeof inf_ref, dir, "inf.pfm", v);
+    for (int i = 0; i < 12; i++) v[i] = 1.0f;
+    write_pfm(ones, sizeof ones, dir, "ones.pfm", v);
+
+    snprintf(cmd, sizeof cmd, DARTSPP_BIN " compare %s %s", nan_img, zeros);
+    assert_int_equal(test_run(cmd, out, sizeof out), 2);
+    ASSERT_CONTAINS(out, nan_img);
+    ASSERT_CONTAINS(out, "4 of 4 pixels have a NaN or Inf channel");
+    snprintf(cmd, sizeof cmd, DARTSPP_BIN " compare %s %s --csv", nan_img, zeros);
+    assert_int_equal(test_run(cmd, out, sizeof out), 2);
+    snprintf(cmd, sizeof cmd, DARTSPP_BIN " compare %s %s", ones, inf_ref);
+    assert_int_equal(test_run(cmd, out, sizeof out), 2);
+    ASSERT_CONTAINS(out, inf_ref);
+    ASSERT_CONTAINS(out, "1 of 4 pixels have a NaN or Inf channel (the first at x 1, y 0)");
+
+    snprintf(cmd, sizeof cmd, DARTSPP_BIN " compare %s %s", ones, zeros);
+    assert_int_equal(test_run(cmd, out, sizeof out), 0);
+    ASSERT_CONTAINS(out, "(of 4 compared)");
+    snprintf(cmd, sizeof cmd, DARTSPP_BIN " compare %s %s --csv", ones, zeros);
+    assert_int_equal(test_run(cmd, out, sizeof out), 0);
+    ASSERT_CONTAINS(out, "1,1,"); /* mse 1, rmse 1 */
+    ASSERT_CONTAINS(out, ",0,4\n"); /* no non-finite pixel, 4 compared */
+}
+
+/* patch-mean printed 0 for a patch without a finite pixel: now exit 2. A patch with one finite pixel averages
+ * that pixel alone (hand value (1 + 2 + 6) / 3 = 3) and reports the others. */
+static void test_cli_patch_mean_no_finite_pixel(void **state)
+{
+    char *dir = *state = tmpdir_or_fail();
+    char path[512], cmd[2048], out[4096];
+    float v[12];
+    for (int i = 0; i < 12; i++) v[i] = NAN;
+    v[9] = 1, v[10] = 2, v[11] = 6; /* pixel (1, 1) */
+    write_pfm(path, sizeof path, dir, "p.pfm", v);
+    snprintf(cmd, sizeof cmd, DARTSPP_BIN " patch-mean %s 0 0 2 1", path);
+    assert_int_equal(test_run(cmd, out, sizeof out), 2);
+    ASSERT_CONTAINS(out, path);
+    ASSERT_CONTAINS(out, "no pixel of the rectangle");
+    snprintf(cmd, sizeof cmd, DARTSPP_BIN " patch-mean %s 0 0 2 2", path);
+    assert_int_equal(test_run(cmd, out, sizeof out), 0);
+    ASSERT_CONTAINS(out, "3 non-finite pixels left out");
+    ASSERT_CONTAINS(out, "\n3\n");
+}
+
+/* merge wrote NaN pixels with "variance 0" and could overwrite one of its inputs: now an output that is an
+ * input (the same path, another spelling of it, a symbolic link to it) is refused with the input unchanged, and a
+ * non-finite input is refused by name with no output written. Two finite inputs 1 and 3 everywhere: the mean is 2,
+ * V = s²/k = ((1 − 2)² + (3 − 2)²) / 1 / 2 = 1 (by hand). */
+static void test_cli_merge_refuses_inputs_as_output_and_nonfinite(void **state)
+{
+    char *dir = *state = tmpdir_or_fail();
+    char a[512], b[512], bad[512], outp[512], link[512], cmd[4096], out[4096];
+    float v[12];
+    for (int i = 0; i < 12; i++) v[i] = 1.0f;
+    write_pfm(a, sizeof a, dir, "a.pfm", v);
+    for (int i = 0; i < 12; i++) v[i] = 3.0f;
+    write_pfm(b, sizeof b, dir, "b.pfm", v);
+    v[7] = NAN;
+    write_pfm(bad, sizeof bad, dir, "bad.pfm", v);
+    join(outp, sizeof outp, dir, "m.pfm");
+    join(link, sizeof link, dir, "link.pfm");
+    assert_int_equal(symlink(a, link), 0);
+    unsigned char before[256], after[256];
+    size_t len_before = read_into(a, before, sizeof before);
+    assert_true(len_before > 48 && len_before < sizeof before);
+
+    const char *outputs[3] = {a, link, NULL};
+    char spelled[600];
+    snprintf(spelled, sizeof spelled, "%s/./a.pfm", dir);
+    outputs[2] = spelled;
+    for (int i = 0; i < 3; i++) {
+        snprintf(cmd, sizeof cmd, DARTSPP_BIN " merge %s %s %s", outputs[i], a, b);
+        assert_int_equal(test_run(cmd, out, sizeof out), 2);
+        ASSERT_CONTAINS(out, "is the input");
+        assert_int_equal(read_into(a, after, sizeof after), len_before);
+        assert_memory_equal(after, before, len_before);
+    }
+
+    snprintf(cmd, sizeof cmd, DARTSPP_BIN " merge %s %s %s", outp, a, bad);
+    assert_int_equal(test_run(cmd, out, sizeof out), 2);
+    ASSERT_CONTAINS(out, bad);
+    ASSERT_CONTAINS(out, "1 of 4 pixels have a NaN or Inf channel (the first at x 0, y 1)");
+    assert_int_equal(access(outp, F_OK), -1);
+
+    snprintf(cmd, sizeof cmd, DARTSPP_BIN " merge %s %s %s", outp, a, b);
+    assert_int_equal(test_run(cmd, out, sizeof out), 0);
+    ASSERT_CONTAINS(out, "variance of the mean 1 ");
+    image_rgb m;
+    dp_error err;
+    assert_int_equal(image_read(outp, &m, &err), 0);
+    for (int i = 0; i < 12; i++) assert_true(m.rgb[i] == 2.0f);
+    image_free(&m);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -231,6 +353,9 @@ int main(void)
         cmocka_unit_test(test_compare_zero_reference),
         cmocka_unit_test(test_compare_size_mismatch),
         cmocka_unit_test(test_mean_of_hand_values),
+        cmocka_unit_test_teardown(test_cli_compare_refuses_nonfinite, test_teardown_tmpdir),
+        cmocka_unit_test_teardown(test_cli_patch_mean_no_finite_pixel, test_teardown_tmpdir),
+        cmocka_unit_test_teardown(test_cli_merge_refuses_inputs_as_output_and_nonfinite, test_teardown_tmpdir),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

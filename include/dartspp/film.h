@@ -85,8 +85,11 @@ int film_splat(film *f, size_t px, double t, vec3 c, int frame);
 /* The pass layer joins the sums with weight w > 0 (passes + 1), or is cleared. */
 void film_commit_pass(film *f, double w);
 void film_drop_pass(film *f);
-/* Gate image (k < 0) or frame k, as the weighted mean over passes. */
+/* Gate image (k < 0) or frame k, as the weighted mean over passes in float32. A pixel with a channel that is
+ * not finite there (NaN, or beyond the float range) is written as 0: no NaN or Inf leaves the film. */
 int film_image(const film *f, int k, image_rgb *img, dp_error *err);
+/* The pixels film_image writes as 0 for not being finite, over the gate image and every frame. */
+long film_nonfinite_pixels(const film *f);
 
 /* ---- the pixels of one pass ----
  * Every integrator takes one camera sample per pixel per pass the same way: rows in parallel (dynamic

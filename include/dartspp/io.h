@@ -92,6 +92,8 @@ typedef struct {
 } image_error;
 
 int image_compare(const image_rgb *img, const image_rgb *ref, image_error *out, dp_error *err);
+/* Pixels with a NaN or Inf channel, and where the first is (row 0 at the top; -1 when none). */
+long image_nonfinite_pixels(const image_rgb *img, int *first_x, int *first_y);
 
 /* The mean of k >= 2 independent renders of the same size (equal weights) and the variance of that mean,
  * averaged over channels and pixels: V = mean of s²/k, s² the unbiased per-value sample variance. V is

@@ -105,6 +105,7 @@ typedef struct render_stats {
     double camera_rays;     /* primary rays traced */
     double rays;            /* all rays traced (primary, bounce, shadow) */
     long nonfinite;
+    long nonfinite_pixels;  /* pixels of the images not finite at the end, written as 0 (film_nonfinite_pixels) */
     int interrupted;
     double photon_paths;    /* light paths traced (photon points) */
     double stored_photons;  /* volume + surface photons stored, summed over iterations */

@@ -169,6 +169,7 @@ typedef struct {
 typedef struct {
     long spp;                /* progressive passes; 0 = no limit */
     double timeout_seconds;  /* 0 = no limit */
+    char timeout_negative[32]; /* a negative timeout as written ("-1", "-5s"): no limit, with a warning; else "" */
     double checkpoint_seconds;
     char output_file[1024];  /* LDR preview as written in the scene (not written by dartspp) */
     char hdr_output_file[1024];

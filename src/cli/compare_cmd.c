@@ -27,7 +27,17 @@ int cli_compare(int argc, char **argv)
     image_rgb img = {0}, ref = {0};
     image_error e;
     dp_error err;
-    int rc = image_read(paths[0], &img, &err) || image_read(paths[1], &ref, &err) || image_compare(&img, &ref, &e, &err);
+    int rc = image_read(paths[0], &img, &err) || image_read(paths[1], &ref, &err);
+    /* A NaN or Inf pixel means the render went wrong there: it is refused, never scored (docs/cli.md §4). */
+    for (int i = 0; i < 2 && !rc; i++) {
+        int x, y;
+        const image_rgb *im = i ? &ref : &img;
+        long bad = image_nonfinite_pixels(im, &x, &y);
+        if (bad)
+            rc = dp_fail(&err, "%s: %ld of %ld pixels have a NaN or Inf channel (the first at x %d, y %d): "
+                               "not compared", paths[i], bad, (long)im->width * im->height, x, y);
+    }
+    if (!rc) rc = image_compare(&img, &ref, &e, &err);
     if (rc) fprintf(stderr, "dartspp compare: %s\n", err.msg);
     else if (csv)
         printf("%.9g,%.9g,%.9g,%.9g,%.9g,%ld,%ld\n", e.mse, e.rmse, e.rel_mse, e.mse_q99, e.q99, e.nonfinite, e.pixels);
@@ -36,7 +46,7 @@ int cli_compare(int argc, char **argv)
                "relative mse       %.6g   (mean of (x-r)^2/(r^2+0.01))\n"
                "mse / q99^2        %.6g   (both divided by the reference's 0.99 quantile %.6g)\n"
                "non-finite pixels  %ld   (of %ld compared)\n",
-               paths[0], paths[1], e.mse, e.rmse, e.rel_mse, e.mse_q99, e.q99, e.nonfinite, e.pixels + e.nonfinite);
+               paths[0], paths[1], e.mse, e.rmse, e.rel_mse, e.mse_q99, e.q99, e.nonfinite, e.pixels);
     image_free(&img);
     image_free(&ref);
     return rc ? 2 : 0;

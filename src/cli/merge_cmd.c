@@ -3,6 +3,7 @@
  * result brings into every error measured against it. */
 #include <stdio.h>
 #include <stdlib.h>
+#include <sys/stat.h>
 
 #include "dartspp/cli.h"
 #include "dartspp/io.h"
@@ -21,7 +22,17 @@ int cli_merge(int argc, char **argv)
         fprintf(stderr, "dartspp merge: out of memory\n");
         return 1;
     }
-    for (int j = 0; j < k && !rc; j++) rc = image_read(argv[1 + j], &imgs[j], &err);
+    struct stat out_st, in_st;
+    int out_exists = stat(argv[0], &out_st) == 0;
+    for (int j = 0; j < k && !rc; j++) {
+        int x, y;
+        long bad;
+        if (out_exists && stat(argv[1 + j], &in_st) == 0 && in_st.st_dev == out_st.st_dev && in_st.st_ino == out_st.st_ino)
+            rc = dp_fail(&err, "the output %s is the input %s: merge into a new file", argv[0], argv[1 + j]);
+        else if (!(rc = image_read(argv[1 + j], &imgs[j], &err)) && (bad = image_nonfinite_pixels(&imgs[j], &x, &y)))
+            rc = dp_fail(&err, "%s: %ld of %ld pixels have a NaN or Inf channel (the first at x %d, y %d): not merged",
+                         argv[1 + j], bad, (long)imgs[j].width * imgs[j].height, x, y);
+    }
     if (!rc) rc = image_mean_of(imgs, k, &mean, &v, &err);
     if (!rc) rc = image_write(argv[0], &mean, NULL, &err);
     if (rc) fprintf(stderr, "dartspp merge: %s\n", err.msg);

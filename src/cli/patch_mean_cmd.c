@@ -1,5 +1,6 @@
 /* `dartspp patch-mean IMAGE X0 Y0 X1 Y1`: mean over channels and pixels of [X0, X1) × [Y0, Y1), row 0 at the
- * top (for transient curves). Non-finite pixels are left out and reported on stderr. */
+ * top (for transient curves). Non-finite pixels are left out and reported on stderr; a rectangle with no finite
+ * pixel is an error. */
 #include <errno.h>
 #include <stdio.h>
 #include <string.h>
@@ -79,7 +80,14 @@ int cli_patch_mean(int argc, char **argv)
         image_free(&mask);
         return 2;
     }
-    printf("%.9g\n", n ? sum / n : 0.0);
+    if (n == 0) {
+        fprintf(stderr, "dartspp patch-mean: %s: no pixel of the rectangle [%ld,%ld) x [%ld,%ld) is finite: "
+                        "nothing to average\n", argv[0], r[0], r[2], r[1], r[3]);
+        image_free(&img);
+        image_free(&mask);
+        return 2;
+    }
+    printf("%.9g\n", sum / n);
     image_free(&img);
     image_free(&mask);
     return 0;

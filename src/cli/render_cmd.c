@@ -121,6 +121,13 @@ static int parse_args(int argc, char **argv, render_request *rq, const char **se
     }
     if (!rq->scene_path) return bad_arg("", NULL, "missing SCENE.json");
     if (!rq->log != !rq->reference) return bad_arg(rq->log ? "--log" : "--reference", NULL, "--log and --reference go together");
+    /* 0 is "no limit": one budget flag alone at 0 leaves nothing to end the render (docs/cli.md §2.1) */
+    if (rq->time_limit == 0 && rq->spp < 0)
+        return bad_arg("--time", "0", "0 is no time limit, and without --spp nothing would end the render (give "
+                                      "seconds > 0, or --spp N; --spp 0 --time 0 renders until Ctrl-C)");
+    if (rq->spp == 0 && rq->time_limit < 0)
+        return bad_arg("--spp", "0", "0 is no pass limit, and without --time nothing would end the render (give "
+                                     "N > 0, or --time S; --spp 0 --time 0 renders until Ctrl-C)");
     /* --time alone renders for that long; --spp alone renders that many passes */
     if (rq->time_limit >= 0 && rq->spp < 0) rq->spp = 0;
     if (rq->spp >= 0 && rq->time_limit < 0) rq->time_limit = 0;

@@ -2,6 +2,7 @@
  * its own layer, which joins the sums only when the pass completes: an interrupted pass is dropped whole. */
 #include "dartspp/film.h"
 
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -71,18 +72,38 @@ void film_drop_pass(film *f)
     if (nf > 0) memset(f->frame_pass, 0, nf * sizeof(float));
 }
 
+/* Image k (k < 0: the gate image) as float32 into out (NULL: only counted), a pixel with a non-finite channel
+ * as 0 (the last line of defence: a NaN pass weight, a value beyond the float range). Returns those pixels. */
+static long image_values_of(const film *f, int k, float *out)
+{
+    size_t n = (size_t)f->width * f->height;
+    double inv = f->weight_sum > 0.0 ? 1.0 / f->weight_sum : 0.0;
+    const double *sum = k < 0 ? f->sum : NULL;
+    const float *fs = k < 0 ? NULL : &f->frame_sum[3 * n * (size_t)k];
+    long bad = 0;
+    for (size_t i = 0; i < 3 * n; i += 3) {
+        float v[3];
+        for (int c = 0; c < 3; c++) v[c] = (float)((sum ? sum[i + c] : (double)fs[i + c]) * inv);
+        int finite = isfinite(v[0]) && isfinite(v[1]) && isfinite(v[2]);
+        bad += !finite;
+        if (out)
+            for (int c = 0; c < 3; c++) out[i + c] = finite ? v[c] : 0.0f;
+    }
+    return bad;
+}
+
 int film_image(const film *f, int k, image_rgb *img, dp_error *err)
 {
     if (image_alloc(img, f->width, f->height, err)) return -1;
-    size_t n = (size_t)f->width * f->height * 3;
-    double inv = f->weight_sum > 0.0 ? 1.0 / f->weight_sum : 0.0;
-    if (k < 0) {
-        for (size_t i = 0; i < n; i++) img->rgb[i] = (float)(f->sum[i] * inv);
-    } else {
-        const float *fs = &f->frame_sum[n * (size_t)k];
-        for (size_t i = 0; i < n; i++) img->rgb[i] = (float)(fs[i] * inv);
-    }
+    image_values_of(f, k, img->rgb);
     return 0;
+}
+
+long film_nonfinite_pixels(const film *f)
+{
+    long bad = 0;
+    for (int k = -1; k < f->window.frame_count; k++) bad += image_values_of(f, k, NULL);
+    return bad;
 }
 
 double film_sample_pixels(film *f, const camera *cam, uint64_t seed, long pass, const dp_stop_flag *stop,

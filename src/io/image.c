@@ -116,6 +116,19 @@ static int pixel_finite(const float *p)
     return isfinite(p[0]) && isfinite(p[1]) && isfinite(p[2]);
 }
 
+long image_nonfinite_pixels(const image_rgb *img, int *first_x, int *first_y)
+{
+    long bad = 0;
+    *first_x = *first_y = -1;
+    size_t n = image_values(img) / 3;
+    for (size_t i = 0; i < n; i++)
+        if (!pixel_finite(img->rgb + 3 * i) && bad++ == 0) {
+            *first_x = (int)(i % (size_t)img->width);
+            *first_y = (int)(i / (size_t)img->width);
+        }
+    return bad;
+}
+
 static void add_pixel(error_sums *s, const float *x, const float *r, double q)
 {
     for (int c = 0; c < 3; ++c) {

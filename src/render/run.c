@@ -63,6 +63,26 @@ int render_run_refused(const render_cluster *cluster, int status)
     return cluster && cluster->size > 1 ? cluster->agree_rc(cluster, status) : status;
 }
 
+/* A budget that means "forever" is said aloud, with how to stop it: a negative scene timeout (the format's
+ * "-1", no limit) in use, or neither a pass nor a time limit. */
+static void warn_unbounded(const render_run_job *j)
+{
+    long spp = j->ro.spp >= 0 ? j->ro.spp : j->p.spp;
+    double limit = j->ro.time_limit >= 0 ? j->ro.time_limit : j->p.timeout_seconds;
+    const char *stop = "it runs until Ctrl-C (or SIGTERM), which writes the completed passes";
+    if (limit > 0 && spp > 0) return;
+    if (j->ro.time_limit < 0 && j->s.renderer.timeout_negative[0] && spp > 0)
+        fprintf(stderr, "warning: %s: renderer.timeout \"%s\" is negative, which means no time limit: the render runs "
+                "until its %ld passes (spp) are done, or until Ctrl-C\n", j->s.path, j->s.renderer.timeout_negative, spp);
+    else if (j->ro.time_limit < 0 && j->s.renderer.timeout_negative[0] && spp == 0)
+        fprintf(stderr, "warning: %s: renderer.timeout \"%s\" is negative, which means no time limit, and spp is 0 (no "
+                "pass limit): nothing bounds this render; %s (--time S or --spp N bound it)\n", j->s.path,
+                j->s.renderer.timeout_negative, stop);
+    else if (limit == 0 && spp == 0)
+        fprintf(stderr, "warning: %s: no time limit and no pass limit (%s): nothing bounds this render; %s\n", j->s.path,
+                j->ro.spp == 0 ? "--spp 0 --time 0" : "spp 0 and no timeout in the scene", stop);
+}
+
 /* Rank 0, before the render: the scene's notes, the plan (--verbose), the warnings and the cluster. */
 static void announce(const render_run_job *j)
 {
@@ -70,6 +90,7 @@ static void announce(const render_run_job *j)
     if (j->s.notes) fputs(j->s.notes, stderr);
     if (j->rq->verbose) fprintf(stderr, "plan: %s\n", j->plan_json);
     run_warn(&j->s, &j->p);
+    warn_unbounded(j);
     if (j->cl && !j->quiet)
         fprintf(stderr, "cluster: %d ranks (%d on this machine, %d threads each); iteration i runs on rank i mod %d\n",
                 j->cl->size, j->cl->ranks_on_node, j->ro.threads, j->cl->size);
@@ -124,6 +145,9 @@ static int render_and_write(render_run_job *j)
         say_error(&err, "");
         failed = 1;
     }
+    if (j->rank == 0 && (st.nonfinite_pixels = film_nonfinite_pixels(&f)) > 0)
+        fprintf(stderr, "warning: %s: %ld pixels of the images are NaN or beyond the float range; they are written "
+                "as 0, so the image is wrong there\n", j->s.path, st.nonfinite_pixels);
     if (!failed && j->rank == 0) run_print_summary(j, &st);
     if (j->rank != 0) {
         /* nothing to write here: rank 0 holds the summed film */

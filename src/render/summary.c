@@ -118,9 +118,14 @@ static void print_cluster(const scene *s, const render_plan *p, const render_sta
 static void print_summary(const scene *s, const render_plan *p, const render_stats *st, double load_seconds)
 {
     print_scene(s, p, load_seconds);
-    printf("rendered %ld passes in %.2f s (%.2f M camera rays/s, %.2f M rays/s)%s; non-finite samples suppressed: %ld\n",
+    printf("rendered %ld passes in %.2f s (%.2f M camera rays/s, %.2f M rays/s)%s; non-finite samples suppressed: %ld",
            st->passes, st->seconds, st->seconds > 0 ? st->camera_rays / st->seconds * 1e-6 : 0.0,
-           st->seconds > 0 ? st->rays / st->seconds * 1e-6 : 0.0, st->interrupted ? " (interrupted)" : "", st->nonfinite);
+           st->seconds > 0 ? st->rays / st->seconds * 1e-6 : 0.0, st->interrupted ? " (interrupted)" : "",
+           st->nonfinite + st->nonfinite_pixels);
+    if (st->nonfinite_pixels > 0)
+        printf(" (%ld of them whole pixels of the images, NaN or beyond the float range, written as 0)",
+               st->nonfinite_pixels);
+    printf("\n");
     if (p->type == INTEGRATOR_PHOTON_POINTS) print_samplers(s, p);
     print_photon_stats(st);
     if (st->reductions > 0) print_cluster(s, p, st);

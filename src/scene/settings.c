@@ -289,6 +289,11 @@ int settings_parse(json_ctx *c, const cJSON *root, scene *s)
     for (int i = 0; i < n; i++)
         if (read_key(c, &keys[i], keys[i].section == KEY_SECTION_INTEGRATOR ? in : re, s)) return -1;
     if (resolve_integrator(c, in, &s->integrator)) return -1;
+    const cJSON *timeout = jget_item(c, re, "timeout");
+    if (cJSON_IsNumber(timeout) && timeout->valuedouble < 0)
+        snprintf(s->renderer.timeout_negative, sizeof s->renderer.timeout_negative, "%g", timeout->valuedouble);
+    else if (cJSON_IsString(timeout) && timeout->valuestring[0] == '-')
+        snprintf(s->renderer.timeout_negative, sizeof s->renderer.timeout_negative, "%s", timeout->valuestring);
     note_unread_keys(c, in, KEY_SECTION_INTEGRATOR, s);
     note_unread_keys(c, re, KEY_SECTION_RENDERER, s);
     return 0;
