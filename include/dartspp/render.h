@@ -107,6 +107,7 @@ typedef struct {
 
 typedef struct render_stats {
     long passes;
+    long resumed_passes;    /* of them, held by the film resumed (render_options.resume) */
     double seconds;
     double camera_rays;     /* primary rays traced */
     double rays;            /* all rays traced (primary, bounce, shadow) */

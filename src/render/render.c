@@ -207,7 +207,7 @@ static int render_passes(const scene *s, const render_plan *p, const render_opti
     double t0 = dp_seconds();
     int rc = 0;
     st->passes = f->passes; /* 0, or the passes of the film resumed */
-    long first = f->passes;
+    long first = st->resumed_passes = f->passes;
     if (opt->passes_started) *opt->passes_started = 1;
     if (c) {
         rc = render_rounds(s, p, &eda, opt, f, st, spp, limit, err);
