@@ -23,8 +23,9 @@ static void progress_print(progress_line *pl, const render_stats *st, long spp, 
     char left[64] = "";
     double rem = -1;
     if (limit > 0) rem = limit - now;
-    if (spp > 0 && st->passes > 0) {
-        double by_spp = (spp - st->passes) * now / st->passes;
+    long done = st->passes - st->resumed_passes; /* this run's passes */
+    if (spp > 0 && done > 0) {
+        double by_spp = (spp - st->passes) * now / done;
         rem = rem < 0 ? by_spp : (by_spp < rem ? by_spp : rem);
     }
     if (rem >= 0) snprintf(left, sizeof left, ", %.1f s left", rem < 0 ? 0 : rem);

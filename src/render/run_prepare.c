@@ -104,8 +104,12 @@ static int set_up_state(render_run_job *j, dp_error *err)
     if (access(j->state, F_OK) != 0)
         return dp_fail(err, "--resume: %s: no checkpoint state to resume (renders with --checkpoint write one)",
                        j->state);
-    if (resume_state_read(j->state, 1, &st, err)) return -1;
+    /* the header first: a state of another size is refused before its sums are read */
+    if (resume_state_read(j->state, 0, &st, err)) return -1;
     int rc = resume_check(&st, j->state, j, spp, err);
+    resume_state_free(&st);
+    if (rc || resume_state_read(j->state, 1, &st, err)) return -1;
+    rc = resume_check(&st, j->state, j, spp, err); /* the same file, unless replaced in between */
     if (!rc) rc = film_init(&j->resumed, st.width, st.height, &j->p.window, err);
     if (!rc) {
         size_t n = (size_t)st.width * st.height * 3;
