@@ -30,6 +30,8 @@ typedef struct {
     const char *reference, *log; /* the error log against a reference image (both or neither) */
     double log_every;            /* seconds between its rows; 0: every pass */
     double max_memory;           /* bytes; 0: what the machine has available */
+    int resume;                  /* --resume: continue from the checkpoint state "<output stem>.state" */
+    int overwrite;               /* --overwrite: replace a checkpoint holding more passes than this run renders */
 } render_request;
 
 typedef struct render_cluster render_cluster;
@@ -97,10 +99,15 @@ typedef struct {
      * every gather_every seconds (0: only at the end). */
     const render_cluster *cluster;
     double gather_every;
+    /* A film to continue (--resume; this process alone): its sums, weights and pass count are copied into
+     * the new film, and the render goes on at pass resume->passes, the time budget counting from here.
+     * Same size and frames as the scene's. NULL: from pass 0. */
+    const film *resume;
 } render_options;
 
 typedef struct render_stats {
     long passes;
+    long resumed_passes;    /* of them, held by the film resumed (render_options.resume) */
     double seconds;
     double camera_rays;     /* primary rays traced */
     double rays;            /* all rays traced (primary, bounce, shadow) */

@@ -8,7 +8,8 @@ static void usage(FILE *f)
 {
     fprintf(f,
             "usage: dartspp render SCENE.json [--threads N] [--seed S] [--spp N] [--time SECONDS]\n"
-            "                      [--output PATH.exr|.pfm] [--checkpoint SECONDS] [--set key=value ...]\n"
+            "                      [--output PATH.exr|.pfm] [--checkpoint SECONDS] [--resume | --overwrite]\n"
+            "                      [--set key=value ...]\n"
             "                      [--reference REF.exr --log RUN.csv [--log-every SECONDS]]\n"
             "                      [--max-memory SIZE] [--no-cube] [--no-viewer] [--verbose] [--quiet]\n"
             "       dartspp compare IMAGE REFERENCE [--csv]      (EXR or PFM)\n"

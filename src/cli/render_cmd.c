@@ -80,6 +80,8 @@ static int parse_args(int argc, char **argv, render_request *rq, const char **se
         else if (!strcmp(o, "--quiet")) rq->quiet = 1;
         else if (!strcmp(o, "--no-cube")) rq->skip |= RENDER_SKIP_CUBE;
         else if (!strcmp(o, "--no-viewer")) rq->skip |= RENDER_SKIP_VIEWER;
+        else if (!strcmp(o, "--resume")) rq->resume = 1;
+        else if (!strcmp(o, "--overwrite")) rq->overwrite = 1;
         else if (!strcmp(o, "--seed") || !strcmp(o, "--threads")) {
             unsigned long long u;
             int seed = !strcmp(o, "--seed");

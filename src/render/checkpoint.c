@@ -1,4 +1,5 @@
-/* After every pass of a run: the error log's row when one is due, and the checkpoints. */
+/* After every pass of a run: the error log's row when one is due, and the checkpoints (the images, then the
+ * checkpoint state for --resume). */
 #include <stdio.h>
 #include <unistd.h>
 
@@ -16,6 +17,9 @@ int checkpoint_after_pass(void *ctx, const film *f, const render_stats *st, dp_e
         fprintf(stderr, "%swarning: checkpoint not written: %s\n", isatty(2) ? "\r\033[K" : "", werr.msg);
         return 0;
     }
+    /* the state after the images: it never holds passes that the images lack */
+    if (c->state && resume_state_write(c->state, f, c->plan_json, c->seed, &werr))
+        fprintf(stderr, "%swarning: checkpoint state not written: %s\n", isatty(2) ? "\r\033[K" : "", werr.msg);
     if (!c->quiet)
         fprintf(stderr, "%scheckpoint: %ld passes, %.1f s -> %s\n", isatty(2) ? "\r\033[K" : "", st->passes,
                 st->seconds, c->out);

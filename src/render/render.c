@@ -23,8 +23,9 @@ static void progress_print(progress_line *pl, const render_stats *st, long spp, 
     char left[64] = "";
     double rem = -1;
     if (limit > 0) rem = limit - now;
-    if (spp > 0 && st->passes > 0) {
-        double by_spp = (spp - st->passes) * now / st->passes;
+    long done = st->passes - st->resumed_passes; /* this run's passes */
+    if (spp > 0 && done > 0) {
+        double by_spp = (spp - st->passes) * now / done;
         rem = rem < 0 ? by_spp : (by_spp < rem ? by_spp : rem);
     }
     if (rem >= 0) snprintf(left, sizeof left, ", %.1f s left", rem < 0 ? 0 : rem);
@@ -40,13 +41,15 @@ static void progress_print(progress_line *pl, const render_stats *st, long spp, 
     fflush(stderr);
 }
 
-static int keep_going(const render_stats *st, long spp, double limit, const dp_stop_flag *stop)
+/* first: the passes the film held at the start (a resumed render); the time budget counts this run's. */
+static int keep_going(const render_stats *st, long first, long spp, double limit, const dp_stop_flag *stop)
 {
+    long done = st->passes - first;
     if (dp_stopped(stop)) return 0;
-    if (st->passes == 0) return 1;
     if (spp > 0 && st->passes >= spp) return 0;
+    if (done == 0) return 1;
     if (limit > 0) {
-        double per_pass = st->seconds / st->passes;
+        double per_pass = st->seconds / done;
         if (st->seconds + 0.5 * per_pass >= limit) return 0;
     }
     return 1;
@@ -168,13 +171,30 @@ static int render_rounds(const scene *s, const render_plan *p, const eda_set *ed
     return failed ? -1 : 0;
 }
 
+/* A resumed render: the checkpoint's sums, weights and counts into the fresh film f. 0, or -1 with err. */
+static int film_resume(film *f, const film *from, dp_error *err)
+{
+    if (from->width != f->width || from->height != f->height || from->window.frame_count != f->window.frame_count)
+        return dp_fail(err, "the film to resume is %dx%d with %d frames, the render %dx%d with %d", from->width,
+                       from->height, from->window.frame_count, f->width, f->height, f->window.frame_count);
+    size_t n = (size_t)f->width * f->height * 3, nf = n * (size_t)f->window.frame_count;
+    memcpy(f->sum, from->sum, n * sizeof(double));
+    if (nf > 0) memcpy(f->frame_sum, from->frame_sum, nf * sizeof(float));
+    f->passes = from->passes;
+    f->weight_sum = from->weight_sum;
+    f->last_weight = from->last_weight;
+    f->nonfinite = from->nonfinite;
+    return 0;
+}
+
 /* The passes, with the plan resolved and the film initialised. */
 static int render_passes(const scene *s, const render_plan *p, const render_options *opt, film *f, render_stats *st,
                          dp_error *err)
 {
     eda_set eda = {0};
     int ready = !(p->type == INTEGRATOR_PHOTON_POINTS && eda_set_prepare(s, p, &eda, err)) &&
-                !film_init(f, s->cam.width, s->cam.height, &p->window, err);
+                !film_init(f, s->cam.width, s->cam.height, &p->window, err) &&
+                !(opt->resume && film_resume(f, opt->resume, err));
     const render_cluster *c = opt->cluster && opt->cluster->size > 1 ? opt->cluster : NULL;
     if (c && c->agree_rc(c, !ready) && ready) /* a rank without its EDA tables or film: none starts */
         ready = !dp_fail_kind(err, DP_ERROR_RANK, "another rank could not start the render (its message is above)");
@@ -187,6 +207,8 @@ static int render_passes(const scene *s, const render_plan *p, const render_opti
     progress_line pl = {.tty = isatty(2), .last_print = -1e9};
     double t0 = dp_seconds();
     int rc = 0;
+    st->passes = f->passes; /* 0, or the passes of the film resumed */
+    long first = st->resumed_passes = f->passes;
     if (opt->passes_started) *opt->passes_started = 1;
     if (c) {
         rc = render_rounds(s, p, &eda, opt, f, st, spp, limit, err);
@@ -196,7 +218,7 @@ static int render_passes(const scene *s, const render_plan *p, const render_opti
         if (opt->progress && c->rank == 0) progress_print(&pl, st, spp, limit, 1);
         return rc ? -1 : 0;
     }
-    while (!rc && keep_going(st, spp, limit, opt->stop)) {
+    while (!rc && keep_going(st, first, spp, limit, opt->stop)) {
         if ((rc = render_pass(s, p, &eda, opt, f, st->passes, st, err))) break;
         if (dp_stopped(opt->stop)) { /* interrupted inside the pass: it is incomplete */
             film_drop_pass(f);

@@ -104,6 +104,7 @@ static void set_up_render(render_run_job *j)
     ro->after_pass = checkpoint_after_pass;
     ro->after_pass_ctx = &j->cp;
     ro->cluster = j->cl;
+    ro->resume = j->resumed.sum ? &j->resumed : NULL;
     /* with several ranks the films are summed for checkpoints and log rows only when one is due */
     double log_every = j->rq->log_every;
     ro->gather_every = j->cp.every > 0 ? j->cp.every : 0.0;
@@ -152,9 +153,17 @@ static int render_and_write(render_run_job *j)
     if (j->rank != 0) {
         /* nothing to write here: rank 0 holds the summed film */
     } else if (f.passes > 0) {
-        if (write_outputs(j, &f, &werr) && !failed) {
-            err = werr;
-            failed = 1;
+        if (write_outputs(j, &f, &werr)) {
+            if (!failed) {
+                err = werr;
+                failed = 1;
+            }
+        } else if (j->cp.state && resume_state_write(j->cp.state, &f, j->plan_json, j->cp.seed, &werr)) {
+            say_error(&werr, " (the checkpoint state; the images were written)");
+            if (!failed) {
+                err = werr;
+                failed = 1;
+            }
         }
     } else if (st.interrupted)
         fprintf(stderr, "dartspp render: interrupted before the first pass completed: nothing written\n");

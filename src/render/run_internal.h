@@ -15,6 +15,8 @@ typedef struct {
     double every, last;  /* seconds between checkpoints (0: none), and when the last one was written */
     int quiet;
     int skip;            /* render_write_outputs */
+    const char *state;   /* the checkpoint state to write with each checkpoint (resume.c); NULL: none */
+    uint64_t seed;
     error_log *log;      /* --log: error against --reference (may be NULL) */
 } checkpoints;
 
@@ -35,7 +37,33 @@ typedef struct {
     double load_seconds;      /* scene_load: JSON, meshes, textures, Embree build */
     checkpoints cp;
     render_options ro;
+    char state[OUTPUT_PATH_MAX + 16]; /* the checkpoint state beside the outputs (resume.c) */
+    film resumed;             /* --resume: the checkpoint's film (sums, passes), handed to the render */
 } render_run_job;
+
+/* ---- the checkpoint state (resume.c): "<stem>.state", the film's exact sums for --resume ---- */
+typedef struct {
+    uint64_t seed;
+    int width, height, frames;
+    long passes, nonfinite;
+    double weight_sum, last_weight;
+    char *plan;          /* the plan's JSON */
+    double *sum;         /* width·height·3 (read with data only) */
+    float *frame_sum;    /* frames·width·height·3 (read with data only) */
+} resume_state;
+
+/* "<stem>.state" of the output path <stem>.exr|.pfm. */
+void resume_state_path(const char *out, char *path, size_t n);
+/* The film's sums, pass count and weights with the plan and seed, written atomically. 0, or -1 with err. */
+int resume_state_write(const char *path, const film *f, const char *plan_json, uint64_t seed, dp_error *err);
+/* Reads the header (and, with_data, the sums: checked against the checksum). 0, or -1 with err (input). */
+int resume_state_read(const char *path, int with_data, resume_state *s, dp_error *err);
+void resume_state_free(resume_state *s);
+/* Whether the state fits this run (seed, resolution, frames, plan; not more passes than spp > 0). */
+int resume_check(const resume_state *s, const char *path, const render_run_job *j, long spp, dp_error *err);
+/* Without --resume: refuses (-1 with err) when the state at path holds more passes than spp (or any, when
+ * spp <= 0: the run's pass count is unknown). */
+int resume_overwrite_check(const char *path, long spp, dp_error *err);
 
 /* Everything that can refuse the render before any work (run_prepare.c): 0, or -1 with err of kind
  * DP_ERROR_INPUT whatever the cause (nothing has been rendered), the job holding nothing. */

@@ -3,6 +3,7 @@
  * its cause (exit 2): nothing has been rendered yet. */
 #include <stdio.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "run_internal.h"
 
@@ -87,6 +88,48 @@ static void set_up_checkpoints(render_run_job *j)
                           .every = j->rank != 0 ? 0 : rq->checkpoint >= 0 ? rq->checkpoint : j->p.checkpoint_seconds};
 }
 
+/* The checkpoint state beside the outputs (resume.c), rank 0's: with --resume it is loaded into j->resumed and
+ * must fit this run; without, a state holding more passes than this run renders is not overwritten unless
+ * --overwrite. Checkpoints and, with checkpoints or --resume, the final write write it (this process alone:
+ * dartspp-mpi neither writes nor resumes it). */
+static int set_up_state(render_run_job *j, dp_error *err)
+{
+    const render_request *rq = j->rq;
+    if (j->rank != 0) return 0;
+    if (j->cl && rq->resume)
+        return dp_fail(err, "--resume: dartspp-mpi cannot resume a render yet; resume it with dartspp render");
+    resume_state_path(j->out, j->state, sizeof j->state);
+    if (!j->cl && (j->cp.every > 0 || rq->resume)) { /* --resume alone: the final write updates it */
+        j->cp.state = j->state;
+        j->cp.seed = rq->seed;
+    }
+    long spp = rq->spp >= 0 ? rq->spp : j->p.spp;
+    if (!rq->resume) return rq->overwrite ? 0 : resume_overwrite_check(j->state, spp, err);
+    resume_state st;
+    if (access(j->state, F_OK) != 0)
+        return dp_fail(err, "--resume: %s: no checkpoint state to resume (renders with --checkpoint write one)",
+                       j->state);
+    /* the header first: a state of another size is refused before its sums are read */
+    if (resume_state_read(j->state, 0, &st, err)) return -1;
+    int rc = resume_check(&st, j->state, j, spp, err);
+    resume_state_free(&st);
+    if (rc || resume_state_read(j->state, 1, &st, err)) return -1;
+    rc = resume_check(&st, j->state, j, spp, err); /* the same file, unless replaced in between */
+    if (!rc) rc = film_init(&j->resumed, st.width, st.height, &j->p.window, err);
+    if (!rc) {
+        size_t n = (size_t)st.width * st.height * 3;
+        memcpy(j->resumed.sum, st.sum, n * sizeof(double));
+        if (st.frames > 0) memcpy(j->resumed.frame_sum, st.frame_sum, n * (size_t)st.frames * sizeof(float));
+        j->resumed.passes = st.passes;
+        j->resumed.weight_sum = st.weight_sum;
+        j->resumed.last_weight = st.last_weight;
+        j->resumed.nonfinite = st.nonfinite;
+        if (!j->quiet) fprintf(stderr, "resuming %s: %ld passes\n", j->state, st.passes);
+    }
+    resume_state_free(&st);
+    return rc;
+}
+
 /* The error log is rank 0's; its reference is read here, before any rank renders. */
 static int open_error_log(render_run_job *j, dp_error *err)
 {
@@ -105,9 +148,10 @@ int run_prepare(render_run_job *j, dp_error *err)
     if (!rc) rc = check_outputs(j, err) || check_memory(j, err);
     if (!rc) {
         set_up_checkpoints(j);
-        rc = open_error_log(j, err);
+        rc = set_up_state(j, err) || open_error_log(j, err);
     }
     if (rc) {
+        film_free(&j->resumed);
         plan_free(&j->p);
         scene_free(&j->s);
         return refuse(err);
@@ -120,6 +164,7 @@ void run_release(render_run_job *j)
 {
     if (!j->prepared) return;
     error_log_close(j->cp.log);
+    film_free(&j->resumed);
     plan_free(&j->p);
     scene_free(&j->s);
     j->prepared = 0;

@@ -118,8 +118,12 @@ static void print_cluster(const scene *s, const render_plan *p, const render_sta
 static void print_summary(const scene *s, const render_plan *p, const render_stats *st, double load_seconds)
 {
     print_scene(s, p, load_seconds);
-    printf("rendered %ld passes in %.2f s (%.2f M camera rays/s, %.2f M rays/s)%s; non-finite samples suppressed: %ld",
-           st->passes, st->seconds, st->seconds > 0 ? st->camera_rays / st->seconds * 1e-6 : 0.0,
+    char resumed[96] = "";
+    if (st->resumed_passes > 0)
+        snprintf(resumed, sizeof resumed, " (%ld of them resumed from the checkpoint, %ld in this run)",
+                 st->resumed_passes, st->passes - st->resumed_passes);
+    printf("rendered %ld passes%s in %.2f s (%.2f M camera rays/s, %.2f M rays/s)%s; non-finite samples suppressed: %ld",
+           st->passes, resumed, st->seconds, st->seconds > 0 ? st->camera_rays / st->seconds * 1e-6 : 0.0,
            st->seconds > 0 ? st->rays / st->seconds * 1e-6 : 0.0, st->interrupted ? " (interrupted)" : "",
            st->nonfinite + st->nonfinite_pixels);
     if (st->nonfinite_pixels > 0)
