@@ -182,6 +182,13 @@ int render_write_outputs(const film *f, const char *path, const char *integrator
     if (atomic_set_open(&set, stem, err)) return -1;
     if (write_all(f, set.stem, dot, integrator, plan, skip, NULL, err)) {
         atomic_set_abort(&set);
+        /* the message names the final path, not the staging folder's */
+        char *at = strstr(err->msg, set.stem);
+        if (at) {
+            char rest[sizeof err->msg];
+            snprintf(rest, sizeof rest, "%s", at + strlen(set.stem));
+            snprintf(at, sizeof err->msg - (size_t)(at - err->msg), "%s%s", stem, rest);
+        }
         return -1;
     }
     return atomic_set_commit(&set, wrote, err);
