@@ -1,7 +1,7 @@
 /* Signals and files (issue 32, item 7): the real `dartspp render` on the demo scene, killed or limited the
  * ways a user's run is. A dropped terminal (SIGHUP) keeps the completed passes as SIGTERM does; a file-size
  * limit (`ulimit -f`) ends the run with a message naming the limit, the rescue attempt and no temporary file
- * left; a SIGKILL at a random moment of a 300-frame write leaves the complete old set or the complete new
+ * left; a SIGKILL at a random moment of a 200-frame write leaves the complete old set or the complete new
  * one (each file's `dartspp.passes` header is the set's marker), and the next run removes what the killed
  * one left behind. */
 #include "fixtures.h"
@@ -18,7 +18,7 @@
 
 #define DEMO "scenes/fogbox/fogbox.json"
 #define EXIT_BOUND_S 5.0
-#define FRAMES 300
+#define FRAMES 200
 
 static double now_s(void)
 {
@@ -252,7 +252,7 @@ static long set_marker(const char *dir, const char *over, const char *base)
     return bad ? -1 : marker;
 }
 
-/* SIGKILL at a random moment of a 300-frame write, over 6 seeds of the moment: each run renders one pass
+/* SIGKILL at a random moment of a 200-frame write, over 5 seeds of the moment: each run renders one pass
  * more than the set on disk, so every file's `dartspp.passes` tells its set. After the kill the folder holds
  * the complete old set or the complete new one; or, when the kill landed while the staged files were being
  * moved into place (renames only), the commit folder completes the new set. The next run to the same output
@@ -271,7 +271,7 @@ static void test_sigkill_during_frame_write(void **state)
     assert_int_equal(marker, 1);
     int old_sets = 0, new_sets = 0, commit_sets = 0, finished = 0;
     double write_s = 0;
-    for (int round = 0; round < 7; round++) {
+    for (int round = 0; round < 6; round++) {
         long spp = marker + 1;
         char spp_s[32], frames_s[32];
         snprintf(spp_s, sizeof spp_s, "%ld", spp);
@@ -341,9 +341,54 @@ static void test_sigkill_during_frame_write(void **state)
         marker = set_marker(d, NULL, "set");
         assert_int_equal(marker, spp + 1);
     }
-    print_message("  6 kills: %d left the old set, %d the new one, %d a commit folder; %d runs had finished\n", old_sets,
+    print_message("  5 kills: %d left the old set, %d the new one, %d a commit folder; %d runs had finished\n", old_sets,
                   new_sets, commit_sets, finished);
     assert_true(old_sets >= 1); /* the kills did land inside writes */
+}
+
+/* A second interrupt during the write of the outputs means "exit now": the process ends at once, and the
+ * temporary file of the write in progress and the staging folder go with it (the old files, here none,
+ * stay as they were). Before: the temporary file of the frame being written was left behind. */
+static void test_second_interrupt_during_write(void **state)
+{
+    const char *d = *state;
+    char o[600], frames_s[32];
+    snprintf(o, sizeof o, "%s/now.exr", d);
+    snprintf(frames_s, sizeof frames_s, "frame_num=%d", FRAMES);
+    int left = 0;
+    for (int round = 0; round < 3; round++) {
+        const char *argv[] = {DARTSPP_BIN, "render", DEMO, "--set", "resolution=32", "--set", frames_s, "--spp", "1",
+                              "--quiet", "--output", o, NULL};
+        child c;
+        child_start(&c, d, argv, NULL, 0);
+        char tag[64];
+        snprintf(tag, sizeof tag, ".tmp.%ld", (long)c.pid);
+        double t0 = now_s();
+        int seen = 0;
+        while (!seen && now_s() - t0 < 120) {
+            DIR *dd = opendir(d);
+            for (struct dirent *e; dd && (e = readdir(dd));)
+                if (strstr(e->d_name, tag)) seen = 1;
+            if (dd) closedir(dd);
+            if (!seen) usleep(1000);
+        }
+        assert_true(seen);
+        usleep(300000 + 200000 * round); /* well inside the write of the frames */
+        kill(c.pid, SIGINT);
+        usleep(20000);
+        kill(c.pid, SIGINT);
+        int rc = child_wait(&c, EXIT_BOUND_S * 4);
+        char *log = read_text(c.log);
+        int now = strstr(log, "exiting now") != NULL;
+        free(log);
+        int n = count_named(d, ".tmp.") + count_named(d, ".set.");
+        print_message("  two interrupts %.1f s into the write: exit %d, %d temporary entries left\n",
+                      0.3 + 0.2 * round, rc, n);
+        assert_int_equal(rc, 130);
+        assert_true(now);
+        left += n;
+    }
+    assert_int_equal(left, 0);
 }
 
 static int setup_dir(void **state)
@@ -357,6 +402,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test_setup_teardown(test_sighup_writes_completed_passes, setup_dir, test_teardown_tmpdir),
         cmocka_unit_test_setup_teardown(test_file_size_limit, setup_dir, test_teardown_tmpdir),
+        cmocka_unit_test_setup_teardown(test_second_interrupt_during_write, setup_dir, test_teardown_tmpdir),
         cmocka_unit_test_setup_teardown(test_sigkill_during_frame_write, setup_dir, test_teardown_tmpdir),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
