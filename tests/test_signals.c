@@ -391,6 +391,36 @@ static void test_second_interrupt_during_write(void **state)
     assert_int_equal(left, 0);
 }
 
+/* The other commands that write: `merge` under a file-size limit below its output's size ends with a
+ * message naming the limit, a non-zero exit and no temporary file. Before: killed by SIGXFSZ (exit 153). */
+static void test_file_size_limit_merge(void **state)
+{
+    const char *d = *state;
+    char a[600], b[600], o[600];
+    snprintf(a, sizeof a, "%s/a.exr", d);
+    snprintf(b, sizeof b, "%s/b.exr", d);
+    snprintf(o, sizeof o, "%s/m.exr", d);
+    image_rgb img;
+    dp_error err;
+    noise_image(&img, 64, 64); /* 48 KiB of noise: ZIP keeps most of it */
+    assert_int_equal(image_write(a, &img, NULL, &err), 0);
+    assert_int_equal(image_write(b, &img, NULL, &err), 0);
+    image_free(&img);
+    const char *argv[] = {DARTSPP_BIN, "merge", o, a, b, NULL};
+    child c;
+    child_start(&c, d, argv, NULL, 16 * 1024);
+    int rc = child_wait(&c, 60.0);
+    char *log = read_text(c.log);
+    print_message("  merge under ulimit -f 16: exit %d\n", rc);
+    print_tail(log);
+    int names_limit = strstr(log, "File too large") && strstr(log, "ulimit -f");
+    free(log);
+    assert_true(rc >= 1 && rc < 128);
+    assert_true(names_limit);
+    assert_false(file_exists(o));
+    assert_int_equal(count_named(d, ".tmp."), 0);
+}
+
 static int setup_dir(void **state)
 {
     *state = test_tmpdir();
@@ -402,6 +432,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test_setup_teardown(test_sighup_writes_completed_passes, setup_dir, test_teardown_tmpdir),
         cmocka_unit_test_setup_teardown(test_file_size_limit, setup_dir, test_teardown_tmpdir),
+        cmocka_unit_test_setup_teardown(test_file_size_limit_merge, setup_dir, test_teardown_tmpdir),
         cmocka_unit_test_setup_teardown(test_second_interrupt_during_write, setup_dir, test_teardown_tmpdir),
         cmocka_unit_test_setup_teardown(test_sigkill_during_frame_write, setup_dir, test_teardown_tmpdir),
     };
