@@ -23,13 +23,16 @@ typedef struct {
     char path[4096 + 64];
 } live_entry;
 static live_entry live[LIVE_SLOTS];
+static int live_claimed[LIVE_SLOTS]; /* a slot is taken atomically (two threads may write files at once) */
 
+/* Best effort: with every slot taken the file is not tracked (a signal exit would leave it). */
 static void live_add(const char *path, int kind)
 {
+    if (strlen(path) >= sizeof live[0].path) return;
     for (int i = 0; i < LIVE_SLOTS; i++)
-        if (!live[i].used && strlen(path) < sizeof live[i].path) {
+        if (!__atomic_exchange_n(&live_claimed[i], 1, __ATOMIC_ACQ_REL)) {
             strcpy(live[i].path, path);
-            __atomic_signal_fence(__ATOMIC_SEQ_CST);
+            __atomic_thread_fence(__ATOMIC_SEQ_CST);
             live[i].used = kind;
             return;
         }
@@ -38,7 +41,11 @@ static void live_add(const char *path, int kind)
 static void live_remove(const char *path)
 {
     for (int i = 0; i < LIVE_SLOTS; i++)
-        if (live[i].used && !strcmp(live[i].path, path)) live[i].used = 0;
+        if (live[i].used && !strcmp(live[i].path, path)) {
+            live[i].used = 0;
+            __atomic_store_n(&live_claimed[i], 0, __ATOMIC_RELEASE);
+            return;
+        }
 }
 
 /* Removes the files of a flat folder and the folder, with async-signal-safe system calls only (no
