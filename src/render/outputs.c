@@ -1,5 +1,6 @@
 /* Film → files: gate image, PNG preview, per-frame images, the frame sidecar, the transient cube and its
- * viewer page (docs/cli.md §3); the check of the output path before any work, and the rescue folder when the
+ * viewer page (docs/cli.md §3), in frame mode as one set staged and moved into place; the check of the
+ * output path before any work (with the cleanup of what killed runs left), and the rescue folder when the
  * final write fails anyway. */
 #include "dartspp/render.h"
 
