@@ -5,6 +5,8 @@
 
 #include <signal.h>
 #include <sys/resource.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
 
 /* ---- atomic writes ---- */
 
@@ -203,6 +205,102 @@ static void test_frames_csv(void **state)
     test_rmtree(dir);
 }
 
+/* ---- file sets and what killed runs leave ---- */
+
+static long dead_pid(void)
+{
+    pid_t p = fork();
+    assert_true(p >= 0);
+    if (p == 0) _exit(0);
+    waitpid(p, NULL, 0);
+    return (long)p; /* reaped: no process has it until the kernel hands it out again */
+}
+
+static int notes;
+static void count_note(const char *msg)
+{
+    print_message("  note: %s\n", msg);
+    notes++;
+}
+
+/* A set: nothing visible before the commit, every file in place after it and no staging folder left; an
+ * aborted set leaves the old files. atomic_clean_stale removes the temporary file and the staging folder of
+ * a process that no longer runs, completes its commit folder, and leaves a running process's (the parent
+ * of this test) alone; a file of another stem is not touched. */
+static void test_atomic_set_and_stale(void **state)
+{
+    (void)state;
+    char *dir = test_tmpdir(), stem[512], path[9000];
+    dp_error err;
+    atomic_set set;
+    join(stem, sizeof stem, dir, "s");
+    join(path, sizeof path, dir, "s_0000.txt");
+    test_write_file(path, "old");
+    assert_int_equal(atomic_set_open(&set, stem, &err), 0);
+    snprintf(path, sizeof path, "%s_0000.txt", set.stem);
+    test_write_file(path, "new0");
+    snprintf(path, sizeof path, "%s_0001.txt", set.stem);
+    test_write_file(path, "new1");
+    join(path, sizeof path, dir, "s_0000.txt");
+    assert_int_equal(file_size(path), 3); /* the old file until the commit */
+    atomic_set_abort(&set);
+    assert_int_equal(file_size(path), 3);
+    assert_int_equal(file_size(set.stage), -1);
+    assert_int_equal(atomic_set_open(&set, stem, &err), 0);
+    snprintf(path, sizeof path, "%s_0000.txt", set.stem);
+    test_write_file(path, "new0");
+    snprintf(path, sizeof path, "%s_0001.txt", set.stem);
+    test_write_file(path, "new1");
+    assert_int_equal(atomic_set_commit(&set, NULL, &err), 0);
+    join(path, sizeof path, dir, "s_0000.txt");
+    assert_int_equal(file_size(path), 4);
+    join(path, sizeof path, dir, "s_0001.txt");
+    assert_int_equal(file_size(path), 4);
+    assert_int_equal(count_temp_files(dir), 0);
+    /* left behind by processes that are gone, one that runs, and another output's */
+    long dead = dead_pid(), dead2 = dead_pid(), live = (long)getppid();
+    char name[200];
+    snprintf(name, sizeof name, "s_0001.txt.tmp.%ld", dead);
+    join(path, sizeof path, dir, name);
+    test_write_file(path, "half");
+    snprintf(name, sizeof name, ".s.set.tmp.%ld", dead);
+    join(path, sizeof path, dir, name);
+    assert_int_equal(mkdir(path, 0755), 0);
+    strcat(path, "/s_0000.txt");
+    test_write_file(path, "staged");
+    snprintf(name, sizeof name, ".s.set.commit.%ld", dead2);
+    join(path, sizeof path, dir, name);
+    assert_int_equal(mkdir(path, 0755), 0);
+    strcat(path, "/s_0001.txt");
+    test_write_file(path, "committed");
+    snprintf(name, sizeof name, "s.exr.tmp.%ld", live);
+    join(path, sizeof path, dir, name);
+    test_write_file(path, "running");
+    snprintf(name, sizeof name, "other.exr.tmp.%ld", dead);
+    join(path, sizeof path, dir, name);
+    test_write_file(path, "not ours");
+    notes = 0;
+    int found = atomic_clean_stale(stem, count_note);
+    /* the commit folder's pid may run again by now: then it is left alone, and said so */
+    assert_int_equal(found, 4);
+    assert_int_equal(notes, 4);
+    assert_int_equal(count_temp_files(dir), 2); /* the running process's and the other output's */
+    snprintf(name, sizeof name, "s.exr.tmp.%ld", live);
+    join(path, sizeof path, dir, name);
+    assert_int_equal(file_size(path), 7);
+    snprintf(name, sizeof name, ".s.set.tmp.%ld", dead);
+    join(path, sizeof path, dir, name);
+    assert_int_equal(file_size(path), -1);
+    if (kill((pid_t)(dead2), 0) != 0) {
+        join(path, sizeof path, dir, "s_0001.txt");
+        assert_int_equal(file_size(path), 9); /* the commit folder's file moved into place */
+        snprintf(name, sizeof name, ".s.set.commit.%ld", dead2);
+        join(path, sizeof path, dir, name);
+        assert_int_equal(file_size(path), -1);
+    }
+    test_rmtree(dir);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -212,6 +310,7 @@ int main(void)
         cmocka_unit_test(test_atomic_open_commit_abort),
         cmocka_unit_test(test_atomic_fopen_fclose_fabort),
         cmocka_unit_test(test_frames_csv),
+        cmocka_unit_test(test_atomic_set_and_stale),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -52,6 +52,30 @@ int atomic_fclose(atomic_file *af, int failed, dp_error *err);
 /* Closes the stream and removes the temporary file (the caller reports why). */
 void atomic_fabort(atomic_file *af);
 
+/* " (the file-size limit ...)" after the errno text of EFBIG, else "". */
+const char *io_errno_hint(int e);
+
+/* Removes the temporary files and staging folders of the writes in progress (async-signal-safe: for a
+ * handler that ends the process). */
+void atomic_cleanup_on_signal(void);
+
+/* A set of files that appears all-or-nothing (the frames, cube, viewer and sidecar of a render): every file
+ * is written under `stem` (with the same base name as the final stem) into the staging folder
+ * "<dir>/.<base>.set.tmp.<pid>"; commit renames that folder to "<dir>/.<base>.set.commit.<pid>" (the commit
+ * point) and moves its files to <dir>. A process killed before the commit point leaves the old files as
+ * they were; one killed while moving leaves the commit folder, which the next atomic_clean_stale of the
+ * same stem completes. */
+typedef struct {
+    char dir[4096], base[4096], stage[4200], stem[8400];
+} atomic_set;
+int atomic_set_open(atomic_set *s, const char *final_stem, dp_error *err);
+int atomic_set_commit(atomic_set *s, void (*wrote)(const char *path), dp_error *err);
+void atomic_set_abort(atomic_set *s);
+/* What processes that no longer run left beside the outputs "<stem>*": temporary files "*.tmp.<pid>" and
+ * staging folders are removed, commit folders completed; those of a running process are left alone. Each
+ * gets a sentence for note(). Returns how many were found. */
+int atomic_clean_stale(const char *stem, void (*note)(const char *msg));
+
 /* Float32 RGB EXR (channels R, G, B, ZIP compression) with the metadata as header attributes
  * `dartspp.timeUnit`, `dartspp.gateStart`/`dartspp.gateEnd` (gated images only), `dartspp.cameraWarped`,
  * `dartspp.frame` (-1 for a gate image), `dartspp.passes` (when > 0), `dartspp.integrator` and `dartspp.plan`

@@ -1,4 +1,5 @@
 /* dartspp: entry point and sub-command dispatch. */
+#include <signal.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -26,6 +27,7 @@ static void usage(FILE *f)
  * commands need no cluster and stay in dartspp. */
 int main(int argc, char **argv)
 {
+    signal(SIGXFSZ, SIG_IGN); /* a file-size limit fails the write (EFBIG, reported) instead of killing */
     render_cluster c;
     if (cluster_mpi_start(&argc, &argv, &c)) {
         fprintf(stderr, "dartspp-mpi: MPI did not start\n");
@@ -46,6 +48,7 @@ int main(int argc, char **argv)
 #else
 int main(int argc, char **argv)
 {
+    signal(SIGXFSZ, SIG_IGN); /* a file-size limit fails the write (EFBIG, reported) instead of killing */
     if (argc < 2 || !strcmp(argv[1], "-h") || !strcmp(argv[1], "--help")) {
         usage(argc < 2 ? stderr : stdout);
         return argc < 2 ? 2 : 0;

@@ -82,7 +82,8 @@ static int64_t stream_write(exr_const_context_t ctxt, void *ud, const void *buf,
         if (n < 0 && errno == EINTR) continue;
         if (n <= 0) {
             char m[256];
-            snprintf(m, sizeof m, "write failed: %s", n < 0 ? strerror(errno) : "no space written");
+            int e = n < 0 ? errno : 0;
+            snprintf(m, sizeof m, "write failed: %s%s", e ? strerror(e) : "no space written", io_errno_hint(e));
             note(s, m);
             return -1;
         }

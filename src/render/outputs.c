@@ -1,5 +1,6 @@
 /* Film → files: gate image, PNG preview, per-frame images, the frame sidecar, the transient cube and its
- * viewer page (docs/cli.md §3); the check of the output path before any work, and the rescue folder when the
+ * viewer page (docs/cli.md §3), in frame mode as one set staged and moved into place; the check of the
+ * output path before any work (with the cleanup of what killed runs left), and the rescue folder when the
  * final write fails anyway. */
 #include "dartspp/render.h"
 
@@ -12,6 +13,8 @@
 #include <unistd.h>
 
 #define TIME_UNIT "optical path length in scene units (c = 1)"
+/* a path under the staging folder of a frame set: its folder name repeats the stem's base name */
+#define STAGED_PATH_MAX (2 * OUTPUT_PATH_MAX + 128)
 
 static int write_one(const char *path, const image_rgb *img, const image_meta *meta, void (*wrote)(const char *),
                      dp_error *err)
@@ -45,7 +48,7 @@ static void frame_path(char *out, size_t n, const char *stem, int frame_count, i
 /* The cube and the viewer, filled frame by frame beside the frame files. */
 typedef struct {
     int skip;
-    char npy_path[OUTPUT_PATH_MAX + 64], html_path[OUTPUT_PATH_MAX + 64];
+    char npy_path[STAGED_PATH_MAX], html_path[STAGED_PATH_MAX];
     npy_file npy;
     int npy_open;
     viewer_cube view;
@@ -117,7 +120,7 @@ static int write_frames(const film *f, const char *stem, const char *ext, image_
     frame_extras x;
     if (extras_open(&x, f, stem, skip, err)) return -1;
     for (int k = 0; k < tw->frame_count; k++) {
-        char path[OUTPUT_PATH_MAX + 64];
+        char path[STAGED_PATH_MAX];
         frame_path(path, sizeof path, stem, tw->frame_count, k, ext);
         image_rgb img = {0};
         if (film_image(f, k, &img, err)) {
@@ -136,26 +139,26 @@ static int write_frames(const film *f, const char *stem, const char *ext, image_
         }
     }
     if (extras_close(&x, f, stem, wrote, err)) return -1;
-    char csv[OUTPUT_PATH_MAX + 64];
+    char csv[STAGED_PATH_MAX];
     snprintf(csv, sizeof csv, "%s_frames.csv", stem);
     if (frames_csv_write(csv, tw->frame_count, tw->start, tw->width, err)) return -1;
     if (wrote) wrote(csv);
     return 0;
 }
 
-int render_write_outputs(const film *f, const char *path, const char *integrator, const char *plan, int skip,
-                         void (*wrote)(const char *path), dp_error *err)
+/* The gate image, its PNG and (frame mode) the frame set under `stem`. */
+static int write_all(const film *f, const char *stem, const char *dot, const char *integrator, const char *plan,
+                     int skip, void (*wrote)(const char *path), dp_error *err)
 {
-    char stem[OUTPUT_PATH_MAX];
-    const char *dot;
-    if (split_output_path(path, stem, sizeof stem, &dot, err) || io_make_parent_dirs(path, err)) return -1;
+    char path[STAGED_PATH_MAX];
+    snprintf(path, sizeof path, "%s%s", stem, dot);
     const time_window *tw = &f->window;
     image_meta meta = {.time_unit = TIME_UNIT, .gated = tw->gated, .gate_start = tw->start,
                        .gate_end = time_window_end(tw), .camera_warped = !tw->camera_unwarp, .frame_index = -1,
                        .integrator = integrator, .plan = plan, .passes = f->passes};
     image_rgb img = {0};
     if (film_image(f, -1, &img, err)) return -1;
-    char png[OUTPUT_PATH_MAX + 64];
+    char png[STAGED_PATH_MAX];
     snprintf(png, sizeof png, "%s.png", stem);
     int rc = write_one(path, &img, &meta, wrote, err);
     if (!rc) rc = png_write_preview(png, &img, err);
@@ -163,6 +166,33 @@ int render_write_outputs(const film *f, const char *path, const char *integrator
     image_free(&img);
     if (!rc && tw->frame_count > 0) rc = write_frames(f, stem, dot, meta, skip, wrote, err);
     return rc;
+}
+
+static void say_note(const char *msg) { fprintf(stderr, "dartspp render: %s\n", msg); }
+
+/* One image: written in place, atomically. Frame mode: every file into a staging folder, then moved into
+ * place (atomic_set in io.h), so that a killed run leaves the old set or the new one, never a mix. */
+int render_write_outputs(const film *f, const char *path, const char *integrator, const char *plan, int skip,
+                         void (*wrote)(const char *path), dp_error *err)
+{
+    char stem[OUTPUT_PATH_MAX];
+    const char *dot;
+    if (split_output_path(path, stem, sizeof stem, &dot, err) || io_make_parent_dirs(path, err)) return -1;
+    if (f->window.frame_count <= 0) return write_all(f, stem, dot, integrator, plan, skip, wrote, err);
+    static atomic_set set; /* large; one write at a time */
+    if (atomic_set_open(&set, stem, err)) return -1;
+    if (write_all(f, set.stem, dot, integrator, plan, skip, NULL, err)) {
+        atomic_set_abort(&set);
+        /* the message names the final path, not the staging folder's */
+        char *at = strstr(err->msg, set.stem);
+        if (at) {
+            char rest[sizeof err->msg];
+            snprintf(rest, sizeof rest, "%s", at + strlen(set.stem));
+            snprintf(at, sizeof err->msg - (size_t)(at - err->msg), "%s%s", stem, rest);
+        }
+        return -1;
+    }
+    return atomic_set_commit(&set, wrote, err);
 }
 
 /* The folder of a file path ("." for a bare name). */
@@ -192,12 +222,13 @@ static void extras_room(int width, int height, int frame_count, int skip, double
 
 int render_outputs_check(const char *path, int width, int height, int frame_count, int skip, dp_error *err)
 {
-    char stem[OUTPUT_PATH_MAX], dir[OUTPUT_PATH_MAX], probe[OUTPUT_PATH_MAX + 64];
+    char stem[OUTPUT_PATH_MAX], dir[OUTPUT_PATH_MAX], probe[STAGED_PATH_MAX];
     const char *ext;
     struct stat st;
     if (split_output_path(path, stem, sizeof stem, &ext, err)) return -1;
     if (stat(path, &st) == 0 && S_ISDIR(st.st_mode)) return dp_fail(err, "%s: output is a folder", path);
     if (io_make_parent_dirs(path, err)) return -1;
+    atomic_clean_stale(stem, say_note);
     parent_dir(path, dir, sizeof dir);
     /* writability: create and remove a probe file where the outputs will go */
     snprintf(probe, sizeof probe, "%s/.dartspp-probe-XXXXXX", dir);
@@ -237,7 +268,7 @@ int render_write_rescue(const film *f, const char *path, const char *integrator,
     for (int i = 0; i < 3; i++) {
         if (i > 0 && !strcmp(dirs[i], dirs[i - 1])) continue;
         if ((size_t)snprintf(rescue_dir, n, "%s/dartspp-rescue-XXXXXX", dirs[i]) >= n || !mkdtemp(rescue_dir)) continue;
-        char target[OUTPUT_PATH_MAX + 64];
+        char target[STAGED_PATH_MAX];
         snprintf(target, sizeof target, "%s/%s", rescue_dir, base);
         if (!render_write_outputs(f, target, integrator, plan, skip, wrote, &last)) return 0;
         rmdir(rescue_dir); /* only if it stayed empty */
