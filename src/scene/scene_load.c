@@ -268,6 +268,9 @@ static int append_surface_mesh(json_ctx *c, scene *s, const tri_mesh *m, const x
         vec3 p = xform_point(T, v3(m->pos[3 * i], m->pos[3 * i + 1], m->pos[3 * i + 2]));
         if (!v3_is_finite(p) || !isfinite((float)p.x) || !isfinite((float)p.y) || !isfinite((float)p.z))
             return jfail(c, where, "transform", "maps a vertex outside the float range");
+        if (!(fabs(p.x) <= SCENE_COORD_MAX && fabs(p.y) <= SCENE_COORD_MAX && fabs(p.z) <= SCENE_COORD_MAX))
+            return jfail(c, where, "transform", "maps a vertex to (%g, %g, %g), beyond the supported coordinates "
+                                                "(|x| <= %g)", p.x, p.y, p.z, SCENE_COORD_MAX);
         s->verts[3 * (size_t)(base + i)] = (float)p.x;
         s->verts[3 * (size_t)(base + i) + 1] = (float)p.y;
         s->verts[3 * (size_t)(base + i) + 2] = (float)p.z;
