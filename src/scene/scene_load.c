@@ -435,6 +435,9 @@ static int parse_camera(json_ctx *c, const cJSON *root, scene *s)
     }
     if (jget_number(c, v, "camera", "fov", 60.0, &cam->fov_deg)) return -1;
     if (!(cam->fov_deg > 0 && cam->fov_deg < 180)) return jfail(c, "camera", "fov", "must be in (0, 180) degrees (got %g)", cam->fov_deg);
+    /* a positive fov so small that the image plane's distance 1/tan(fov/2) overflows gave NaN ray directions */
+    if (cam->fov_deg < 1e-6)
+        return jfail(c, "camera", "fov", "is too small (got %g; the smallest supported is 1e-6 degrees)", cam->fov_deg);
     xform T;
     if (xform_parse(c, jget_item(c, v, "transform"), "camera", &T)) return -1;
     cam->pos = T.pos;
