@@ -1040,6 +1040,15 @@ static void test_found_far_coordinates(void **state)
     expect_refused("\"scale\": [4, 1, 4]", "\"scale\": [-1e30, 1, 4]", "primitives[0]", "maps a vertex");
     expect_refused("\"position\": [0, 1, -4]", "\"position\": [0, 1, 2e15]", "camera.transform.position",
                    "beyond the supported coordinates");
+    /* a mesh file's own vertex beyond the bound: the message names the file and its line */
+    static const char far_obj[] = "v 0 0 0\nv 1 0 0\nv 1e20 1 0\nf 1 2 3\n";
+    write_in_dir("far.obj", far_obj, strlen(far_obj));
+    dp_error e2;
+    if (load_base_with("\"primitives\": [", "\"primitives\": [{\"type\": \"mesh\", \"file\": \"far.obj\", \"bsdf\": \"white\"},",
+                       &e2) == 0)
+        fail_msg("a .obj vertex at 1e20 loaded");
+    ASSERT_CONTAINS(e2.msg, "far.obj:3");
+    ASSERT_CONTAINS(e2.msg, "beyond the supported coordinates");
     /* the bound itself loads, and renders a finite image */
     dp_error err;
     char *text = fx_keep(replace1(BASE_SCENE, "\"scale\": [4, 1, 4]", "\"scale\": [1e15, 1, 1e15]"));
