@@ -114,10 +114,11 @@ check: build/san/dartspp $(QUICK_BIN)
 
 # The whole stress matrix (extreme media, anisotropy, gates, scales, geometry): the estimator-level cases of
 # tests/test_darts.c and tests/test_eda.c, the renders of tests/test_stress.c and all 18 material cases of
-# tests/test_materials.c, under ASan (its time: tests/README.md). `make test` runs a fast subset of each.
-# DARTSPP_STRESS_ONLY=text picks render cases by name.
-STRESS_TESTS = build/san/tests/test_darts build/san/tests/test_eda build/san/tests/test_stress build/san/tests/test_materials
-stress: $(STRESS_TESTS)
+# tests/test_materials.c, and ten times the fuzz cases of tests/test_fuzz_renders.c, under ASan (its time:
+# tests/README.md). `make test` runs a fast subset of each. DARTSPP_STRESS_ONLY=text picks render cases by name.
+STRESS_TESTS = build/san/tests/test_darts build/san/tests/test_eda build/san/tests/test_stress build/san/tests/test_materials \
+               build/san/tests/test_fuzz_renders
+stress: build/san/dartspp $(STRESS_TESTS)
 	@DARTSPP_STRESS=full tests/run_tests.sh $(STRESS_TESTS)
 
 # docs/keys.md between its markers is the output of `dartspp keys --markdown` (tests/test_keys.c checks it).

@@ -57,6 +57,20 @@ static inline film_slot film_time_slot(const film *f, double t, int frame)
     return s;
 }
 
+/* The largest weighted contribution the film keeps: the frame layers and the output images are float32, so a
+ * finite double beyond this (an albedo of 1e308, a tiny gate width's weight) would sum to Inf there; it is
+ * dropped and counted with the non-finite ones. 1e30 leaves 8 decades of float range for the sums. */
+#define FILM_VALUE_MAX 1e30
+
+/* Whether c is finite and, weighted for slot s, within FILM_VALUE_MAX. */
+static inline int film_slot_fits(const film_slot *s, vec3 c)
+{
+    if (!v3_is_finite(c)) return 0;
+    double w = s->gated ? (s->wg > s->wf ? s->wg : s->wf) : 1.0;
+    double m = fmax(fabs(c.x), fmax(fabs(c.y), fabs(c.z)));
+    return m * w <= FILM_VALUE_MAX;
+}
+
 /* Adds a finite c to pixel px in a slot that counts (not thread-safe for one pixel). */
 static inline void film_slot_add(film *f, size_t px, const film_slot *s, vec3 c)
 {
@@ -80,7 +94,8 @@ static inline void film_slot_add(film *f, size_t px, const film_slot *s, vec3 c)
 
 /* Adds contribution c arriving at path time t to pixel index px (not thread-safe for one pixel).
  * frame >= 0 (DARTS frame mode): c counts only if t falls in that frame, in the frames and the gate image.
- * Returns 0 when c was non-finite and was dropped (the caller counts it). */
+ * Returns 0 when c was non-finite or too large for the film (FILM_VALUE_MAX) and was dropped (the caller
+ * counts it). */
 int film_splat(film *f, size_t px, double t, vec3 c, int frame);
 /* The pass layer joins the sums with weight w > 0 (passes + 1), or is cleared. */
 void film_commit_pass(film *f, double w);

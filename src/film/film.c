@@ -40,7 +40,9 @@ int film_splat(film *f, size_t px, double t, vec3 c, int frame)
 {
     if (!v3_is_finite(c)) return 0;
     film_slot s = film_time_slot(f, t, frame);
-    if (s.counts) film_slot_add(f, px, &s, c);
+    if (!s.counts) return 1;
+    if (!film_slot_fits(&s, c)) return 0;
+    film_slot_add(f, px, &s, c);
     return 1;
 }
 

@@ -60,7 +60,7 @@ static inline void volume_photon_splat_slot(const gather_input *g, film_pixel *p
                                                                             : v3_exp_neg(v3_scale(m->sigma_t, t));
     vec3 c = v3_scale(v3_mul(v3_mul(thr, tr), v3(p->power[0], p->power[1], p->power[2])), f);
     if (v3_is_zero(c)) return;
-    if (!v3_is_finite(c)) pix->nonfinite++;
+    if (!film_slot_fits(slot, c)) pix->nonfinite++;
     else film_slot_add(pix->f, pix->px, slot, c);
 }
 

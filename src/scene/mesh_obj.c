@@ -145,6 +145,10 @@ static int parse_numbers(const char *s, int n, float_list *l, const char *path, 
     int got = sscanf(s, "%lf %lf %lf", &x[0], &x[1], &x[2]);
     if (got < n || !isfinite(x[0]) || !isfinite(x[1]) || (n == 3 && !isfinite(x[2])))
         return dp_fail(err, "%s:%ld: bad %s line", path, lineno, what);
+    if (!strcmp(what, "vertex") &&
+        !(fabs(x[0]) <= SCENE_COORD_MAX && fabs(x[1]) <= SCENE_COORD_MAX && fabs(x[2]) <= SCENE_COORD_MAX))
+        return dp_fail(err, "%s:%ld: vertex beyond the supported coordinates (|x| <= %g)", path, lineno,
+                       SCENE_COORD_MAX);
     if (list_push(l, x, n)) return dp_fail_kind(err, DP_ERROR_MEMORY, "%s: out of memory", path);
     return 0;
 }

@@ -36,6 +36,9 @@ static int read_vertices(FILE *f, const char *path, uint64_t nv, tri_mesh *m, dp
         float x = lef32(v), y = lef32(v + 4), z = lef32(v + 8);
         if (!isfinite(x) || !isfinite(y) || !isfinite(z))
             return dp_fail(err, "%s: vertex %llu has a non-finite position", path, (unsigned long long)i);
+        if (!(fabsf(x) <= SCENE_COORD_MAX && fabsf(y) <= SCENE_COORD_MAX && fabsf(z) <= SCENE_COORD_MAX))
+            return dp_fail(err, "%s: vertex %llu is beyond the supported coordinates (|x| <= %g)", path,
+                           (unsigned long long)i, SCENE_COORD_MAX);
         if (tri_mesh_add_vertex(m, x, y, z)) return dp_fail_kind(err, DP_ERROR_MEMORY, "%s: out of memory", path);
         float *n = &m->nrm[3 * (size_t)i], *uv = &m->uv[2 * (size_t)i];
         for (int k = 0; k < 3; k++) n[k] = lef32(v + 12 + 4 * k);

@@ -10,6 +10,10 @@ typedef struct {
     vec3 x, y, z, pos;
 } xform;
 
+/* The largest |coordinate| of a position (camera, light, primitive) or of a vertex in world space: three
+ * decades inside Embree's ray range (|origin| < 1.8e18, FLT_LARGE), which it asserts. */
+#define SCENE_COORD_MAX 1e15
+
 int xform_parse(json_ctx *c, const cJSON *v, const char *where, xform *out);
 static inline vec3 xform_point(const xform *m, vec3 p)
 {

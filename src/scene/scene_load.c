@@ -268,6 +268,9 @@ static int append_surface_mesh(json_ctx *c, scene *s, const tri_mesh *m, const x
         vec3 p = xform_point(T, v3(m->pos[3 * i], m->pos[3 * i + 1], m->pos[3 * i + 2]));
         if (!v3_is_finite(p) || !isfinite((float)p.x) || !isfinite((float)p.y) || !isfinite((float)p.z))
             return jfail(c, where, "transform", "maps a vertex outside the float range");
+        if (!(fabs(p.x) <= SCENE_COORD_MAX && fabs(p.y) <= SCENE_COORD_MAX && fabs(p.z) <= SCENE_COORD_MAX))
+            return jfail(c, where, "transform", "maps a vertex to (%g, %g, %g), beyond the supported coordinates "
+                                                "(|x| <= %g)", p.x, p.y, p.z, SCENE_COORD_MAX);
         s->verts[3 * (size_t)(base + i)] = (float)p.x;
         s->verts[3 * (size_t)(base + i) + 1] = (float)p.y;
         s->verts[3 * (size_t)(base + i) + 2] = (float)p.z;
@@ -435,6 +438,9 @@ static int parse_camera(json_ctx *c, const cJSON *root, scene *s)
     }
     if (jget_number(c, v, "camera", "fov", 60.0, &cam->fov_deg)) return -1;
     if (!(cam->fov_deg > 0 && cam->fov_deg < 180)) return jfail(c, "camera", "fov", "must be in (0, 180) degrees (got %g)", cam->fov_deg);
+    /* a positive fov so small that the image plane's distance 1/tan(fov/2) overflows gave NaN ray directions */
+    if (cam->fov_deg < 1e-6)
+        return jfail(c, "camera", "fov", "is too small (got %g; the smallest supported is 1e-6 degrees)", cam->fov_deg);
     xform T;
     if (xform_parse(c, jget_item(c, v, "transform"), "camera", &T)) return -1;
     cam->pos = T.pos;

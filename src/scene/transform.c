@@ -48,7 +48,24 @@ static int parse_matrix16(json_ctx *c, const cJSON *v, const char *where, xform 
     return 0;
 }
 
+static int xform_parse_any(json_ctx *c, const cJSON *v, const char *where, xform *out);
+
+/* A position beyond SCENE_COORD_MAX is refused: Embree's rays need |origin| below 1.8e18 (FLT_LARGE) and
+ * assert otherwise, and the camera, the lights and every hit point are ray origins. */
 int xform_parse(json_ctx *c, const cJSON *v, const char *where, xform *out)
+{
+    if (xform_parse_any(c, v, where, out)) return -1;
+    vec3 p = out->pos;
+    if (!(fabs(p.x) <= SCENE_COORD_MAX && fabs(p.y) <= SCENE_COORD_MAX && fabs(p.z) <= SCENE_COORD_MAX)) {
+        char w[256];
+        snprintf(w, sizeof w, "%s.transform", where);
+        return jfail(c, w, "position", "(%g, %g, %g) is beyond the supported coordinates (|x| <= %g)", p.x, p.y, p.z,
+                     SCENE_COORD_MAX);
+    }
+    return 0;
+}
+
+static int xform_parse_any(json_ctx *c, const cJSON *v, const char *where, xform *out)
 {
     out->x = v3(1, 0, 0);
     out->y = v3(0, 1, 0);
