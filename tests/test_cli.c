@@ -212,7 +212,7 @@ static void test_error_exits_without_leaks(void **state)
 
 /* Issue 32: numbers on the command line are what they say. A seed is an exact integer from 0 to 2^64 - 1:
  * before, 1.5 became 1 and every seed past 2^64 - 1 was clamped to it (so "different" seeds rendered the
- * same image); a thread count is a whole number up to 1024 (10000 threads were accepted on 2 cores: 13x
+ * same image); a pass count is a whole number (`--spp 1.5` was truncated, `1e30` overflowed); a thread count is a whole number up to 1024 (10000 threads were accepted on 2 cores: 13x
  * slower). Each ends at once with exit 2 and a message naming the option, writing nothing. And
  * `render --help` prints the render usage on stdout and exits 0 (it was "an unknown option"). */
 static void test_numbers_and_help(void **state)
@@ -228,6 +228,8 @@ static void test_numbers_and_help(void **state)
         {"--threads 10000", "1024"},
         {"--threads 2.5", "--threads"},
         {"--threads -2", "--threads"},
+        {"--spp 1.5", "--spp"},
+        {"--spp 1e30", "--spp"},
     };
     int failures = 0;
     for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {

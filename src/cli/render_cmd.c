@@ -1,5 +1,6 @@
 /* `dartspp render SCENE.json [options]`: the flags, then the render command (render_run, src/render). */
 #include <errno.h>
+#include <limits.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -94,10 +95,14 @@ static int parse_args(int argc, char **argv, render_request *rq, const char **se
             if (seed) rq->seed = (uint64_t)u;
             else rq->threads = (int)u;
             i++;
-        } else if (!strcmp(o, "--spp") || !strcmp(o, "--time")) {
+        } else if (!strcmp(o, "--spp")) {
+            unsigned long long u;
+            if (parse_uint(v, (unsigned long long)LONG_MAX, &u)) return bad_arg(o, v, "expected a whole number of passes");
+            rq->spp = (long)u;
+            i++;
+        } else if (!strcmp(o, "--time")) {
             if (parse_number(o, v, 0, &d)) return bad_arg(o, v, "expected a non-negative number");
-            if (!strcmp(o, "--spp")) rq->spp = (long)d;
-            else rq->time_limit = d;
+            rq->time_limit = d;
             i++;
         } else if (!strcmp(o, "--checkpoint")) {
             if (parse_number(o, v, 0, &rq->checkpoint)) return bad_arg(o, v, "expected seconds (0: no checkpoints)");
