@@ -2,7 +2,7 @@
  * guard, interrupts that end a render within a second and keep exactly the completed passes, the rescue
  * folder when the final write fails, and error exits without leaks (the sanitized binary runs with
  * LeakSanitizer on). Every case runs the real `dartspp render` on the shipped demo scene. */
-#include "test_util.h"
+#include "child_process.h"
 
 #include <errno.h>
 #include <fcntl.h>
@@ -16,89 +16,11 @@
 /* A loose bound for a loaded machine: the stop flag is read every batch of light paths and every row. */
 #define EXIT_BOUND_S 5.0
 
-static double now_s(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return ts.tv_sec + 1e-9 * ts.tv_nsec;
-}
 
-/* A render started in the background with its stdout and stderr in one file. */
-typedef struct {
-    pid_t pid;
-    char log[600];
-} child;
 
-static void child_start(child *c, const char *dir, const char *const *argv, const char *tmpdir)
-{
-    snprintf(c->log, sizeof c->log, "%s/render.log", dir);
-    c->pid = fork();
-    assert_true(c->pid >= 0);
-    if (c->pid == 0) {
-        int fd = open(c->log, O_WRONLY | O_CREAT | O_TRUNC, 0644);
-        if (fd < 0) _exit(127);
-        dup2(fd, 1);
-        dup2(fd, 2);
-        if (tmpdir) setenv("TMPDIR", tmpdir, 1);
-        execv(argv[0], (char *const *)argv);
-        _exit(127);
-    }
-}
 
-/* Waits up to `bound` seconds; returns the exit status (128 + signal if killed) and the seconds waited, or
- * -1 after killing a child that did not end in time. */
-static int child_wait(child *c, double bound, double *waited)
-{
-    double t0 = now_s();
-    int st;
-    for (;;) {
-        pid_t r = waitpid(c->pid, &st, WNOHANG);
-        if (r == c->pid) break;
-        if (now_s() - t0 > bound) {
-            kill(c->pid, SIGKILL);
-            waitpid(c->pid, &st, 0);
-            *waited = now_s() - t0;
-            return -1;
-        }
-        usleep(10000);
-    }
-    *waited = now_s() - t0;
-    return WIFEXITED(st) ? WEXITSTATUS(st) : 128 + WTERMSIG(st);
-}
 
-static char *read_text(const char *path)
-{
-    FILE *f = fopen(path, "rb");
-    if (!f) return strdup("");
-    char *buf = calloc(1 << 20, 1);
-    size_t n = buf ? fread(buf, 1, (1 << 20) - 1, f) : 0;
-    (void)n;
-    fclose(f);
-    return buf;
-}
 
-/* Waits until the log contains `what` (up to `bound` seconds); 1 if it did. */
-static int log_wait_for(const child *c, const char *what, double bound)
-{
-    double t0 = now_s();
-    while (now_s() - t0 < bound) {
-        char *t = read_text(c->log);
-        int found = strstr(t, what) != NULL;
-        free(t);
-        if (found) return 1;
-        usleep(20000);
-    }
-    return 0;
-}
-
-/* Prints what a command said, at most its last 700 characters, always ending the line (the test runner reads
- * cmocka's result lines at the start of a line). */
-static void print_tail(const char *what)
-{
-    size_t n = strlen(what);
-    const char *t = n > 700 ? what + n - 700 : what;
-    print_message("%s%s", t, n && what[n - 1] == '\n' ? "" : "\n");
-}
 
 static void rm_rf(const char *dir)
 {
@@ -107,11 +29,6 @@ static void rm_rf(const char *dir)
     (void)!system(cmd);
 }
 
-static int file_exists(const char *path)
-{
-    struct stat st;
-    return stat(path, &st) == 0;
-}
 
 /* Every test gets a fresh temporary folder as its state, removed by the teardown even when it fails. */
 static int setup_dir(void **state)
@@ -304,7 +221,7 @@ static double interrupt_mid_pass(const char *dir, const char *const *extra, int 
     for (int i = 0; extra[i]; i++) argv[n++] = extra[i];
     argv[n] = NULL;
     child c;
-    child_start(&c, dir, argv, NULL);
+    child_start(&c, dir, argv, NULL, 0);
     /* the CLI says nothing before its first pass ends, so wait long enough for loading and the pilot */
     usleep((useconds_t)(settle * 1e6));
     double t0 = now_s(), waited;
@@ -404,7 +321,7 @@ static void test_interrupt_while_preparing(void **state)
     const char *argv[] = {DARTSPP_BIN, "render", DEMO, "--set", "eda=true", "--set", "eda_shape=[256,256,256]", "--set",
                           set_dir, "--output", o, NULL};
     child c;
-    child_start(&c, d, argv, NULL);
+    child_start(&c, d, argv, NULL, 0);
     assert_true(log_wait_for(&c, "EDA", 20.0)); /* the table build announces itself */
     double waited;
     kill(c.pid, SIGINT);
@@ -434,7 +351,7 @@ static void test_rescue_when_output_folder_disappears(void **state)
         const char *argv[] = {DARTSPP_BIN, "render", DEMO, "--set", "resolution=32", "--time", "4", "--quiet",
                               "--output", o, NULL};
         child c;
-        child_start(&c, d, argv, rescue_tmp);
+        child_start(&c, d, argv, rescue_tmp, 0);
         usleep(1500000);
         rm_rf(folder);
         if (replace) test_write_file(folder, "not a folder any more\n");

@@ -5,7 +5,7 @@
  * overwrite a checkpoint holding more passes says so and refuses unless --overwrite. The real sanitized
  * binary on the demo scene at 16x16. The reference is the uninterrupted render of the same command line:
  * what is tested is that resuming changes nothing, so no expected value comes from an earlier run. */
-#include "test_util.h"
+#include "child_process.h"
 
 #include <fcntl.h>
 #include <signal.h>
@@ -18,13 +18,6 @@
 #define PASSES 6
 /* n frames of the gate's width from just before the gate: all of them lit */
 #define FRAMES(n) "--set frame_num=" #n " --set start_time=6.45"
-
-static double now_s(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return ts.tv_sec + 1e-9 * ts.tv_nsec;
-}
 
 static int setup_dir(void **state)
 {
@@ -81,13 +74,6 @@ static long state_passes(const char *path)
         if (sscanf(line, "passes %ld", &passes) != 1) passes = -1;
     fclose(f);
     return passes;
-}
-
-static void print_tail(const char *what)
-{
-    size_t n = strlen(what);
-    const char *t = n > 700 ? what + n - 700 : what;
-    print_message("%s%s", t, n && what[n - 1] == '\n' ? "" : "\n");
 }
 
 static int run(const char *cmd, char *out, size_t n)

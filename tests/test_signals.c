@@ -4,6 +4,7 @@
  * left; a SIGKILL at a random moment of a 200-frame write leaves the complete old set or the complete new
  * one (each file's `dartspp.passes` header is the set's marker), and the next run removes what the killed
  * one left behind. */
+#include "child_process.h"
 #include "fixtures.h"
 
 #include <dirent.h>
@@ -20,81 +21,11 @@
 #define EXIT_BOUND_S 5.0
 #define FRAMES 200
 
-static double now_s(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return ts.tv_sec + 1e-9 * ts.tv_nsec;
-}
 
-/* A render started in the background with its stdout and stderr in one file; fsize_limit > 0 sets
- * RLIMIT_FSIZE (bytes) in the child before exec, as `ulimit -f` does. */
-typedef struct {
-    pid_t pid;
-    char log[600];
-} child;
 
-static void child_start(child *c, const char *dir, const char *const *argv, const char *tmpdir, long fsize_limit)
-{
-    snprintf(c->log, sizeof c->log, "%s/render.log", dir);
-    c->pid = fork();
-    assert_true(c->pid >= 0);
-    if (c->pid == 0) {
-        int fd = open(c->log, O_WRONLY | O_CREAT | O_TRUNC, 0644);
-        if (fd < 0) _exit(127);
-        dup2(fd, 1);
-        dup2(fd, 2);
-        if (tmpdir) setenv("TMPDIR", tmpdir, 1);
-        if (fsize_limit > 0) {
-            struct rlimit rl = {(rlim_t)fsize_limit, (rlim_t)fsize_limit};
-            if (setrlimit(RLIMIT_FSIZE, &rl) != 0) _exit(126);
-        }
-        execv(argv[0], (char *const *)argv);
-        _exit(127);
-    }
-}
 
-/* The exit status (128 + signal if killed), or -1 after killing a child that did not end within bound. */
-static int child_wait(child *c, double bound)
-{
-    double t0 = now_s();
-    int st;
-    for (;;) {
-        pid_t r = waitpid(c->pid, &st, WNOHANG);
-        if (r == c->pid) break;
-        if (now_s() - t0 > bound) {
-            kill(c->pid, SIGKILL);
-            waitpid(c->pid, &st, 0);
-            return -1;
-        }
-        usleep(5000);
-    }
-    return WIFEXITED(st) ? WEXITSTATUS(st) : 128 + WTERMSIG(st);
-}
 
-static char *read_text(const char *path)
-{
-    FILE *f = fopen(path, "rb");
-    if (!f) return strdup("");
-    char *buf = calloc(1 << 20, 1);
-    size_t n = buf ? fread(buf, 1, (1 << 20) - 1, f) : 0;
-    (void)n;
-    fclose(f);
-    return buf;
-}
 
-static void print_tail(const char *what)
-{
-    size_t n = strlen(what);
-    const char *t = n > 700 ? what + n - 700 : what;
-    print_message("%s%s", t, n && what[n - 1] == '\n' ? "" : "\n");
-}
-
-static int file_exists(const char *path)
-{
-    struct stat st;
-    return stat(path, &st) == 0;
-}
 
 /* Entries under dir (recursively) whose name holds `what`; their names go to print_message. */
 static int count_named(const char *dir, const char *what)
@@ -142,7 +73,7 @@ static void test_sighup_writes_completed_passes(void **state)
     usleep(6000000); /* loading and a few passes of about a second each under the sanitizers */
     double t0 = now_s();
     kill(c.pid, SIGHUP);
-    int rc = child_wait(&c, EXIT_BOUND_S * 4);
+    int rc = child_wait(&c, EXIT_BOUND_S * 4, NULL);
     char *log = read_text(c.log);
     print_message("  SIGHUP: exit %d, %.2f s after the signal\n", rc, now_s() - t0);
     print_tail(log);
@@ -176,7 +107,7 @@ static void test_file_size_limit(void **state)
                           "1", "--quiet", "--output", o, NULL};
     child c;
     child_start(&c, d, argv, tmp, 200 * 1024); /* a frame's 48 KiB fits, the cube's 384 KiB does not */
-    int rc = child_wait(&c, 120.0);
+    int rc = child_wait(&c, 120.0, NULL);
     char *log = read_text(c.log);
     print_message("  ulimit -f 200: exit %d\n", rc);
     print_tail(log);
@@ -300,7 +231,7 @@ static void test_sigkill_during_frame_write(void **state)
         assert_true(seen >= 0);
         if (round == 0) {
             /* round 0 measures the write: it is not killed */
-            assert_int_equal(child_wait(&c, 120), 0);
+            assert_int_equal(child_wait(&c, 120, NULL), 0);
             write_s = now_s() - seen;
             print_message("  the %d-frame write takes %.2f s\n", FRAMES, write_s);
             marker = set_marker(d, NULL, "set");
@@ -311,7 +242,7 @@ static void test_sigkill_during_frame_write(void **state)
         double delay = write_s * rand() / RAND_MAX;
         usleep((useconds_t)(delay * 1e6));
         kill(c.pid, SIGKILL);
-        int rc = child_wait(&c, 60);
+        int rc = child_wait(&c, 60, NULL);
         finished += rc == 0;
         /* a commit folder of the killed process? */
         char commit[700] = "";
@@ -375,7 +306,7 @@ static void test_second_interrupt_during_write(void **state)
         }
         assert_true(seen >= 0);
         if (round == 0) {
-            assert_int_equal(child_wait(&c, 120), 0);
+            assert_int_equal(child_wait(&c, 120, NULL), 0);
             write_s = now_s() - seen;
             print_message("  the write takes %.2f s\n", write_s);
             assert_int_equal(set_marker(d, NULL, "now"), 1);
@@ -386,7 +317,7 @@ static void test_second_interrupt_during_write(void **state)
         kill(c.pid, SIGINT);
         usleep(20000);
         kill(c.pid, SIGINT);
-        int rc = child_wait(&c, EXIT_BOUND_S * 4);
+        int rc = child_wait(&c, EXIT_BOUND_S * 4, NULL);
         char *log = read_text(c.log);
         int now = strstr(log, "exiting now") != NULL;
         free(log);
@@ -422,7 +353,7 @@ static void test_file_size_limit_merge(void **state)
     const char *argv[] = {DARTSPP_BIN, "merge", o, a, b, NULL};
     child c;
     child_start(&c, d, argv, NULL, 16 * 1024);
-    int rc = child_wait(&c, 60.0);
+    int rc = child_wait(&c, 60.0, NULL);
     char *log = read_text(c.log);
     print_message("  merge under ulimit -f 16: exit %d\n", rc);
     print_tail(log);
