@@ -3,12 +3,12 @@
  * error-log rows (checkpoint.c), the run summary (summary.c) and the outputs, written to a rescue folder when
  * the final write fails. */
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
 
 #include "run_internal.h"
 
-static render_run_job job; /* large (the plan's JSON, paths): not on the stack */
 
 static void say_error(const dp_error *err, const char *where)
 {
@@ -174,7 +174,11 @@ static int render_and_write(render_run_job *j)
 
 int render_run(const render_request *rq, const render_cluster *cluster)
 {
-    render_run_job *j = &job;
+    render_run_job *j = calloc(1, sizeof *j); /* large (the plan's JSON, paths): not on the stack */
+    if (!j) {
+        fprintf(stderr, "dartspp render: out of memory\n");
+        return render_run_refused(cluster, dp_exit_status(DP_ERROR_MEMORY));
+    }
     start(j, rq, cluster);
     dp_error err;
     int status = 0;
@@ -189,5 +193,6 @@ int render_run(const render_request *rq, const render_cluster *cluster)
         status = render_and_write(j);
     }
     run_release(j);
+    free(j);
     return status;
 }

@@ -109,7 +109,8 @@ static int check_range(json_ctx *c, const scene_key *k, const char *where, doubl
     return jfail(c, where, k->name, "must be <= %g (got %.17g)", k->hi, v);
 }
 
-/* The default of a bool, int, number or choice key: its own, or the resolved value of the key it follows. */
+/* The default of a bool, int, number or choice key: its own, or the resolved value of the key it follows
+ * (def_from names an earlier number key of the table: volume_alpha follows alpha). */
 static double key_default(const scene_key *k, scene *s)
 {
     const scene_key *from = k->def_from ? scene_key_find(k->def_from) : NULL;
