@@ -255,4 +255,24 @@ void eda_set_free(eda_set *set);
 /* Bytes the tables of eda_set_prepare will hold (the memory guard's estimate), without touching a file. */
 size_t eda_set_bytes(const scene *s, const render_plan *p);
 
+/* ---- time-angular direction sampling (uniform-time PT; Jarabo et al. 2014 §5.3, supplement §B.4 eq. 21–22) ----
+ * docs/darts.md §13. At a vertex x with the target (light) at x_L, l = x_L − x, and a distance r drawn
+ * before the direction: ω such that the time t = r + d₂, d₂ = |x + rω − x_L|, is uniform on
+ * [t_min, t_max] = [r + ||l| − r|, 2r + |l|]: cosθ = (|l|² + 2tr − t²)/(2|l|r) about l (eq. 21), φ uniform.
+ * Solid-angle density p_Ω(ω) = |l|r/(2π(t_max − t_min)d₂) = max(r, |l|)/(4π d₂) (|dt/dcosθ| = |l|r/d₂;
+ * Jarabo's eq. 16, r/(4π d₂), integrates to r/|l| < 1 when |l| > r). */
+
+/* Returns 1 with the unit direction *w and its density *pdf; 0 when r, |l| or t_max − t_min is below 1e-9
+ * of r + |l| (and on the null set r = |l|, u1 = 0, where d₂ = 0). u1 picks the time, u2 the azimuth. */
+int time_angular_sample(vec3 x, vec3 target, double r, double u1, double u2, vec3 *w, double *pdf);
+/* The density of time_angular_sample at the unit direction w; 0 in the degenerate cases. */
+double time_angular_pdf(vec3 x, vec3 target, double r, vec3 w);
+/* One-sample MIS with the phase function: with probability c = share time-angular (u[1], u[2]), else phase
+ * sampling (u[1], u[2]); *weight = ρ(ω)/(c·p_TA + (1 − c)·p_phase), p_phase = ρ (the balance heuristic).
+ * Where time-angular sampling is degenerate (or share <= 0): phase sampling, weight 1. u: three uniforms. */
+vec3 time_angular_mix_sample(const phase_function *ph, vec3 w_in, vec3 x, vec3 target, double r, double share,
+                             const double u[3], double *weight);
+/* The density of time_angular_mix_sample at w: c·p_TA + (1 − c)·ρ, or ρ where time-angular is degenerate. */
+double time_angular_mix_pdf(const phase_function *ph, vec3 w_in, vec3 x, vec3 target, double r, double share, vec3 w);
+
 #endif
