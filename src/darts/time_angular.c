@@ -32,10 +32,10 @@ static int ta_setup(vec3 x, vec3 target, double r, ta_geometry *g)
     return g->span > TA_EPS * s;
 }
 
-/* d₂ for cosθ: d₂² = |l|² + r² − 2|l|r cosθ = (|l| − r)² + 2|l|r(1 − cosθ) (accurate near θ = 0) */
-static double ta_d2(const ta_geometry *g, double cos_theta)
+/* d₂ for 1 − cosθ: d₂² = |l|² + r² − 2|l|r cosθ = (|l| − r)² + 2|l|r(1 − cosθ) */
+static double ta_d2(const ta_geometry *g, double one_minus_cos)
 {
-    return sqrt(g->d_lo * g->d_lo + 2.0 * g->L * g->r * dp_fmax(0.0, 1.0 - cos_theta));
+    return sqrt(g->d_lo * g->d_lo + 2.0 * g->L * g->r * one_minus_cos);
 }
 
 /* p_Ω = max(r, |l|)/(4π d₂) (header comment) */
@@ -44,10 +44,11 @@ static double ta_density(const ta_geometry *g, double d2)
     return d2 > 0.0 ? dp_fmax(g->r, g->L) * DP_INV_4PI / d2 : 0.0;
 }
 
-/* The unit direction at cosθ from e and azimuth φ = 2πu about it. */
-static vec3 ta_direction(vec3 e, double cos_theta, double u)
+/* The unit direction at angle θ from e, given by m = 1 − cosθ ∈ [0, 2] (sinθ = √(m(2 − m)) keeps small angles
+ * exact), and azimuth φ = 2πu about e. */
+static vec3 ta_direction(vec3 e, double m, double u)
 {
-    double s = sqrt(dp_fmax(0.0, 1.0 - cos_theta * cos_theta)), phi = 2.0 * M_PI * u;
+    double cos_theta = 1.0 - m, s = sqrt(m * (2.0 - m)), phi = 2.0 * M_PI * u;
     vec3 b1, b2;
     v3_basis(e, &b1, &b2);
     vec3 side = v3_add(v3_scale(b1, s * cos(phi)), v3_scale(b2, s * sin(phi)));
@@ -61,10 +62,9 @@ int time_angular_sample(vec3 x, vec3 target, double r, double u1, double u2, vec
     /* eq. 22: t = t_min + ξ(t_max − t_min), so d₂ = t − r = ||l| − r| + ξ·2 min(r, |l|) */
     double d2 = g.d_lo + u1 * g.span;
     if (!(d2 > 0.0)) return 0; /* r = |l| and ξ = 0: the target itself, a null set */
-    /* eq. 21 with t − r = d₂ */
-    double c = (g.L * g.L + g.r * g.r - d2 * d2) / (2.0 * g.L * g.r);
-    c = dp_fmin(1.0, dp_fmax(-1.0, c));
-    *w = ta_direction(g.e, c, u2);
+    /* eq. 21 with t − r = d₂, as 1 − cosθ = (d₂² − (|l| − r)²)/(2|l|r), clamped to cosθ ∈ [−1, 1] */
+    double m = (d2 - g.d_lo) * (d2 + g.d_lo) / (2.0 * g.L * g.r);
+    *w = ta_direction(g.e, dp_fmin(2.0, dp_fmax(0.0, m)), u2);
     *pdf = ta_density(&g, d2);
     return 1;
 }
@@ -73,8 +73,9 @@ double time_angular_pdf(vec3 x, vec3 target, double r, vec3 w)
 {
     ta_geometry g;
     if (!ta_setup(x, target, r, &g)) return 0.0;
-    double c = dp_fmin(1.0, dp_fmax(-1.0, v3_dot(w, g.e)));
-    return ta_density(&g, ta_d2(&g, c));
+    vec3 dw = v3_sub(w, g.e); /* 1 − cosθ = |w − e|²/2 for unit w, without cancellation near θ = 0 */
+    double m = dp_fmin(2.0, dp_fmax(0.0, 0.5 * v3_dot(dw, dw)));
+    return ta_density(&g, ta_d2(&g, m));
 }
 
 vec3 time_angular_mix_sample(const phase_function *ph, vec3 w_in, vec3 x, vec3 target, double r, double share,
