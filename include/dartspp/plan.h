@@ -115,6 +115,7 @@ typedef struct render_plan {
     radius_schedule r_vol, r_surf;
     int volume_splat;               /* primary lines gathered photon by photon (volume_gather "splat") */
     darts_plan darts;
+    int uniform_time;                /* path tracer, time_sampling "uniform", gated, a medium, one η */
     int medium_count;
     eda_plan *eda;                   /* medium_count entries */
     int eda_active;                  /* some medium uses EDA */

@@ -139,6 +139,8 @@ typedef struct {
     double vacuum_speed;            /* vaccum_speed_of_light (the format's spelling) */
     double vacuum_eta;              /* 1 / vacuum_speed */
     int enable_rr;                  /* path tracer: Russian roulette on throughput */
+    int time_sampling_uniform;      /* path tracer: time_sampling 0 "none", 1 "uniform" (Jarabo et al. 2014) */
+    double time_angular_share;      /* path tracer, uniform time: share of time-angular directions */
     /* photon points */
     double photon_count, volume_photon_count;
     long gather_photon_count;

@@ -21,9 +21,11 @@ static void resolve_eda(const scene *s, render_plan *p)
     for (int i = 0; i < s->medium_count; i++) {
         const medium *m = &s->media[i];
         eda_plan *e = &p->eda[i];
-        e->on = p->type == INTEGRATOR_PHOTON_POINTS && in->window.gated && (m->eda || (in->eda && medium_scatters(m)));
-        /* EDA aims at the camera's equal-time ellipsoid, which unwarped time does not have */
-        e->asked_unwarped = e->on && in->window.camera_unwarp;
+        e->on = in->window.gated && (m->eda || (in->eda && medium_scatters(m))) &&
+                (p->type == INTEGRATOR_PHOTON_POINTS || (p->type == INTEGRATOR_PATH_TRACER && !in->time_sampling_uniform));
+        /* photon points: EDA aims at the camera's equal-time ellipsoid, which unwarped time does not have (the
+         * path tracer aims at the light, whose leg always counts) */
+        e->asked_unwarped = e->on && in->window.camera_unwarp && p->type == INTEGRATOR_PHOTON_POINTS;
         if (e->asked_unwarped) e->on = 0;
         e->alpha = m->eda_alpha > 0.0 ? m->eda_alpha : in->eda_alpha;
         p->eda_active |= e->on;
@@ -31,21 +33,27 @@ static void resolve_eda(const scene *s, render_plan *p)
 }
 
 /* The DARTS samplers run when one of them is on (EDA included), the window is gated and there is a
- * medium. Control vertices need one η over every region of the scene (darts.h). */
+ * medium (and, in the path tracer, a light to aim at). Control vertices need one η over every region of the
+ * scene (darts.h). The path tracer's uniform-time sampling (time_sampling "uniform") is a method of its own:
+ * free flight, line-to-point connections and time-angular directions (p->uniform_time), no DARTS sampler. */
 static void resolve_darts(const scene *s, render_plan *p)
 {
     const integrator_settings *in = &s->integrator;
     darts_plan *d = &p->darts;
+    int pt = p->type == INTEGRATOR_PATH_TRACER;
     int asked = in->enable_guiding || in->enable_elliptical || in->eda;
     for (int i = 0; i < s->medium_count; i++) asked |= s->media[i].eda;
-    d->active = p->type == INTEGRATOR_PHOTON_POINTS && in->window.gated && asked && s->medium_count > 0;
+    int gated_medium = in->window.gated && s->medium_count > 0 && (!pt || s->light_count > 0);
+    p->uniform_time = pt && in->time_sampling_uniform && gated_medium && scene_eta_uniform(s);
+    d->active = gated_medium && asked && (p->type == INTEGRATOR_PHOTON_POINTS || (pt && !in->time_sampling_uniform));
     d->unwarped = in->window.camera_unwarp;
-    /* DA distance sampling aims at diffusion towards the camera within the residual time of the camera's
-     * ellipsoid: unwarped time has none, so it is off (free flight, unbiased); control vertices become
-     * sphere_control_vertex, which needs no η along a camera leg */
-    d->distance_sampling = in->enable_guiding && !d->unwarped;
+    /* photon points: DA distance sampling aims at diffusion towards the camera within the residual time of
+     * the camera's ellipsoid: unwarped time has none, so it is off (free flight, unbiased); control vertices
+     * become sphere_control_vertex, which needs no η along a camera leg. The path tracer aims at the light,
+     * whose leg always counts: only its camera segment goes without (src/render/README.md) */
+    d->distance_sampling = in->enable_guiding && (pt || !d->unwarped);
     d->elliptical_asked = in->enable_elliptical;
-    d->control_vertices = d->active && in->enable_elliptical && (d->unwarped || scene_eta_uniform(s));
+    d->control_vertices = d->active && in->enable_elliptical && ((d->unwarped && !pt) || scene_eta_uniform(s));
     d->control_vertex_mis = in->control_vertex_mis;
     d->residual = in->ellipse_residual ? RESIDUAL_EXPONENTIAL : RESIDUAL_UNIFORM;
     d->strict = in->strict_time_width;
@@ -69,7 +77,7 @@ static void resolve_camera_side(const scene *s, render_plan *p)
 {
     darts_plan *d = &p->darts;
     d->strict_surfaces = d->strict;
-    if (!d->active || !(d->control_vertices || d->strict)) return;
+    if (p->type != INTEGRATOR_PHOTON_POINTS || !d->active || !(d->control_vertices || d->strict)) return;
     plan_scan_camera_side(s, &p->shading, &d->side);
     if (d->mirrors != DARTS_MIRRORS_FULL || !d->side.seen) return;
     d->strict_surfaces = 0; /* a camera path behind a continued surface has no upper bound on its leg */
@@ -206,7 +214,10 @@ int plan_json(const render_plan *p, const scene *s, char *out, size_t n)
         cJSON_AddNumberToObject(root, "frames", tw->frame_count);
     }
     add_keys(root, p);
-    if (p->type == INTEGRATOR_PHOTON_POINTS) {
+    if (p->type == INTEGRATOR_PATH_TRACER)
+        cJSON_AddStringToObject(root, "method", p->uniform_time ? "uniform-time path tracer (Jarabo et al. 2014)"
+                                                : p->darts.active ? "DARTS path tracer" : "path tracer");
+    if (p->type == INTEGRATOR_PHOTON_POINTS || p->darts.active) {
         add_darts(root, p, s);
         cJSON *eda = cJSON_AddObjectToObject(root, "eda");
         for (int i = 0; i < p->medium_count; i++)

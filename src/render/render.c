@@ -59,10 +59,7 @@ static int keep_going(const render_stats *st, long first, long spp, double limit
 static int render_pass(const scene *s, const render_plan *p, const eda_set *eda, const render_options *opt, film *f,
                        long iteration, render_stats *st, dp_error *err)
 {
-    if (p->type == INTEGRATOR_PATH_TRACER) {
-        st->rays += path_tracer_pass(s, p, f, opt->seed, iteration, opt->stop);
-        return 0;
-    }
+    if (p->type == INTEGRATOR_PATH_TRACER) return path_tracer_pass(s, p, eda, f, opt->seed, iteration, opt->stop, &st->rays, err);
     return photon_points_pass(s, p, eda, f, opt->seed, iteration, opt->stop, st, err);
 }
 
@@ -192,7 +189,7 @@ static int render_passes(const scene *s, const render_plan *p, const render_opti
                          dp_error *err)
 {
     eda_set eda = {0};
-    int ready = !(p->type == INTEGRATOR_PHOTON_POINTS && eda_set_prepare(s, p, &eda, err)) &&
+    int ready = !eda_set_prepare(s, p, &eda, err) &&
                 !film_init(f, s->cam.width, s->cam.height, &p->window, err) &&
                 !(opt->resume && film_resume(f, opt->resume, err));
     const render_cluster *c = opt->cluster && opt->cluster->size > 1 ? opt->cluster : NULL;

@@ -265,6 +265,13 @@ static int resolve_integrator(json_ctx *c, const cJSON *v, integrator_settings *
                      in->volume_gather_radius);
     if (in->type == INTEGRATOR_PHOTON_POINTS && !(in->photon_count >= 1))
         return jfail(c, "integrator", "photon_count", "photon points need at least 1 light path per iteration");
+    if (in->type == INTEGRATOR_PATH_TRACER && in->time_sampling_uniform &&
+        (in->enable_guiding || in->enable_elliptical || in->eda))
+        return jfail(c, "integrator", "time_sampling",
+                     "'uniform' is a method of its own (free flight, line-to-point connections, time-angular "
+                     "directions) and cannot run with %s; set %s to false, or time_sampling to \"none\" for DARTS",
+                     in->enable_guiding ? "enable_guiding" : in->enable_elliptical ? "enable_elliptical" : "eda",
+                     in->enable_guiding ? "enable_guiding" : in->enable_elliptical ? "enable_elliptical" : "eda");
     if (in->type == INTEGRATOR_PHOTON_POINTS && !in->fixed_volume_radius &&
         cJSON_GetObjectItemCaseSensitive(v, "fixed_volume_radius"))
         jwarn(c, "integrator.fixed_volume_radius: false (k-NN radii) is not supported; every volume photon "

@@ -1,0 +1,217 @@
+/* Camera paths aimed at a light and a time bin: the DARTS path tracer (He et al. 2024, §4–5, supplement
+ * Alg. 2) and the uniform-time path tracer (Jarabo et al. 2014 §5 as the DARTS supplement §B.4 corrects it).
+ * The samplers are those of the DARTS photon pass (src/darts) with the light, not the camera, as the target:
+ * the residual of a camera-path vertex is its light leg, which always counts in the path's time.
+ *
+ * Per camera path: one light, chosen in proportion to its intensity (channel mean), with its emission time
+ * (the pulse) drawn first, then its target bin (the gate; in frame mode one frame, uniform in time over the
+ * reachable part of the window; uniform time: the whole window). Every contribution of the path goes to that
+ * light only and is divided by the two probabilities.
+ * Per medium segment (docs/darts.md §9): an ellipse record (fresh residual T), the early exit, the light
+ * connection through a control vertex on the segment — which replaces the connection of the medium vertices
+ * the segment's distance sample lands on (the two estimate the same term) — then the distance (DA-RIS, the
+ * uniform-time distance drawn at the previous vertex, or free flight).
+ * Per medium vertex: the direction (EDA with MIS; uniform time: time-angular with MIS; else the phase
+ * function). Surface vertices connect to the path's light as in the plain path tracer. */
+#include <stdlib.h>
+
+#include "path_tracer_internal.h"
+
+/* The DARTS guide of one light: the plan's samplers with the light as target. The light leg always counts
+ * (unwarped time only drops the camera segment, pt_unwarped_camera_segment); the mirror foci of the photon
+ * pass aim at images of the camera and do not apply. */
+static void guide_for_light(const render_plan *p, vec3 light, darts_guide *g)
+{
+    darts_guide_init(p, light, g);
+    g->unwarped = 0;
+    g->cv_multi = 0;
+    g->focus_count = 0;
+    g->strict = 0;
+    if (!p->uniform_time) return;
+    /* uniform time: line-to-point connections (the elliptical vertex with a uniform residual, J14 eq. 14–15)
+     * over the whole window, free-flight distances; no bin is sampled */
+    g->active = 1;
+    g->control_vertices = 1;
+    g->distance_sampling = 0;
+    g->control_vertex_mis = 0;
+    g->residual = RESIDUAL_UNIFORM;
+    g->frames = 0;
+}
+
+int pt_pass_aim_init(pt_pass *pp, dp_error *err)
+{
+    const render_plan *p = pp->p;
+    const scene *s = pp->s;
+    pp->aimed = (p->darts.active || p->uniform_time) && s->light_count > 0;
+    if (!pp->aimed) return 0;
+    int n = s->light_count;
+    pp->guide = calloc((size_t)n, sizeof *pp->guide);
+    pp->light_cdf = calloc((size_t)n, sizeof *pp->light_cdf);
+    if (!pp->guide || !pp->light_cdf) {
+        pt_pass_aim_free(pp);
+        return dp_fail_kind(err, DP_ERROR_MEMORY, "%s: out of memory for the path tracer's light guides", s->path);
+    }
+    double sum = 0.0;
+    for (int i = 0; i < n; i++) {
+        guide_for_light(p, s->lights[i].pos, &pp->guide[i]);
+        sum += dp_fmax(0.0, v3_avg(s->lights[i].intensity));
+    }
+    double acc = 0.0;
+    for (int i = 0; i < n; i++) {
+        acc += sum > 0.0 ? dp_fmax(0.0, v3_avg(s->lights[i].intensity)) / sum : 1.0 / n;
+        pp->light_cdf[i] = acc;
+    }
+    pp->light_cdf[n - 1] = 1.0;
+    return 0;
+}
+
+void pt_pass_aim_free(pt_pass *pp)
+{
+    free(pp->guide);
+    free(pp->light_cdf);
+    pp->guide = NULL;
+    pp->light_cdf = NULL;
+}
+
+int pt_aim_start(pixel_ctx *c, path_state *ps)
+{
+    const pt_pass *pp = c->pass;
+    const scene *s = pp->s;
+    pt_aim *a = &c->aim;
+    double u = rng_uniform(c->rng);
+    int i = 0;
+    while (i < s->light_count - 1 && u >= pp->light_cdf[i]) i++;
+    a->light = i;
+    a->sel_pdf = pp->light_cdf[i] - (i > 0 ? pp->light_cdf[i - 1] : 0.0);
+    if (!(a->sel_pdf > 0.0)) return 0;
+    const point_light *L = &s->lights[i];
+    a->g = &pp->guide[i];
+    a->pre_r = -1.0;
+    ps->time = point_light_emission_time(L, c->rng);
+    /* the earliest arrival: a straight line camera → light, or (unwarped, the camera segment free) none */
+    vec3 from = pp->p->window.camera_unwarp ? L->pos : s->cam.pos;
+    if (!darts_sample_bin(a->g, from, ps->time, rng_uniform(c->rng), &a->bin)) return 0;
+    a->on = 1;
+    return 1;
+}
+
+void pt_aim_connect(pixel_ctx *c, const path_state *ps, vec3 x, const phase_function *pf, const surface_site *ss)
+{
+    const pt_aim *a = &c->aim;
+    pt_connect_light(c, ps, a->light, x, pf, ss, 0, 1.0 / (a->sel_pdf * a->bin.pdf), a->bin.frame);
+}
+
+/* The light connection of a medium segment through a control vertex at distance t on it (paper §5.2, supp.
+ * eq. 10–12): β·σs·e^{−σt·t}/p(t) times the connection from x_ell = o + t·d, whose path time lies in the bin
+ * by construction. p(t) is the elliptical density, or (control_vertex_mis) its one-sample mixture with a
+ * σ-exponential over the in-bin part of the segment: that mixture contains the plain connection's own
+ * density restricted to where it can count, so no further MIS with the plain connection is needed. */
+static void connect_control_vertex(pixel_ctx *c, const path_state *ps, const medium *m, double tmax)
+{
+    const darts_guide *g = c->aim.g;
+    const ellipse_record *r = &c->aim.rec;
+    double t, pdf, sigma = v3_avg(m->sigma_t);
+    double u1 = rng_uniform(c->rng), u2 = rng_uniform(c->rng);
+    int made = g->control_vertex_mis ? control_vertex_sample(r, ps->d, tmax, g->residual, sigma, u1, u2, &t, &pdf)
+                                     : ellipse_control_vertex(r, ps->d, tmax, &t, &pdf);
+    if (!made || !(pdf > 0.0)) return;
+    path_state cv = *ps;
+    cv.o = v3_add(ps->o, v3_scale(ps->d, t));
+    cv.time = ps->time + m->eta * t;
+    cv.depth = ps->depth + 1;
+    cv.beta = v3_mul(ps->beta, v3_scale(v3_mul(m->sigma_s, v3_exp_neg(v3_scale(m->sigma_t, t))), 1.0 / pdf));
+    pt_aim_connect(c, &cv, cv.o, &m->phase, NULL);
+}
+
+/* Uniform time: the distance drawn at the vertex before its direction (J14 §5.1: exponential, λ = σt), used
+ * now that the ray is known. Drawn first, it does not depend on the direction, so the pair (r, ω) is sampled
+ * in the extended space where the surface term is e^{−σt·d_s} = ∫_{d_s}^∞ σt·e^{−σt·r} dr: a medium event
+ * at r < tmax weighs σs·e^{−σt·r}/p(r), the surface at tmax weighs σt·e^{−σt·r}/p(r), p(r) the channel mean
+ * of σt·e^{−σt·r} (grey: σs/σt and 1). */
+static void predrawn_distance(pixel_ctx *c, path_state *ps, const medium *m, double tmax, int *event, double *t)
+{
+    double r = c->aim.pre_r;
+    c->aim.pre_r = -1.0;
+    vec3 e = v3_exp_neg(v3_scale(m->sigma_t, r));
+    double p = v3_avg(v3_mul(m->sigma_t, e));
+    *event = r < tmax;
+    *t = *event ? r : tmax;
+    vec3 f = v3_mul(*event ? m->sigma_s : m->sigma_t, e);
+    ps->beta = p > 0.0 ? v3_mul(ps->beta, v3_scale(f, 1.0 / p)) : v3s(0.0);
+}
+
+int pt_aim_medium_segment(pixel_ctx *c, path_state *ps, double tmax, int *event, double *t)
+{
+    const medium *m = &c->pass->s->media[ps->medium];
+    pt_aim *a = &c->aim;
+    const darts_guide *g = a->g;
+    int aims = medium_scatters(m) && !pt_unwarped_camera_segment(c, ps);
+    if (aims) {
+        ellipse_record_init(&a->rec, g, &a->bin, ps->o, ps->time, m->eta, g->residual, v3_avg(m->sigma_t),
+                            rng_uniform(c->rng));
+        if (g->early_exit && !darts_can_reach(g, &a->bin, ps->o, ps->time)) return 0;
+        if (g->control_vertices) {
+            ps->connected = 1;
+            if (a->rec.valid && ps->medium_events + 1 <= m->max_bounces &&
+                bounces_count(&c->pass->p->bounces, ps->depth + 2))
+                connect_control_vertex(c, ps, m, tmax);
+        }
+    }
+    if (a->pre_r >= 0.0) {
+        predrawn_distance(c, ps, m, tmax, event, t);
+    } else if (aims && g->distance_sampling && (a->rec.valid || a->rec.S_reach > a->rec.C)) {
+        da_sample ds;
+        da_sample_distance(m, &a->rec, ps->d, tmax, g->da_defensive, c->rng, &ds);
+        ps->beta = v3_mul(ps->beta, ds.weight);
+        *t = ds.t;
+        *event = ds.medium_event;
+    } else {
+        *t = medium_sample_free_flight(m, tmax, c->rng, &ps->beta, event);
+    }
+    return 1;
+}
+
+/* Uniform time at a medium vertex (J14 §5.1 and §5.3, supp. §B.4): the next distance r first, then the
+ * direction by time-angular sampling for that r, mixed with the phase function (one-sample MIS). Only where
+ * σt > 0 in every channel (the extended-space weights of predrawn_distance need it); else the phase alone. */
+static void uniform_time_direction(pixel_ctx *c, path_state *ps, const medium *m)
+{
+    pt_aim *a = &c->aim;
+    double st_min = dp_fmin(m->sigma_t.x, dp_fmin(m->sigma_t.y, m->sigma_t.z));
+    if (!(st_min > 0.0)) {
+        double u1 = rng_uniform(c->rng), u2 = rng_uniform(c->rng);
+        ps->d = phase_sample(&m->phase, ps->d, u1, u2);
+        return;
+    }
+    int grey = m->sigma_t.x == m->sigma_t.y && m->sigma_t.y == m->sigma_t.z;
+    int ch = grey ? 0 : (int)dp_fmin(2.0, 3.0 * rng_uniform(c->rng));
+    a->pre_r = -log1p(-rng_uniform(c->rng)) / v3_comp(m->sigma_t, ch);
+    double u[3] = {rng_uniform(c->rng), rng_uniform(c->rng), rng_uniform(c->rng)}, w;
+    ps->d = time_angular_mix_sample(&m->phase, ps->d, ps->o, c->pass->s->lights[a->light].pos, a->pre_r,
+                                    c->pass->p->keys.time_angular_share, u, &w);
+    ps->beta = v3_scale(ps->beta, w);
+}
+
+void pt_aim_scatter_direction(pixel_ctx *c, path_state *ps)
+{
+    const pt_pass *pp = c->pass;
+    const medium *m = &pp->s->media[ps->medium];
+    if (pp->p->uniform_time) {
+        uniform_time_direction(c, ps, m);
+        return;
+    }
+    const eda_table *et = pp->eda && pp->eda->table ? pp->eda->table[ps->medium] : NULL;
+    if (et) { /* EDA toward the light with MIS against the phase function (docs/darts.md §8.2) */
+        ellipse_record vr; /* its own residual: the segment's record draws a fresh one (docs/darts.md §9) */
+        const darts_guide *g = c->aim.g;
+        ellipse_record_init(&vr, g, &c->aim.bin, ps->o, ps->time, m->eta, g->residual, v3_avg(m->sigma_t),
+                            rng_uniform(c->rng));
+        double u[4], w;
+        for (int k = 0; k < 4; k++) u[k] = rng_uniform(c->rng);
+        ps->d = eda_sample_direction(et, pp->eda->alpha[ps->medium], &m->phase, ps->d, &vr, u, &w);
+        ps->beta = v3_scale(ps->beta, w);
+        return;
+    }
+    double u1 = rng_uniform(c->rng), u2 = rng_uniform(c->rng);
+    ps->d = phase_sample(&m->phase, ps->d, u1, u2);
+}

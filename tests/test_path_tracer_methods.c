@@ -1,0 +1,215 @@
+/* The path tracer's methods against the plain path tracer, per image tile: the DARTS path tracer (DA distance
+ * sampling, elliptical control vertices, both, with EDA, in frame mode, camera-unwarped, with two pulsed
+ * lights, behind a glass-free box of Lambertian walls) and the uniform-time path tracer. Every method is an
+ * unbiased estimator of the same image, so on the fog box (HG g = 0.3, coloured fog, multiple scattering and
+ * surfaces, a 0.5-wide gate) each 4 × 4 tile's mean must agree with the plain path tracer's: z from the
+ * spread of per-pass tile totals of both renders (thousands of passes, so the standard errors have
+ * thousands of degrees of freedom), |z| < 4.2 over 16 tiles per method (Bonferroni: two-sided p ≈ 2.7e-5
+ * per tile, 4e-4 per method). The plain reference is rendered once per scene variant.
+ * Broken variants these checks were shown failing on are listed in tests/README.md ("Figures") and the
+ * header of each case. */
+#include "render_fixtures.h"
+
+#define TILES 4
+#define NT (TILES * TILES)
+#define MAX_FRAMES 4
+#define CELLS (NT + MAX_FRAMES)
+
+/* Per-pass totals of every tile of the gate image and (frame mode) of every frame. */
+typedef struct {
+    int frames;
+    long n, cap;
+    double *x; /* per pass: CELLS totals */
+    double last[CELLS];
+} cell_totals;
+
+static double frame_total(const film *f, int k)
+{
+    double v = 0.0;
+    size_t n = (size_t)f->width * f->height * 3;
+    for (size_t i = 0; i < n; i++) v += f->frame_sum[n * (size_t)k + i];
+    return v;
+}
+
+static int cell_probe(void *ctx, const film *f, const render_stats *st, dp_error *err)
+{
+    (void)err;
+    cell_totals *t = ctx;
+    if (st->passes == 1) memset(t->last, 0, sizeof t->last);
+    if (t->n == t->cap) {
+        t->cap = t->cap ? 2 * t->cap : 1024;
+        t->x = realloc(t->x, (size_t)t->cap * CELLS * sizeof(double));
+        assert_non_null(t->x);
+    }
+    double v[CELLS] = {0};
+    for (int y = 0; y < f->height; y++)
+        for (int x = 0; x < f->width; x++)
+            for (int c = 0; c < 3; c++)
+                v[(y * TILES / f->height) * TILES + x * TILES / f->width] += f->sum[3 * ((size_t)y * f->width + x) + c];
+    for (int k = 0; k < t->frames; k++) v[NT + k] = frame_total(f, k);
+    for (int i = 0; i < CELLS; i++) {
+        t->x[(size_t)t->n * CELLS + i] = (v[i] - t->last[i]) / f->last_weight; /* this pass's estimate */
+        t->last[i] = v[i];
+    }
+    t->n++;
+    return 0;
+}
+
+static void mean_se(const cell_totals *t, int v, double *mean, double *se)
+{
+    double s = 0, s2 = 0;
+    for (long i = 0; i < t->n; i++) {
+        double x = t->x[(size_t)i * CELLS + v];
+        s += x;
+        s2 += x * x;
+    }
+    *mean = s / t->n;
+    *se = sqrt(fmax(0.0, (s2 - t->n * *mean * *mean) / (t->n - 1)) / t->n);
+}
+
+/* The fog box (render_fixtures.c) at 16² with the path tracer, a gate or frames (`time`), and the method's
+ * keys; lights: NULL for the box's own, else the primitives text replacing it. */
+static void method_totals(const char *time, const char *method, int unwarp, const char *lights, long passes,
+                          uint64_t seed, int frames, cell_totals *t, double *seconds)
+{
+    char integrator[1024], text[16384];
+    snprintf(integrator, sizeof integrator, "\"type\": \"path_tracer\", \"max_bounces\": 8, %s%s%s%s", time,
+             *method ? ", " : "", method, unwarp ? ", \"camera_unwarp\": true" : "");
+    box_scene_text(text, sizeof text, 16, integrator);
+    if (lights) { /* replace the box's one light by the given ones */
+        char *at = strstr(text, "{ \"type\": \"point\"");
+        assert_non_null(at);
+        char *end = strstr(at, "} } ],");
+        assert_non_null(end);
+        char rest[4096];
+        snprintf(rest, sizeof rest, "%s", end + strlen("} } ],"));
+        snprintf(at, sizeof text - (size_t)(at - text), "%s ],%s", lights, rest);
+    }
+    tmp_scene ts;
+    tmp_scene_write(&ts, text);
+    scene s;
+    load_scene(ts.path, NULL, 0, &s);
+    memset(t, 0, sizeof *t);
+    t->frames = frames;
+    render_options ro = {.threads = 2, .seed = seed, .spp = passes, .after_pass = cell_probe, .after_pass_ctx = t};
+    film f;
+    render_stats st;
+    dp_error err;
+    double t0 = dp_seconds();
+    if (render_scene(&s, &ro, &f, &st, &err)) fail_msg("%s", err.msg);
+    *seconds = dp_seconds() - t0;
+    assert_int_equal(st.nonfinite, 0);
+    assert_int_equal(t->n, passes);
+    film_free(&f);
+    scene_free(&s);
+    tmp_scene_remove(&ts);
+}
+
+/* Largest |z| of the method against the reference over the tiles (and frames). Prints both totals. */
+static double compare_cells(const char *label, const cell_totals *ref, const cell_totals *m, double t_ref, double t_m)
+{
+    double zmax = 0.0, tot_r = 0, tot_m = 0, var_r = 0, var_m = 0;
+    int cells = NT + m->frames;
+    for (int v = 0; v < cells; v++) {
+        double mr, sr, mm, sm;
+        mean_se(ref, v, &mr, &sr);
+        mean_se(m, v, &mm, &sm);
+        if (v < NT) {
+            tot_r += mr, tot_m += mm, var_r += sr * sr, var_m += sm * sm;
+        }
+        if (sr == 0.0 && sm == 0.0) {
+            assert_true(mr == 0.0 && mm == 0.0);
+            continue;
+        }
+        zmax = fmax(zmax, fabs(mm - mr) / sqrt(sr * sr + sm * sm));
+    }
+    print_message("  %-34s total %.5g (se %.2g) vs plain %.5g (se %.2g); max |z| %.2f over %d cells; "
+                  "seconds %.1f vs %.1f\n", label, tot_m, sqrt(var_m), tot_r, sqrt(var_r), zmax, cells, t_m, t_ref);
+    assert_true(tot_r > 0.0);
+    return zmax;
+}
+
+#define GATE "\"transient_time_center\": 4.75, \"transient_time_width\": 0.5"
+#define Z_MAX 4.2
+
+typedef struct {
+    const char *label, *keys;
+    long passes;
+} method_case;
+
+static void check_methods(const char *time, int unwarp, const char *lights, int frames, const method_case *mc, int n,
+                          long ref_passes)
+{
+    cell_totals ref, m;
+    double t_ref, t_m;
+    method_totals(time, "", unwarp, lights, ref_passes, 11, frames, &ref, &t_ref);
+    for (int i = 0; i < n; i++) {
+        method_totals(time, mc[i].keys, unwarp, lights, mc[i].passes, 23 + i, frames, &m, &t_m);
+        double z = compare_cells(mc[i].label, &ref, &m, t_ref, t_m);
+        free(m.x);
+        assert_true(z < Z_MAX);
+    }
+    free(ref.x);
+}
+
+/* The gate on the fog box: every DARTS combination and uniform time. */
+static void test_gate(void **state)
+{
+    (void)state;
+    const method_case mc[] = {
+        {"DARTS (DA + elliptical)", "\"enable_guiding\": true, \"enable_elliptical\": true", 3000},
+        {"DA distance sampling only", "\"enable_guiding\": true", 3000},
+        {"elliptical only", "\"enable_elliptical\": true", 3000},
+        {"elliptical, no MIS, exp. residual",
+         "\"enable_elliptical\": true, \"control_vertex_mis\": false, \"ellipse_residual\": \"exponential\"", 3000},
+        {"DARTS + EDA (16 x 16 x 32 table)",
+         "\"enable_guiding\": true, \"enable_elliptical\": true, \"eda\": true, \"eda_shape\": [16, 16, 32], "
+         "\"eda_table_dir\": \"/tmp/dartspp-test-eda\"", 3000},
+        {"uniform time", "\"time_sampling\": \"uniform\"", 3000},
+    };
+    check_methods(GATE, 0, NULL, 0, mc, (int)(sizeof mc / sizeof mc[0]), 12000);
+}
+
+/* Frame mode (each DARTS camera path serves one frame, divided by its probability): every tile of the union
+ * image and every frame's total. */
+static void test_frames(void **state)
+{
+    (void)state;
+    const method_case mc[] = {
+        {"DARTS, 4 frames", "\"enable_guiding\": true, \"enable_elliptical\": true", 3000},
+        {"uniform time, 4 frames", "\"time_sampling\": \"uniform\"", 3000},
+    };
+    check_methods("\"start_time\": 4.3, \"transient_time_width\": 0.25, \"frame_num\": 4", 0, NULL, 4, mc, 2, 12000);
+}
+
+/* Camera-unwarped time (the camera segment takes no time: no DARTS sampler aims along it) and two lights with
+ * pulses (one light per camera path, chosen by intensity; its emission time drawn first). */
+static void test_unwarped_and_pulsed_lights(void **state)
+{
+    (void)state;
+    const method_case mc[] = {
+        {"DARTS, unwarped", "\"enable_guiding\": true, \"enable_elliptical\": true", 3000},
+        {"uniform time, unwarped", "\"time_sampling\": \"uniform\"", 3000},
+    };
+    check_methods("\"transient_time_center\": 1.75, \"transient_time_width\": 0.5", 1, NULL, 0, mc, 2, 12000);
+    const char *lights =
+        "{ \"type\": \"point\", \"emission\": [4, 4, 4], \"pulse_start\": 0.2, \"pulse_width\": 0.3,"
+        "  \"transform\": { \"position\": [0.3, 1.5, 0.2] } },"
+        "{ \"type\": \"point\", \"emission\": [1, 0.5, 2], \"ext_medium\": \"fog\", \"pulse_start\": 0.5,"
+        "  \"transform\": { \"position\": [-0.5, 0.6, 0.4] } }";
+    const method_case mc2[] = {
+        {"DARTS, two pulsed lights", "\"enable_guiding\": true, \"enable_elliptical\": true", 3000},
+        {"uniform time, two pulsed lights", "\"time_sampling\": \"uniform\"", 3000},
+    };
+    check_methods(GATE, 0, lights, 0, mc2, 2, 12000);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_gate),
+        cmocka_unit_test(test_frames),
+        cmocka_unit_test(test_unwarped_and_pulsed_lights),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
