@@ -25,6 +25,7 @@ static const char *const WORKS[] = {
     "Principles of Optics", /* Born & Wolf */
     "pbrt-v3",
     "Numerical Recipes",
+    "Jarabo et al. 2014", /* "A framework for transient rendering", TOG 33(6) */
 };
 
 static const char *const ROOTS[] = {"src", "include", "tests", "bench", "README.md"};

@@ -6,7 +6,12 @@
  *  c. the times t = r + |x + rω − x_L| are uniform on [r + ||l| − r|, 2r + |l|] (χ² over 20 bins);
  *  d. one-sample MIS with the phase function: E[weight·g(ω)] = ∫ρ g dω (|z| < 4), isotropic and HG g = 0.6;
  *  e. Jarabo's own pdf r/(4π d₂) integrates to min(1, r/|l|), and ours is max(r, |l|)/r times it.
- * Cells are integrated in s = √(1 − cosθ), which takes away the 1/d₂ ∝ 1/s peak at θ = 0 when r = |l|. */
+ * Cells are integrated in s = √(1 − cosθ), which takes away the 1/d₂ ∝ 1/s peak at θ = 0 when r = |l|.
+ * Broken variants of src/darts/time_angular.c, each run once (checks failed, p = 0 or |z| > 20 throughout):
+ *  - t_min = |l| − r when |l| >= r (range 3r): a, b, c, d, e on the cases with |l| >= r;
+ *  - Jarabo's pdf r/(4π d₂) in place of ours: a, b, d, e on r < |l| (c passes: the directions are right);
+ *  - no φ rotation (φ = 0): a, d on all four cases (b, c, e pass: the pdf and the times are right);
+ *  - θ measured from −l: c on three cases, a, b on r = |l|, e on all (d passes: sampler and pdf agree). */
 #include "test_util.h"
 
 #include "dartspp/darts.h"
