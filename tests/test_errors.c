@@ -15,6 +15,7 @@ static void test_exit_status_of_each_kind(void **state)
     assert_int_equal(dp_exit_status(DP_ERROR_MEMORY), 1);
     assert_int_equal(dp_exit_status(DP_ERROR_INTERRUPTED), 130);
     assert_int_equal(dp_exit_status(DP_ERROR_RANK), 1);
+    assert_int_equal(dp_exit_status(DP_ERROR_LOST), 4);
     assert_int_equal(dp_exit_status(DP_ERROR_INTERNAL), 1);
 }
 
