@@ -132,6 +132,7 @@ static int kill_rank_1(child *c, char **log)
     print_message("  rank 1 (pid %d) killed; mpirun exit %d %.2f s later\n", (int)victim, rc, waited);
     if (rc < 0) {
         print_tail(*log);
+        free(*log);
         fail_msg("the job did not end within 20 s of the kill");
     }
     return rc;
@@ -220,6 +221,7 @@ static void test_killed_rank_keeps_last_reduction(void **state)
         kill(c.pid, SIGKILL);
         child_wait(&c, 5, NULL);
         print_tail(log);
+        free(log);
         fail_msg("no checkpoint state after %.1f s of rendering with --reduce-every 0.5", now_s() - t0);
     }
     usleep(300000); /* into the next reduction interval: its passes are the ones lost */
@@ -229,6 +231,7 @@ static void test_killed_rank_keeps_last_reduction(void **state)
     print_message("  the state holds %ld passes\n", held);
     if (rc == 0 || !strstr(log, "a rank was lost") || !strstr(log, "continue with --resume")) {
         print_tail(log);
+        free(log);
         fail_msg("exit %d; expected non-zero and the message that a rank was lost", rc);
     }
     free(log);
@@ -270,6 +273,7 @@ static void test_killed_before_any_reduction(void **state)
     int rc = kill_rank_1(&c, &log);
     if (rc == 0 || !strstr(log, "a rank was lost") || !strstr(log, "nothing was kept")) {
         print_tail(log);
+        free(log);
         fail_msg("exit %d; expected non-zero and the message that nothing was kept", rc);
     }
     free(log);
