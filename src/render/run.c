@@ -118,7 +118,9 @@ static void set_up_render(render_run_job *j)
     if (reduce_every > 0 && (ro->gather_every == 0.0 || reduce_every < ro->gather_every))
         ro->gather_every = reduce_every;
     if (j->rank != 0) return;
-    survivors_init(&j->keep, ro->stop, j->out, j->p.type_name, j->plan_json, j->state, j->rq->skip);
+    double pixels = (double)j->s.cam.width * j->s.cam.height;
+    survivors_init(&j->keep, ro->stop, j->out, j->p.type_name, j->plan_json, j->state, j->rq->skip,
+                   pixels * 3 * (sizeof(double) + j->p.window.frame_count * sizeof(float)));
     j->cp.keep = &j->keep;
     j->cp.state_every = reduce_every;
     ro->exchanges = &j->keep.exchanges;

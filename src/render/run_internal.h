@@ -18,6 +18,7 @@ typedef struct {
     const dp_stop_flag *stop;
     const char *out, *integrator, *plan_json, *state;
     int skip;
+    double stuck_seconds;  /* how long in one collective call after an interrupt means stuck */
     atomic_int quit;       /* the render has returned: the watchdog must not fire */
     pthread_t thread;
     int running;
@@ -94,16 +95,16 @@ int run_prepare(render_run_job *j, dp_error *err);
 void run_release(render_run_job *j);
 
 /* ---- the last reduction kept, and the watchdog (watchdog.c; several ranks, rank 0) ---- */
-/* Before the render: nothing kept; the outputs and state the report names. */
+/* Before the render: nothing kept; the outputs and state the report names; film_bytes, the size of the sums
+ * a reduction moves, lengthens the time that counts as stuck (watchdog.c). */
 void survivors_init(survivors *k, const dp_stop_flag *stop, const char *out, const char *integrator,
-                    const char *plan_json, const char *state, int skip);
+                    const char *plan_json, const char *state, int skip, double film_bytes);
 /* Replaces the kept film by a copy of f (of `seconds`); a copy that cannot be allocated keeps the older one. */
 void survivors_keep(survivors *k, const film *f, double seconds);
 /* Starts the thread that, once the run is interrupted (SIGTERM from mpirun when a rank died) and the driver
- * has been stuck in the same collective call for WATCHDOG_STUCK_SECONDS, writes the kept film's images,
- * says so (survivors_report) and exits with dp_exit_status(DP_ERROR_LOST). 0, or -1 (no watchdog: the
- * checkpoint state on disk still holds the last reduction). */
-#define WATCHDOG_STUCK_SECONDS 0.3
+ * has been stuck in the same collective call for k->stuck_seconds, writes the kept film's images, says so
+ * (survivors_report) and exits with dp_exit_status(DP_ERROR_LOST). 0, or -1 (no watchdog: the checkpoint
+ * state on disk still holds the last reduction). */
 int watchdog_start(survivors *k);
 /* The render has returned: the watchdog stops (waiting for it if it is writing, in which case it exits the
  * process). Safe when it was never started. */

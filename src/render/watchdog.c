@@ -3,9 +3,9 @@
  * never return from it, so the end of the render (the final reduction and write) never comes. Two things
  * keep the work: the checkpoint state written after the periodic reductions (checkpoint.c; on disk, the
  * guarantee), and this watchdog, a thread that writes the images of the last kept reduction when the run was
- * interrupted and the driver has been stuck in the same collective call for WATCHDOG_STUCK_SECONDS (the other
- * ranks, interrupted at the same moment, drop their passes within a batch of light paths or a row of pixels
- * and reach the collective well before that when they are alive). The thread calls no MPI. */
+ * interrupted and the driver has been stuck in the same collective call for a while (the other ranks,
+ * interrupted at the same moment, drop their passes within a batch of light paths or a row of pixels and
+ * reach the collective well before that when they are alive). The thread calls no MPI. */
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -13,9 +13,17 @@
 
 #include "run_internal.h"
 
+/* Stuck: 0.3 s in one collective call after the interrupt, leaving 0.7 s of Open MPI's 1-s grace time for
+ * the images; plus the time a reduction of the film may legitimately take at 100 MB/s (1 Gbit Ethernet),
+ * so that a large film being summed after Ctrl-C is not mistaken for a lost rank (it needs a longer grace
+ * time then anyway: --mca odls_base_sigkill_timeout). */
+#define STUCK_SECONDS 0.3
+#define SLOWEST_LINK 1e8
+
 void survivors_init(survivors *k, const dp_stop_flag *stop, const char *out, const char *integrator,
-                    const char *plan_json, const char *state, int skip)
+                    const char *plan_json, const char *state, int skip, double film_bytes)
 {
+    k->stuck_seconds = STUCK_SECONDS + film_bytes / SLOWEST_LINK;
     memset(&k->f, 0, sizeof k->f);
     pthread_mutex_init(&k->lock, NULL);
     atomic_init(&k->exchanges, 0);
@@ -73,7 +81,7 @@ void survivors_report(survivors *k)
                 "--resume\n", what, k->f.passes, k->seconds, k->out, k->state);
 }
 
-/* Stuck: interrupted, and inside the same collective call for WATCHDOG_STUCK_SECONDS since both began. */
+/* Stuck: interrupted, and inside the same collective call for k->stuck_seconds since both began. */
 static void *watch(void *arg)
 {
     survivors *k = arg;
@@ -88,7 +96,7 @@ static void *watch(void *arg)
             seen = e;
             since = now;
         }
-        if (stopped_at < 0 || !(e & 1) || now - (since > stopped_at ? since : stopped_at) < WATCHDOG_STUCK_SECONDS)
+        if (stopped_at < 0 || !(e & 1) || now - (since > stopped_at ? since : stopped_at) < k->stuck_seconds)
             continue;
         pthread_mutex_lock(&k->lock); /* the film is not being replaced, and the render has not returned */
         if (atomic_load(&k->quit)) {
