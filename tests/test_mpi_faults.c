@@ -4,7 +4,9 @@
  * count; `--resume` of that state with 3 ranks, and with one process, completes to K passes and equals a
  * one-process render of K passes within the bound of tests/test_mpi.c (the gate image's sums are doubles
  * added in another order: 2 float ulps); a one-process state resumes under 3 ranks the same way; a rank
- * killed before the first reduction leaves nothing and the message says so. The release binaries. */
+ * killed before the first reduction leaves nothing and the message says so. Rank 0 exits with status 4 in
+ * both (each rank runs in a shell that prints its status: mpirun reports the killed rank's). The release
+ * binaries. */
 #include "child_process.h"
 
 #include <dirent.h>
@@ -22,6 +24,9 @@
 #define MPIRUN MPIRUN_PATH " --allow-run-as-root --oversubscribe --mca plm_rsh_agent false --mca btl_vader_single_copy_mechanism none"
 /* small photon counts: a pass takes a few tens of milliseconds */
 #define SETS "--threads 1 --seed 9 --set photon_count=20000 --set volume_photon_count=3000"
+
+/* sh -c RANK_STATUS program args...: runs the program, then says how it ended */
+#define RANK_STATUS "trap '' TERM; \"$0\" \"$@\"; echo \"rank $OMPI_COMM_WORLD_RANK exit $?\""
 
 static char *dir;
 
@@ -86,7 +91,33 @@ static int has_env(pid_t pid, const char *var)
     return 0;
 }
 
-/* The pid of the child of mpirun whose OMPI_COMM_WORLD_RANK is `rank`, or -1. */
+/* The parent of pid, or -1. */
+static pid_t parent_of(pid_t pid)
+{
+    char path[64], line[256];
+    snprintf(path, sizeof path, "/proc/%d/status", (int)pid);
+    FILE *f = fopen(path, "r");
+    pid_t ppid = -1;
+    while (f && fgets(line, sizeof line, f))
+        if (sscanf(line, "PPid: %d", &ppid) == 1) break;
+    if (f) fclose(f);
+    return ppid;
+}
+
+/* Whether pid runs dartspp-mpi (its command name). */
+static int is_renderer(pid_t pid)
+{
+    char path[64], name[64] = "";
+    snprintf(path, sizeof path, "/proc/%d/comm", (int)pid);
+    FILE *f = fopen(path, "r");
+    if (!f) return 0;
+    int ok = fgets(name, sizeof name, f) && !strcmp(name, "dartspp-mpi\n");
+    fclose(f);
+    return ok;
+}
+
+/* The pid of the dartspp-mpi below mpirun (its grandchild: each rank runs in a shell) whose
+ * OMPI_COMM_WORLD_RANK is `rank`, or -1. */
 static pid_t rank_pid(pid_t mpirun, int rank)
 {
     char var[64];
@@ -95,14 +126,8 @@ static pid_t rank_pid(pid_t mpirun, int rank)
     struct dirent *e;
     pid_t found = -1;
     while (d && found < 0 && (e = readdir(d))) {
-        pid_t pid = (pid_t)atoi(e->d_name), ppid = -1;
-        char path[300], line[256];
-        snprintf(path, sizeof path, "/proc/%s/status", e->d_name);
-        FILE *f = pid > 0 ? fopen(path, "r") : NULL;
-        while (f && fgets(line, sizeof line, f))
-            if (sscanf(line, "PPid: %d", &ppid) == 1) break;
-        if (f) fclose(f);
-        if (ppid == mpirun && has_env(pid, var)) found = pid;
+        pid_t pid = (pid_t)atoi(e->d_name);
+        if (pid > 0 && is_renderer(pid) && parent_of(parent_of(pid)) == mpirun && has_env(pid, var)) found = pid;
     }
     if (d) closedir(d);
     return found;
@@ -114,7 +139,8 @@ static void start_three(child *c, const char *name, const char *reduce_every)
     char scene[600], out[600];
     snprintf(scene, sizeof scene, "%s/box.json", dir);
     snprintf(out, sizeof out, "%s/%s.exr", dir, name);
-    const char *argv[] = {MPIRUN_PATH, MPIRUN_ARGS, "-np", "3", MPI_BIN, "render", scene, "--threads", "1", "--seed",
+    /* each rank in a shell that ignores mpirun's SIGTERM and prints the rank's own exit status */
+    const char *argv[] = {MPIRUN_PATH, MPIRUN_ARGS, "-np", "3", "/bin/sh", "-c", RANK_STATUS, MPI_BIN, "render", scene, "--threads", "1", "--seed",
                           "9", "--set", "photon_count=20000", "--set", "volume_photon_count=3000", "--time", "60",
                           "--reduce-every", reduce_every, "--output", out, NULL};
     child_start(c, dir, argv, NULL, 0);
@@ -229,10 +255,11 @@ static void test_killed_rank_keeps_last_reduction(void **state)
     int rc = kill_rank_1(&c, &log);
     long held = state_passes(st);
     print_message("  the state holds %ld passes\n", held);
-    if (rc == 0 || !strstr(log, "a rank was lost") || !strstr(log, "continue with --resume")) {
+    if (rc == 0 || !strstr(log, "a rank was lost") || !strstr(log, "continue with --resume") ||
+        !strstr(log, "rank 0 exit 4")) {
         print_tail(log);
         free(log);
-        fail_msg("exit %d; expected non-zero and the message that a rank was lost", rc);
+        fail_msg("exit %d; expected non-zero, the message that a rank was lost and rank 0's exit status 4", rc);
     }
     free(log);
     assert_true(held > 0);
@@ -271,7 +298,7 @@ static void test_killed_before_any_reduction(void **state)
     usleep(1500000);
     char *log;
     int rc = kill_rank_1(&c, &log);
-    if (rc == 0 || !strstr(log, "a rank was lost") || !strstr(log, "nothing was kept")) {
+    if (rc == 0 || !strstr(log, "a rank was lost") || !strstr(log, "nothing was kept") || !strstr(log, "rank 0 exit 4")) {
         print_tail(log);
         free(log);
         fail_msg("exit %d; expected non-zero and the message that nothing was kept", rc);
