@@ -108,6 +108,13 @@ static void progress_print_job(progress_line *pl, const render_stats *st, int ra
     progress_print(pl, &est, spp, limit, 0);
 }
 
+/* A reduction that failed (err says which): a rank was lost, and the films can no longer be summed. */
+static int lost(dp_error *err)
+{
+    err->kind = DP_ERROR_LOST;
+    return -1;
+}
+
 /* Marks rank 0's entries into and exits from collective calls for the run's watchdog (render_options). */
 static void exchange_mark(const render_options *opt)
 {
@@ -173,11 +180,11 @@ static int render_rounds(const scene *s, const render_plan *p, const eda_set *ed
                      st->seconds - last_gather >= opt->gather_every;
         double tc = dp_seconds();
         exchange_mark(opt);
-        int lost = c->round(c, &go, &gather) != 0;
+        int agreed = c->round(c, &go, &gather) == 0;
         exchange_mark(opt);
-        if (lost) return dp_fail_kind(err, DP_ERROR_LOST, "the ranks lost contact (MPI): a rank was lost");
+        if (!agreed) return dp_fail_kind(err, DP_ERROR_LOST, "the ranks lost contact (MPI): a rank was lost");
         if (gather) {
-            if (gather_now(opt, f, st, &failed, err)) return dp_fail_kind(err, DP_ERROR_LOST, "%s", err->msg);
+            if (gather_now(opt, f, st, &failed, err)) return lost(err);
             last_gather = st->seconds;
         }
         st->t_cluster += dp_seconds() - tc;
@@ -188,9 +195,9 @@ static int render_rounds(const scene *s, const render_plan *p, const eda_set *ed
     film total;
     render_stats all;
     double tc = dp_seconds();
-    int lost = sum_onto_rank0(c, f, st, &total, &all, err) != 0;
+    int summed = sum_onto_rank0(c, f, st, &total, &all, err) == 0;
     exchange_mark(opt);
-    if (lost) return dp_fail_kind(err, DP_ERROR_LOST, "%s", err->msg);
+    if (!summed) return lost(err);
     if (c->rank == 0) {
         film_free(f);
         *f = total;
