@@ -3,7 +3,8 @@
  * the last periodic reduction (--reduce-every) is on disk and the watchdog wrote its images with that pass
  * count; `--resume` of that state with 3 ranks, and with one process, completes to K passes and equals a
  * one-process render of K passes within the bound of tests/test_mpi.c (the gate image's sums are doubles
- * added in another order: 2 float ulps); a one-process state resumes under 3 ranks the same way; a rank
+ * added in another order: 2 float ulps); a one-process state with frames resumes under 3 ranks the same
+ * way (frames within 2K ulps); a rank
  * killed before the first reduction leaves nothing and the message says so. Rank 0 exits with status 4 in
  * both (each rank runs in a shell that prints its status: mpirun reports the killed rank's). The release
  * binaries. */
@@ -216,15 +217,15 @@ static void copy_file(const char *from_name, const char *to_name)
 }
 
 /* Resumes `name`.state to K passes: with 3 ranks (np 3) or one process (np 1). */
-static void resume(const char *name, long K, int np)
+static void resume(const char *name, long K, int np, const char *extra)
 {
     char cmd[2048], out[16384];
     if (np > 1)
-        snprintf(cmd, sizeof cmd, MPIRUN " -np %d " MPI_BIN " render %s/box.json " SETS " --spp %ld --resume --output %s/%s.exr",
-                 np, dir, K, dir, name);
+        snprintf(cmd, sizeof cmd, MPIRUN " -np %d " MPI_BIN " render %s/box.json " SETS " %s --spp %ld --resume --output %s/%s.exr",
+                 np, dir, extra, K, dir, name);
     else
-        snprintf(cmd, sizeof cmd, ONE_BIN " render %s/box.json " SETS " --spp %ld --resume --output %s/%s.exr", dir, K,
-                 dir, name);
+        snprintf(cmd, sizeof cmd, ONE_BIN " render %s/box.json " SETS " %s --spp %ld --resume --output %s/%s.exr", dir, extra,
+                 K, dir, name);
     if (test_run(cmd, out, sizeof out) != 0) fail_msg("%s: %s", cmd, out);
     assert_non_null(strstr(out, "resuming "));
 }
@@ -268,20 +269,33 @@ static void test_killed_rank_keeps_last_reduction(void **state)
     const long K = held + 7; /* the resume renders passes of its own, on every rank */
     render_one("one", K, "");
     copy_file("killed.state", "single.state");
-    resume("killed", K, 3);
+    resume("killed", K, 3, "");
     assert_same_as_one("killed", "one", K);
-    resume("single", K, 1);
+    resume("single", K, 1, "");
     assert_same_as_one("single", "one", K);
 }
 
-/* A state written by one process (5 passes) resumed by 3 ranks to 12: equal to one process's 12. */
+/* A state written by one process (5 passes, 2 frames) resumed by 3 ranks to 12: equal to one process's 12,
+ * the gate image within 2 float ulps, each frame within 2K (its sums are floats: K additions in another
+ * order). */
 static void test_one_process_state_resumes_on_ranks(void **state)
 {
     (void)state;
-    render_one("from-one", 5, "--checkpoint 1e-9");
-    render_one("one12", 12, "");
-    resume("from-one", 12, 3);
+    const char *frames = "--set frame_num=2 --set start_time=15.95 --set transient_time_width=0.1";
+    char extra[256];
+    snprintf(extra, sizeof extra, "%s --checkpoint 1e-9", frames);
+    render_one("from-one", 5, extra);
+    render_one("one12", 12, frames);
+    resume("from-one", 12, 3, frames);
     assert_same_as_one("from-one", "one12", 12);
+    for (int k = 0; k < 2; k++) {
+        char a[64], b[64];
+        snprintf(a, sizeof a, "from-one_%04d", k);
+        snprintf(b, sizeof b, "one12_%04d", k);
+        double d = max_rel_diff(a, b);
+        print_message("  frame %d: largest relative difference %.3g (bound %.3g)\n", k, d, 2.0 * 12 * 0x1p-24);
+        assert_true(d <= 2.0 * 12 * 0x1p-24);
+    }
 }
 
 /* A rank killed before the first reduction (every 30 s): non-zero exit, the message says that nothing was
