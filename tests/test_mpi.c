@@ -214,7 +214,7 @@ static void test_memory_guard_counts_ranks(void **state)
 
 /* mpirun's multiple-program form: rank 1 is given a scene that does not exist; the job ends with exit 2,
  * the message names the file, and nothing is written. The same when rank 0 cannot read the error log's
- * reference, and (exit 1) when a rank cannot store its EDA table as the render starts. */
+ * reference, and when a rank cannot load its EDA table as the render starts (exit 2: a damaged table file). */
 static void test_rank_without_scene(void **state)
 {
     (void)state;
@@ -237,16 +237,19 @@ static void test_rank_without_scene(void **state)
     if (rc != 2) fail_msg("exit %d, expected 2 (124: the ranks waited for each other):\n%s", rc, out);
     assert_non_null(strstr(out, "missing.exr"));
     assert_int_equal(access(img, F_OK), -1);
-    /* rank 1 cannot store its EDA table (a folder that cannot exist): it fails as the render starts, and
-     * rank 0 does not wait for it */
+    /* rank 1 cannot load its EDA table (its cache folder holds a damaged copy of the table rank 0 builds): it
+     * fails as the render starts, and rank 0 does not wait for it */
     const char *eda = "--spp 2 --quiet --set eda=true --set eda_shape=[8,8,8] --set eda_table_dir=";
+    snprintf(cmd, sizeof cmd, ONE_BIN " render %s/box.json %s%s/tables --output %s/eda-first.exr && mkdir -p %s/damaged && "
+             "for f in %s/tables/*.bin; do echo damaged > %s/damaged/$(basename $f); done", dir, eda, dir, dir, dir, dir, dir);
+    if (test_run(cmd, out, sizeof out) != 0) fail_msg("%s: %s", cmd, out);
     snprintf(cmd, sizeof cmd,
              "timeout 30 " MPIRUN " -np 1 " MPI_BIN " render %s/box.json %s%s/tables --output %s : -np 1 " MPI_BIN
-             " render %s/box.json %s/proc/no-such-folder --output %s",
-             dir, eda, dir, img, dir, eda, img);
+             " render %s/box.json %s%s/damaged --output %s",
+             dir, eda, dir, img, dir, eda, dir, img);
     rc = test_run(cmd, out, sizeof out);
-    if (rc == 0 || rc == 124) fail_msg("exit %d, expected a failure (124: the ranks waited for each other):\n%s", rc, out);
-    assert_non_null(strstr(out, "/proc/no-such-folder"));
+    if (rc != 2) fail_msg("exit %d, expected 2 (124: the ranks waited for each other):\n%s", rc, out);
+    assert_non_null(strstr(out, "/damaged/eda-"));
     assert_int_equal(access(img, F_OK), -1);
 }
 

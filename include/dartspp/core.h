@@ -29,7 +29,9 @@ typedef enum {
     DP_ERROR_MEMORY,      /* an allocation failed. Exit 1 */
     DP_ERROR_INTERRUPTED, /* SIGINT or SIGTERM stopped the work. Exit 130 (128 + SIGINT, as shells report it) */
     DP_ERROR_RANK,        /* another rank of a cluster failed; that rank reports its own error. Exit 1 */
-    DP_ERROR_INTERNAL,    /* a limit or an invariant of the program, a failed MPI call. Exit 1 */
+    DP_ERROR_INTERNAL,    /* a limit or an invariant of the program. Exit 1 */
+    DP_ERROR_LOST,        /* a rank of a cluster was lost (a collective call failed, or the job was stopped while
+                           * the ranks were exchanging): the last reduction's passes were kept. Exit 4 */
 } dp_error_kind;
 
 typedef struct {

@@ -223,7 +223,8 @@ int eda_table_load(eda_table *t, const char *path, dp_error *err);
  * come from the scene (max_T, dT_start, dT_end); checks every CDF. */
 int eda_table_load_raw(eda_table *t, const char *path, double s_max, double r_lo, double r_hi, dp_error *err);
 /* The cached table for these parameters: DIR/eda-<σs>-<σa>-<g>-<s_max>-<r_lo>-<r_hi>-<shape>.bin, built
- * and stored there first when missing (announced on stderr with its build time). */
+ * and stored there first when missing (announced on stderr with its build time); a folder that cannot store
+ * it is a warning on stderr, and the table is used from memory. */
 int eda_table_cached(eda_table *t, const char *dir, double sigma_s, double sigma_a, double g, int n_ratio, int n_s,
                      int n_cos, double s_max, double r_lo, double r_hi, dp_error *err);
 

@@ -4,6 +4,7 @@
 #define DARTSPP_RENDER_H
 
 #include <signal.h>
+#include <stdatomic.h>
 
 #include "dartspp/film.h"
 #include "dartspp/io.h"
@@ -32,6 +33,9 @@ typedef struct {
     double max_memory;           /* bytes; 0: what the machine has available */
     int resume;                  /* --resume: continue from the checkpoint state "<output stem>.state" */
     int overwrite;               /* --overwrite: replace a checkpoint holding more passes than this run renders */
+    double reduce_every;         /* several ranks: seconds between the reductions that keep the checkpoint state
+                                  * on disk (--reduce-every; 0: only at checkpoints and the end); this process
+                                  * alone: unused */
 } render_request;
 
 typedef struct render_cluster render_cluster;
@@ -99,10 +103,16 @@ typedef struct {
      * every gather_every seconds (0: only at the end). */
     const render_cluster *cluster;
     double gather_every;
-    /* A film to continue (--resume; this process alone): its sums, weights and pass count are copied into
-     * the new film, and the render goes on at pass resume->passes, the time budget counting from here.
-     * Same size and frames as the scene's. NULL: from pass 0. */
+    /* A film to continue (--resume): its sums, weights and pass count are copied into the new film, and the
+     * render goes on at pass resume->passes, the time budget counting from here. Same size and frames as the
+     * scene's. NULL: from pass 0. With a cluster only rank 0 holds it (the others start from zero, so the
+     * reduction adds it once) and every rank is told its pass count in resume_passes. */
     const film *resume;
+    long resume_passes;     /* several ranks: the iteration the rounds start at (the state's pass count) */
+    /* Several ranks, rank 0: odd while the driver is inside a collective call (a round's agreement or a
+     * reduction), even outside; every entry and exit adds 1 (the watchdog of a run, run_internal.h, tells a
+     * job stuck waiting for a lost rank from one that is working). May be NULL. */
+    atomic_long *exchanges;
 } render_options;
 
 typedef struct render_stats {
@@ -123,6 +133,8 @@ typedef struct render_stats {
     double t_photon, t_maps, t_gather; /* seconds spent in the photon pass, map builds, sensor pass */
     double t_cluster;       /* several ranks: rank 0's seconds in the rounds' agreement and the reductions */
     long reductions;        /* several ranks: film reductions onto rank 0 (checkpoints, log rows, the end) */
+    long dropped;           /* several ranks: passes dropped unfinished (interrupt, error), summed over the
+                             * ranks by a reduction; 0 means the film holds iterations 0..passes−1 exactly */
 } render_stats;
 
 /* Renders the scene with its integrator into f (initialised here). On return, also with an error or an

@@ -13,6 +13,7 @@ static void usage(FILE *f)
             "                      [--set key=value ...]\n"
             "                      [--reference REF.exr --log RUN.csv [--log-every SECONDS]]\n"
             "                      [--max-memory SIZE] [--no-cube] [--no-viewer] [--verbose] [--quiet]\n"
+            "                      [--reduce-every SECONDS]  (dartspp-mpi: the checkpoint state's interval)\n"
             "       dartspp compare IMAGE REFERENCE [--csv]      (EXR or PFM)\n"
             "       dartspp patch-mean IMAGE X0 Y0 X1 Y1          (mean of a pixel rectangle)\n"
             "       dartspp merge OUTPUT IMAGE IMAGE [IMAGE...]   (mean of independent renders, its variance)\n"

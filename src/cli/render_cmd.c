@@ -73,7 +73,8 @@ static int parse_number(const char *opt, const char *val, double lo, double *out
  * the message on stderr. */
 static int parse_args(int argc, char **argv, render_request *rq, const char **sets)
 {
-    *rq = (render_request){.seed = 1, .spp = -1, .time_limit = -1, .checkpoint = -1, .log_every = 1.0, .sets = sets};
+    *rq = (render_request){.seed = 1, .spp = -1, .time_limit = -1, .checkpoint = -1, .log_every = 1.0, .reduce_every = 30.0,
+                          .sets = sets};
     for (int i = 0; i < argc; i++) {
         const char *o = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
         double d;
@@ -106,6 +107,9 @@ static int parse_args(int argc, char **argv, render_request *rq, const char **se
             i++;
         } else if (!strcmp(o, "--checkpoint")) {
             if (parse_number(o, v, 0, &rq->checkpoint)) return bad_arg(o, v, "expected seconds (0: no checkpoints)");
+            i++;
+        } else if (!strcmp(o, "--reduce-every")) {
+            if (parse_number(o, v, 0, &rq->reduce_every)) return bad_arg(o, v, "expected seconds (0: no periodic reductions)");
             i++;
         } else if (!strcmp(o, "--max-memory")) {
             if ((rq->max_memory = parse_bytes(v)) < 0) return bad_arg(o, v, "expected a size such as 8G, 512M or 1e9");

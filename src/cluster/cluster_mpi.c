@@ -1,6 +1,6 @@
 /* The render_cluster operations over MPI (Open MPI from Debian; any MPI-3 library): one collective per
  * round (MPI_Allreduce of the go flags and rank 0's gather wish), MPI_Reduce of the films and statistics onto
- * rank 0. Linked into dartspp-mpi only (Makefile): the library never calls MPI itself. */
+ * rank 0. Errors are returned (MPI_ERRORS_RETURN), not fatal. Linked into dartspp-mpi only (Makefile): the library never calls MPI itself. */
 #include <mpi.h>
 #include <stdlib.h>
 #include <string.h>
@@ -40,14 +40,14 @@ static int mpi_reduce(const render_cluster *c, const film *mine, film *total, co
         (nf > 0 && reduce_chunks(mine->frame_sum, total->frame_sum, nf, MPI_FLOAT, sizeof(float), c->rank)))
         return dp_fail_kind(err, DP_ERROR_INTERNAL, "MPI: the reduction of the films failed");
     /* the scalars: the counts, the weight sum and the statistics that add up */
-    double v[17] = {(double)mine->passes,    mine->weight_sum,        (double)mine->nonfinite, st_mine->camera_rays,
+    double v[18] = {(double)mine->passes,    mine->weight_sum,        (double)mine->nonfinite, st_mine->camera_rays,
                     st_mine->rays,           st_mine->photon_paths,   st_mine->stored_photons, st_mine->early_exits,
                     st_mine->aimed_paths,    st_mine->t_photon,       st_mine->t_maps,         st_mine->t_gather,
                     st_mine->chain_paths,    st_mine->chain_large,    st_mine->chain_visible,  st_mine->chain_small,
-                    st_mine->chain_accepted};
-    double w[17];
+                    st_mine->chain_accepted, (double)st_mine->dropped};
+    double w[18];
     int intr = st_mine->interrupted, intr_all = 0;
-    if (MPI_Reduce(v, w, 17, MPI_DOUBLE, MPI_SUM, 0, MPI_COMM_WORLD) != MPI_SUCCESS ||
+    if (MPI_Reduce(v, w, 18, MPI_DOUBLE, MPI_SUM, 0, MPI_COMM_WORLD) != MPI_SUCCESS ||
         MPI_Reduce(&intr, &intr_all, 1, MPI_INT, MPI_MAX, 0, MPI_COMM_WORLD) != MPI_SUCCESS)
         return dp_fail_kind(err, DP_ERROR_INTERNAL, "MPI: the reduction of the statistics failed");
     if (c->rank != 0) return 0;
@@ -71,6 +71,7 @@ static int mpi_reduce(const render_cluster *c, const film *mine, film *total, co
     st_total->chain_visible = w[14];
     st_total->chain_small = w[15];
     st_total->chain_accepted = w[16];
+    st_total->dropped = (long)w[17];
     st_total->interrupted = intr_all;
     return 0;
 }
@@ -94,6 +95,9 @@ int cluster_mpi_start(int *argc, char ***argv, render_cluster *c)
     int provided = 0;
     if (MPI_Init_thread(argc, argv, MPI_THREAD_FUNNELED, &provided) != MPI_SUCCESS) return -1;
     memset(c, 0, sizeof *c);
+    /* a failed call returns its error instead of aborting the job: an MPI that survives a lost rank lets the
+     * driver end the render with the last reduction's passes (DP_ERROR_LOST) */
+    MPI_Comm_set_errhandler(MPI_COMM_WORLD, MPI_ERRORS_RETURN);
     MPI_Comm_rank(MPI_COMM_WORLD, &c->rank);
     MPI_Comm_size(MPI_COMM_WORLD, &c->size);
     MPI_Comm node;

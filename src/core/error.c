@@ -36,6 +36,7 @@ int dp_exit_status(dp_error_kind kind)
     switch (kind) {
     case DP_ERROR_INPUT: return 2;
     case DP_ERROR_INTERRUPTED: return 130;
+    case DP_ERROR_LOST: return 4;
     case DP_ERROR_OUTPUT:
     case DP_ERROR_MEMORY:
     case DP_ERROR_RANK:

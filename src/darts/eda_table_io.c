@@ -187,10 +187,12 @@ int eda_table_cached(eda_table *t, const char *dir, double sigma_s, double sigma
     if (eda_table_build(t, sigma_s, sigma_a, g, n_ratio, n_s, n_cos, s_max, r_lo, r_hi, build_progress, NULL, err))
         return -1;
     fprintf(stderr, "%sEDA table: built in %.1f s\n", isatty(2) ? "\r" : "", dp_seconds() - t0);
-    if (eda_table_save(t, path, err)) {
-        eda_table_free(t);
-        return -1;
-    }
-    fprintf(stderr, "EDA table: stored for later renders\n");
+    /* the table is built and correct: a folder that cannot keep it costs the next render a rebuild, not
+     * this render its work */
+    dp_error save_err;
+    if (eda_table_save(t, path, &save_err))
+        fprintf(stderr, "warning: cannot store the EDA table in %s: %s; using it from memory\n", dir, save_err.msg);
+    else
+        fprintf(stderr, "EDA table: stored for later renders\n");
     return 0;
 }

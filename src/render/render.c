@@ -105,52 +105,96 @@ static void progress_print_job(progress_line *pl, const render_stats *st, int ra
     progress_print(pl, &est, spp, limit, 0);
 }
 
-/* Several ranks (render_cluster, render.h): in round k this rank renders iteration k·size + rank (while
- * below spp), then rank 0 decides for all whether another round starts and whether the films are summed
- * now for after_pass (checkpoints, error logs); at the end the films and statistics are summed onto rank 0.
- * A rank that fails or is interrupted says so at the round's end and every rank stops there; the completed
- * passes of all ranks are summed even then. */
+/* A reduction that failed (err says which): a rank was lost, and the films can no longer be summed. */
+static int lost(dp_error *err)
+{
+    err->kind = DP_ERROR_LOST;
+    return -1;
+}
+
+/* Marks rank 0's entries into and exits from collective calls for the run's watchdog (render_options). */
+static void exchange_mark(const render_options *opt)
+{
+    if (opt->exchanges) atomic_fetch_add(opt->exchanges, 1);
+}
+
+/* This rank's pass of round k: iteration first + k·size + rank while below spp. A failed or interrupted pass
+ * is dropped (and counted: the film then no longer holds a contiguous run of iterations). 1 if it failed. */
+static int round_pass(const scene *s, const render_plan *p, const eda_set *eda, const render_options *opt, film *f,
+                      long i, render_stats *st, dp_error *err)
+{
+    int failed = render_pass(s, p, eda, opt, f, i, st, err) != 0;
+    if (failed || dp_stopped(opt->stop)) {
+        film_drop_pass(f); /* failed, or interrupted inside the pass: it is incomplete */
+        st->dropped++;
+    } else
+        commit_iteration(s, p, f, i, st);
+    return failed;
+}
+
+/* The films summed onto rank 0 in the middle of the rounds, for after_pass (checkpoints, error-log rows, the
+ * checkpoint state). 0, or -1 with err. */
+static int gather_now(const render_options *opt, const film *f, render_stats *st, int *failed, dp_error *err)
+{
+    const render_cluster *c = opt->cluster;
+    film total;
+    render_stats all;
+    exchange_mark(opt);
+    int rc = sum_onto_rank0(c, f, st, &total, &all, err);
+    exchange_mark(opt);
+    if (rc) return -1;
+    st->reductions++;
+    all.seconds = st->seconds;
+    if (c->rank == 0) {
+        *failed |= opt->after_pass(opt->after_pass_ctx, &total, &all, err) != 0;
+        film_free(&total);
+    }
+    return 0;
+}
+
+/* Several ranks (render_cluster, render.h): in round k this rank renders iteration first + k·size + rank
+ * (while below spp; first: the passes of a resumed state, 0 otherwise), then rank 0 decides for all whether
+ * another round starts and whether the films are summed now for after_pass (checkpoints, error logs, the
+ * checkpoint state); at the end the films and statistics are summed onto rank 0. A rank that fails or is
+ * interrupted says so at the round's end and every rank stops there; the completed passes of all ranks are
+ * summed even then. A collective that returns an error (a rank lost, with an MPI that reports it instead of
+ * aborting the job) ends the render with DP_ERROR_LOST. */
 static int render_rounds(const scene *s, const render_plan *p, const eda_set *eda, const render_options *opt,
                          film *f, render_stats *st, long spp, double limit, dp_error *err)
 {
     const render_cluster *c = opt->cluster;
     progress_line pl = {.tty = isatty(2), .last_print = -1e9};
     double t0 = dp_seconds(), last_gather = 0.0;
+    long first = opt->resume_passes;
     int failed = 0, go = 1;
     for (long k = 0; go; k++) {
-        long i = k * c->size + c->rank, done = (k + 1) * c->size;
-        if ((spp <= 0 || i < spp) && !failed) {
-            if ((failed = render_pass(s, p, eda, opt, f, i, st, err) != 0) || dp_stopped(opt->stop))
-                film_drop_pass(f); /* failed, or interrupted inside the pass: it is incomplete */
-            else
-                commit_iteration(s, p, f, i, st);
-        }
+        long i = first + k * c->size + c->rank, done = first + (k + 1) * c->size;
+        if ((spp <= 0 || i < spp) && !failed) failed = round_pass(s, p, eda, opt, f, i, st, err);
         st->seconds = dp_seconds() - t0;
         if (spp > 0 && done > spp) done = spp;
         go = !failed && !dp_stopped(opt->stop) && (c->rank != 0 || another_round(k, done, spp, st->seconds, limit));
         int gather = c->rank == 0 && go && opt->after_pass && opt->gather_every > 0 &&
                      st->seconds - last_gather >= opt->gather_every;
         double tc = dp_seconds();
-        if (c->round(c, &go, &gather)) return dp_fail_kind(err, DP_ERROR_INTERNAL, "the ranks lost contact (MPI)");
+        exchange_mark(opt);
+        int agreed = c->round(c, &go, &gather) == 0;
+        exchange_mark(opt);
+        if (!agreed) return dp_fail_kind(err, DP_ERROR_LOST, "the ranks lost contact (MPI): a rank was lost");
         if (gather) {
-            film total;
-            render_stats all;
-            if (sum_onto_rank0(c, f, st, &total, &all, err)) return -1;
-            st->reductions++;
-            last_gather = all.seconds = st->seconds;
-            if (c->rank == 0) {
-                failed |= opt->after_pass(opt->after_pass_ctx, &total, &all, err) != 0;
-                film_free(&total);
-            }
+            if (gather_now(opt, f, st, &failed, err)) return lost(err);
+            last_gather = st->seconds;
         }
         st->t_cluster += dp_seconds() - tc;
         if (c->rank == 0 && opt->progress) progress_print_job(&pl, st, c->size, done, spp, limit);
     }
+    exchange_mark(opt);
     int any_failed = c->agree_rc(c, failed);
     film total;
     render_stats all;
     double tc = dp_seconds();
-    if (sum_onto_rank0(c, f, st, &total, &all, err)) return -1;
+    int summed = sum_onto_rank0(c, f, st, &total, &all, err) == 0;
+    exchange_mark(opt);
+    if (!summed) return lost(err);
     if (c->rank == 0) {
         film_free(f);
         *f = total;

@@ -29,15 +29,18 @@ static void start(render_run_job *j, const render_request *rq, const render_clus
     interrupt_install(&j->ro);
 }
 
-/* Rank 0's seed, pass count and time budget on every rank: the ranks render one job whatever their own
- * command lines say (the seed as two 32-bit halves, exact in doubles). */
-static int share_options(const render_cluster *c, render_options *ro)
+/* Rank 0's seed, pass count, time budget and resumed passes on every rank: the ranks render one job whatever
+ * their own command lines say (the seed as two 32-bit halves, exact in doubles), and the rounds of a resumed
+ * render start at the state's pass count. */
+static int share_options(const render_cluster *c, render_options *ro, long resumed)
 {
-    double v[4] = {(double)(ro->seed >> 32), (double)(ro->seed & 0xffffffffu), (double)ro->spp, ro->time_limit};
-    if (c->share(c, v, 4)) return -1;
+    double v[5] = {(double)(ro->seed >> 32), (double)(ro->seed & 0xffffffffu), (double)ro->spp, ro->time_limit,
+                   (double)resumed};
+    if (c->share(c, v, 5)) return -1;
     ro->seed = ((uint64_t)v[0] << 32) | (uint64_t)v[1];
     ro->spp = (long)v[2];
     ro->time_limit = v[3];
+    ro->resume_passes = (long)v[4];
     return 0;
 }
 
@@ -51,7 +54,7 @@ static int agree_to_start(render_run_job *j, int status)
     if (all && !status && j->rank == 0)
         fprintf(stderr, "dartspp render: another rank could not start the render (its message is above)\n");
     if (all) return all;
-    if (share_options(cl, &j->ro)) return dp_exit_status(DP_ERROR_INTERNAL); /* MPI reports its own failures */
+    if (share_options(cl, &j->ro, j->resumed.passes)) return dp_exit_status(DP_ERROR_INTERNAL); /* MPI reports its own failures */
     long cores = sysconf(_SC_NPROCESSORS_ONLN);
     if (j->ro.threads == 0 && cores > 0)
         j->ro.threads = cores / cl->ranks_on_node > 0 ? (int)(cores / cl->ranks_on_node) : 1;
@@ -106,10 +109,23 @@ static void set_up_render(render_run_job *j)
     ro->cluster = j->cl;
     ro->resume = j->resumed.sum ? &j->resumed : NULL;
     /* with several ranks the films are summed for checkpoints and log rows only when one is due */
-    double log_every = j->rq->log_every;
+    double log_every = j->rq->log_every, reduce_every = j->rq->reduce_every;
     ro->gather_every = j->cp.every > 0 ? j->cp.every : 0.0;
     if (j->cp.log && (ro->gather_every == 0.0 || log_every < ro->gather_every))
         ro->gather_every = log_every > 0 ? log_every : 1e-9;
+    if (!j->cl) return;
+    /* and every reduce_every seconds for the checkpoint state, kept in memory too for the watchdog */
+    if (reduce_every > 0 && (ro->gather_every == 0.0 || reduce_every < ro->gather_every))
+        ro->gather_every = reduce_every;
+    if (j->rank != 0) return;
+    double pixels = (double)j->s.cam.width * j->s.cam.height;
+    survivors_init(&j->keep, ro->stop, j->out, j->p.type_name, j->plan_json, j->state, j->rq->skip,
+                   pixels * 3 * (sizeof(double) + j->p.window.frame_count * sizeof(float)));
+    j->cp.keep = &j->keep;
+    j->cp.state_every = reduce_every;
+    ro->exchanges = &j->keep.exchanges;
+    if (watchdog_start(&j->keep))
+        fprintf(stderr, "warning: no watchdog thread: if a rank is lost, the last reduction is only in %s\n", j->state);
 }
 
 /* The completed passes to the output, or to a rescue folder when that fails: finished work is never thrown
@@ -130,6 +146,16 @@ static int write_outputs(const render_run_job *j, const film *f, dp_error *err)
     return -1;
 }
 
+/* Several ranks, a collective call failed (an MPI that reports a lost rank instead of ending the job): the
+ * films can no longer be summed, so rank 0 writes the last reduction kept and every rank exits with status 4. */
+static int lost_rank(render_run_job *j, film *f, const dp_error *err)
+{
+    say_error(err, j->rank ? " (a rank other than 0)" : "");
+    if (j->rank == 0) survivors_report(&j->keep);
+    film_free(f);
+    return dp_exit_status(DP_ERROR_LOST);
+}
+
 /* The render, the error log's last row, the summary and the outputs. Returns
  * the exit status: the first error's (the render's, the error log's, the final write's), else that of an
  * interrupt, else 0. */
@@ -139,6 +165,8 @@ static int render_and_write(render_run_job *j)
     render_stats st;
     dp_error err, werr;
     int failed = render_scene(&j->s, &j->ro, &f, &st, &err) != 0;
+    watchdog_stop(&j->keep);
+    if (failed && err.kind == DP_ERROR_LOST) return lost_rank(j, &f, &err);
     if (failed) {
         /* a rank stopped by another rank's error leaves the telling to that rank and to rank 0 */
         if (j->rank == 0 || err.kind != DP_ERROR_RANK) say_error(&err, j->rank ? " (a rank other than 0)" : "");
@@ -158,6 +186,10 @@ static int render_and_write(render_run_job *j)
                 err = werr;
                 failed = 1;
             }
+        } else if (j->cp.state && st.dropped > 0) {
+            /* several ranks, some of which dropped a pass: not iterations 0..N−1, which a resume needs */
+            fprintf(stderr, "dartspp render: %s keeps the last reduction in which every rank had finished its "
+                    "passes\n", j->cp.state);
         } else if (j->cp.state && resume_state_write(j->cp.state, &f, j->plan_json, j->cp.seed, &werr)) {
             say_error(&werr, " (the checkpoint state; the images were written)");
             if (!failed) {
@@ -192,6 +224,7 @@ int render_run(const render_request *rq, const render_cluster *cluster)
         set_up_render(j);
         status = render_and_write(j);
     }
+    if (j->cp.keep) survivors_free(&j->keep);
     run_release(j);
     free(j);
     return status;

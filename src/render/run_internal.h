@@ -3,7 +3,26 @@
 #ifndef DARTSPP_RENDER_RUN_INTERNAL_H
 #define DARTSPP_RENDER_RUN_INTERNAL_H
 
+#include <pthread.h>
+
 #include "dartspp/render.h"
+
+/* Several ranks, rank 0: the film of the last reduction that was written to the checkpoint state, kept in
+ * memory with what the watchdog (watchdog.c) needs to write it when the job is stopped while the ranks are
+ * exchanging (a rank lost: the collective never returns, and Open MPI kills the job 1 s after its SIGTERM). */
+typedef struct {
+    pthread_mutex_t lock;  /* held while the film is replaced, and by the watchdog while it writes */
+    film f;                /* passes 0: no reduction kept yet */
+    double seconds;        /* render seconds of that reduction */
+    atomic_long exchanges; /* render_options.exchanges */
+    const dp_stop_flag *stop;
+    const char *out, *integrator, *plan_json, *state;
+    int skip;
+    double stuck_seconds;  /* how long in one collective call after an interrupt means stuck */
+    atomic_int quit;       /* the render has returned: the watchdog must not fire */
+    pthread_t thread;
+    int running;
+} survivors;
 
 /* After every pass (render_options.after_pass): a row of the error log when one is due, and every `every`
  * seconds of rendering a checkpoint, the outputs of all completed passes written atomically (an
@@ -18,6 +37,9 @@ typedef struct {
     const char *state;   /* the checkpoint state to write with each checkpoint (resume.c); NULL: none */
     uint64_t seed;
     error_log *log;      /* --log: error against --reference (may be NULL) */
+    survivors *keep;     /* several ranks, rank 0: the state is written every state_every seconds of rendering
+                          * (after a reduction holding iterations 0..passes−1) and its film kept here; else NULL */
+    double state_every, last_state;
 } checkpoints;
 
 int checkpoint_after_pass(void *ctx, const film *f, const render_stats *st, dp_error *err);
@@ -39,6 +61,7 @@ typedef struct {
     render_options ro;
     char state[OUTPUT_PATH_MAX + 16]; /* the checkpoint state beside the outputs (resume.c) */
     film resumed;             /* --resume: the checkpoint's film (sums, passes), handed to the render */
+    survivors keep;           /* several ranks, rank 0 (watchdog.c) */
 } render_run_job;
 
 /* ---- the checkpoint state (resume.c): "<stem>.state", the film's exact sums for --resume ---- */
@@ -70,6 +93,26 @@ int resume_overwrite_check(const char *path, long spp, dp_error *err);
 int run_prepare(render_run_job *j, dp_error *err);
 /* Frees what run_prepare took (the error log, the plan and the scene). */
 void run_release(render_run_job *j);
+
+/* ---- the last reduction kept, and the watchdog (watchdog.c; several ranks, rank 0) ---- */
+/* Before the render: nothing kept; the outputs and state the report names; film_bytes, the size of the sums
+ * a reduction moves, lengthens the time that counts as stuck (watchdog.c). */
+void survivors_init(survivors *k, const dp_stop_flag *stop, const char *out, const char *integrator,
+                    const char *plan_json, const char *state, int skip, double film_bytes);
+/* Replaces the kept film by a copy of f (of `seconds`); a copy that cannot be allocated keeps the older one. */
+void survivors_keep(survivors *k, const film *f, double seconds);
+/* Starts the thread that, once the run is interrupted (SIGTERM from mpirun when a rank died) and the driver
+ * has been stuck in the same collective call for k->stuck_seconds, writes the kept film's images, says so
+ * (survivors_report) and exits with dp_exit_status(DP_ERROR_LOST). 0, or -1 (no watchdog: the checkpoint
+ * state on disk still holds the last reduction). */
+int watchdog_start(survivors *k);
+/* The render has returned: the watchdog stops (waiting for it if it is writing, in which case it exits the
+ * process). Safe when it was never started. */
+void watchdog_stop(survivors *k);
+/* Writes the kept film's images and says on stderr that a rank was lost and what was kept (or that nothing
+ * was: no reduction yet). */
+void survivors_report(survivors *k);
+void survivors_free(survivors *k);
 
 /* Warnings about the scene before the render: parts of it the chosen integrator or DARTS samplers render
  * with a known bias or not at all (warnings.c). */

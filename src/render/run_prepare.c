@@ -90,16 +90,15 @@ static void set_up_checkpoints(render_run_job *j)
 
 /* The checkpoint state beside the outputs (resume.c), rank 0's: with --resume it is loaded into j->resumed and
  * must fit this run; without, a state holding more passes than this run renders is not overwritten unless
- * --overwrite. Checkpoints and, with checkpoints or --resume, the final write write it (this process alone:
- * dartspp-mpi neither writes nor resumes it). */
+ * --overwrite. This process alone writes it at checkpoints and, with checkpoints or --resume, at the end;
+ * several ranks always keep it (after the periodic reductions, --reduce-every, and at the end), so that a
+ * lost rank costs only the passes since the last reduction. */
 static int set_up_state(render_run_job *j, dp_error *err)
 {
     const render_request *rq = j->rq;
     if (j->rank != 0) return 0;
-    if (j->cl && rq->resume)
-        return dp_fail(err, "--resume: dartspp-mpi cannot resume a render yet; resume it with dartspp render");
     resume_state_path(j->out, j->state, sizeof j->state);
-    if (!j->cl && (j->cp.every > 0 || rq->resume)) { /* --resume alone: the final write updates it */
+    if (j->cl || j->cp.every > 0 || rq->resume) { /* --resume alone: the final write updates it */
         j->cp.state = j->state;
         j->cp.seed = rq->seed;
     }
