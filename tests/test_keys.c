@@ -269,14 +269,17 @@ static void test_unread_keys_reported(void **state)
 {
     (void)state;
     char notes[8192];
+    const char *pt_strict[] = {"type=path_tracer", "strict_time_width=true", "surface_chains=false"};
+    notes_of(pt_strict, 3, 0, notes, sizeof notes);
+    ASSERT_CONTAINS(notes, "warning: " BASE_SCENE ": integrator.strict_time_width: the path_tracer integrator does not read");
+    ASSERT_CONTAINS(notes, "integrator.surface_chains: the path_tracer integrator does not read");
+    const char *pt_plain[] = {"type=path_tracer", "strict_time_width=false"};
+    notes_of(pt_plain, 2, 1, notes, sizeof notes);
+    if (strstr(notes, "strict_time_width: the path_tracer")) fail_msg("a key at its default warned:\n%s", notes);
+    ASSERT_CONTAINS(notes, "ignored key: integrator.strict_time_width (not read by path_tracer)");
     const char *pt_guided[] = {"type=path_tracer", "enable_guiding=true", "enable_elliptical=true"};
     notes_of(pt_guided, 3, 0, notes, sizeof notes);
-    ASSERT_CONTAINS(notes, "warning: " BASE_SCENE ": integrator.enable_guiding: the path_tracer integrator does not read");
-    ASSERT_CONTAINS(notes, "integrator.enable_elliptical: the path_tracer integrator does not read");
-    const char *pt_plain[] = {"type=path_tracer", "enable_guiding=false"};
-    notes_of(pt_plain, 2, 1, notes, sizeof notes);
-    if (strstr(notes, "enable_guiding: the path_tracer")) fail_msg("a key at its default warned:\n%s", notes);
-    ASSERT_CONTAINS(notes, "ignored key: integrator.enable_guiding (not read by path_tracer)");
+    if (strstr(notes, "enable_guiding")) fail_msg("a key the path tracer reads was reported:\n%s", notes);
     const char *pp_rr[] = {"enable_rr=false"};
     notes_of(pp_rr, 1, 0, notes, sizeof notes);
     ASSERT_CONTAINS(notes, "integrator.enable_rr: the progressive_transient_photon_map integrator does not read");
@@ -286,7 +289,8 @@ static void test_unread_keys_reported(void **state)
     ASSERT_CONTAINS(notes, "ignored key: renderer.scene_bvh (accepted from the format, not read by dartspp)");
 }
 
-/* The paper's DARTS path-tracer scene: its DARTS keys are reported as not read (until the path tracer reads them). */
+/* The paper's DARTS path-tracer scene: its DARTS keys are read (no "does not read" warning), and its plan
+ * says the DARTS path tracer runs. */
 static void test_paper_path_trace_darts_keys_reported(void **state)
 {
     (void)state;
@@ -297,8 +301,15 @@ static void test_paper_path_trace_darts_keys_reported(void **state)
     dp_error err = {0};
     scene_load_options opt = {0};
     assert_int_equal(scene_load(path, &opt, &s, &err), 0);
-    ASSERT_CONTAINS(s.notes, "integrator.enable_guiding: the path_tracer integrator does not read");
-    ASSERT_CONTAINS(s.notes, "integrator.enable_elliptical: the path_tracer integrator does not read");
+    if (s.notes && strstr(s.notes, "enable_guiding")) fail_msg("enable_guiding reported:\n%s", s.notes);
+    if (s.notes && strstr(s.notes, "enable_elliptical")) fail_msg("enable_elliptical reported:\n%s", s.notes);
+    render_plan p;
+    assert_int_equal(plan_resolve(&s, &p, &err), 0);
+    assert_true(p.darts.active && p.darts.distance_sampling && p.darts.control_vertices);
+    char json[16384];
+    assert_int_equal(plan_json(&p, &s, json, sizeof json), 0);
+    ASSERT_CONTAINS(json, "\"method\":\"DARTS path tracer\"");
+    plan_free(&p);
     scene_free(&s);
 }
 

@@ -107,9 +107,17 @@ static void test_darts_and_eda_switches(void **state)
     assert_false(p.darts.active || p.darts.control_vertices || p.eda_active || p.eda[0].on);
     plan_done(&s, &p);
 
-    /* the path tracer: no DARTS whatever the keys */
+    /* the path tracer: DARTS toward the light as the keys ask (docs/darts.md §14), and uniform time */
     plan_of("", "\"type\": \"path_tracer\", " GATE "\"enable_guiding\": true, \"eda\": true", "", &s, &p);
+    assert_true(p.darts.active && p.darts.distance_sampling && !p.darts.control_vertices && p.eda_active);
+    assert_false(p.uniform_time);
+    plan_done(&s, &p);
+    plan_of("", "\"type\": \"path_tracer\", " GATE "\"time_sampling\": \"uniform\"", "", &s, &p);
+    assert_true(p.uniform_time);
     assert_false(p.darts.active || p.eda_active);
+    plan_done(&s, &p);
+    plan_of("", "\"type\": \"path_tracer\", " R "\"enable_guiding\": true, \"enable_elliptical\": true", "", &s, &p);
+    assert_false(p.darts.active || p.uniform_time); /* steady state: nothing to aim at */
     plan_done(&s, &p);
 }
 

@@ -65,14 +65,17 @@ static void test_threads_bit_identical(void **state)
 static void test_frames_sum_to_union_gate(void **state)
 {
     (void)state;
-    /* the path tracer: the same random numbers whatever the window (DARTS aims each path at one frame) */
-    const char *frames[] = {"frame_num=4", "start_time=7", "transient_time_width=0.5", "type=path_tracer"};
-    const char *gate[] = {"transient_time_center=8", "transient_time_width=2", "type=path_tracer"};
-    const char *gate1[] = {"transient_time_center=7.25", "transient_time_width=0.5", "type=path_tracer"};
+    /* the plain path tracer: the same random numbers whatever the window (DARTS aims each path at one frame) */
+    const char *frames[] = {"frame_num=4", "start_time=7", "transient_time_width=0.5", "type=path_tracer",
+                            "enable_guiding=false", "enable_elliptical=false"};
+    const char *gate[] = {"transient_time_center=8", "transient_time_width=2", "type=path_tracer",
+                          "enable_guiding=false", "enable_elliptical=false"};
+    const char *gate1[] = {"transient_time_center=7.25", "transient_time_width=0.5", "type=path_tracer",
+                           "enable_guiding=false", "enable_elliptical=false"};
     scene *sf = &fx.scenes[0], *sg = &fx.scenes[1], *s1 = &fx.scenes[2];
-    load_scene("scenes/fogbox/fogbox.json", frames, 4, sf);
-    load_scene("scenes/fogbox/fogbox.json", gate, 3, sg);
-    load_scene("scenes/fogbox/fogbox.json", gate1, 3, s1);
+    load_scene("scenes/fogbox/fogbox.json", frames, 6, sf);
+    load_scene("scenes/fogbox/fogbox.json", gate, 5, sg);
+    load_scene("scenes/fogbox/fogbox.json", gate1, 5, s1);
     sf->cam.width = sg->cam.width = s1->cam.width = 32;
     sf->cam.height = sg->cam.height = s1->cam.height = 32;
     film *ff = &fx.films[0], *fg = &fx.films[1], *f1 = &fx.films[2];

@@ -1,4 +1,4 @@
-/* Camera paths aimed at a light and a time bin: the DARTS path tracer (He et al. 2024, §4–5, supplement
+/* Camera paths aimed at a light and a time bin: the DARTS path tracer (the DARTS paper §4–5, supplement
  * Alg. 2) and the uniform-time path tracer (Jarabo et al. 2014 §5 as the DARTS supplement §B.4 corrects it).
  * The samplers are those of the DARTS photon pass (src/darts) with the light, not the camera, as the target:
  * the residual of a camera-path vertex is its light leg, which always counts in the path's time.
@@ -7,7 +7,7 @@
  * (the pulse) drawn first, then its target bin (the gate; in frame mode one frame, uniform in time over the
  * reachable part of the window; uniform time: the whole window). Every contribution of the path goes to that
  * light only and is divided by the two probabilities.
- * Per medium segment (docs/darts.md §9): an ellipse record (fresh residual T), the early exit, the light
+ * Per medium segment (docs/darts.md §14): an ellipse record (fresh residual T), the early exit, the light
  * connection through a control vertex on the segment — which replaces the connection of the medium vertices
  * the segment's distance sample lands on (the two estimate the same term) — then the distance (DA-RIS, the
  * uniform-time distance drawn at the previous vertex, or free flight).
@@ -101,7 +101,7 @@ void pt_aim_connect(pixel_ctx *c, const path_state *ps, vec3 x, const phase_func
     pt_connect_light(c, ps, a->light, x, pf, ss, 0, 1.0 / (a->sel_pdf * a->bin.pdf), a->bin.frame);
 }
 
-/* The light connection of a medium segment through a control vertex at distance t on it (paper §5.2, supp.
+/* The light connection of a medium segment through a control vertex at distance t on it (paper §5.2, supplement
  * eq. 10–12): β·σs·e^{−σt·t}/p(t) times the connection from x_ell = o + t·d, whose path time lies in the bin
  * by construction. p(t) is the elliptical density, or (control_vertex_mis) its one-sample mixture with a
  * σ-exponential over the in-bin part of the segment: that mixture contains the plain connection's own
@@ -123,7 +123,7 @@ static void connect_control_vertex(pixel_ctx *c, const path_state *ps, const med
     pt_aim_connect(c, &cv, cv.o, &m->phase, NULL);
 }
 
-/* Uniform time: the distance drawn at the vertex before its direction (J14 §5.1: exponential, λ = σt), used
+/* Uniform time: the distance drawn at the vertex before its direction (Jarabo et al. 2014 §5.1: exponential, λ = σt), used
  * now that the ray is known. Drawn first, it does not depend on the direction, so the pair (r, ω) is sampled
  * in the extended space where the surface term is e^{−σt·d_s} = ∫_{d_s}^∞ σt·e^{−σt·r} dr: a medium event
  * at r < tmax weighs σs·e^{−σt·r}/p(r), the surface at tmax weighs σt·e^{−σt·r}/p(r), p(r) the channel mean
@@ -171,7 +171,7 @@ int pt_aim_medium_segment(pixel_ctx *c, path_state *ps, double tmax, int *event,
     return 1;
 }
 
-/* Uniform time at a medium vertex (J14 §5.1 and §5.3, supp. §B.4): the next distance r first, then the
+/* Uniform time at a medium vertex (Jarabo et al. 2014 §5.1, §5.3 as the supplement §B.4 corrects it): the next distance r first, then the
  * direction by time-angular sampling for that r, mixed with the phase function (one-sample MIS). Only where
  * σt > 0 in every channel (the extended-space weights of predrawn_distance need it); else the phase alone. */
 static void uniform_time_direction(pixel_ctx *c, path_state *ps, const medium *m)
@@ -202,7 +202,7 @@ void pt_aim_scatter_direction(pixel_ctx *c, path_state *ps)
     }
     const eda_table *et = pp->eda && pp->eda->table ? pp->eda->table[ps->medium] : NULL;
     if (et) { /* EDA toward the light with MIS against the phase function (docs/darts.md §8.2) */
-        ellipse_record vr; /* its own residual: the segment's record draws a fresh one (docs/darts.md §9) */
+        ellipse_record vr; /* its own residual: the segment's record draws a fresh one (docs/darts.md §14) */
         const darts_guide *g = c->aim.g;
         ellipse_record_init(&vr, g, &c->aim.bin, ps->o, ps->time, m->eta, g->residual, v3_avg(m->sigma_t),
                             rng_uniform(c->rng));

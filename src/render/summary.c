@@ -68,6 +68,37 @@ static void print_samplers(const scene *s, const render_plan *p)
     printf("\n");
 }
 
+/* Which method the path tracer runs (docs/darts.md §14): plain, DARTS (which samplers) or uniform time. */
+static void print_path_method(const scene *s, const render_plan *p)
+{
+    const darts_plan *d = &p->darts;
+    const integrator_settings *in = &s->integrator;
+    if (p->uniform_time) {
+        printf("path tracer: uniform time (Jarabo et al. 2014, corrected as the DARTS supplement B.4): free-flight "
+               "distances, line-to-point light connections, time-angular directions (share %g)\n",
+               in->time_angular_share);
+        return;
+    }
+    if (!d->active) {
+        int asked = in->enable_guiding || in->enable_elliptical || in->time_sampling_uniform;
+        printf("path tracer: plain%s\n", !asked ? ""
+               : s->light_count == 0 ? "; DARTS and uniform time off: the scene has no light"
+               : in->time_sampling_uniform && p->window.gated && s->medium_count > 0
+                   ? "; uniform time off: the refractive index is not uniform"
+                   : "; DARTS and uniform time off: the scene has no medium or no gate");
+        return;
+    }
+    printf("path tracer: DARTS toward %s, %s target bins; DA distance sampling %s; elliptical light connections %s "
+           "(residual %s, %s)", s->light_count > 1 ? "one light per camera path" : "the light",
+           p->window.frame_count ? "per-frame" : "gate", d->distance_sampling ? "on" : "off",
+           d->control_vertices ? "on" : d->elliptical_asked ? "off: refractive index not uniform" : "off",
+           d->residual == RESIDUAL_EXPONENTIAL ? "exponential" : "uniform",
+           d->control_vertex_mis ? "MIS with an in-bin exponential" : "no MIS");
+    if (p->window.camera_unwarp) printf("; camera-unwarped time: no sampler aims along the camera segment");
+    print_media(s, p);
+    printf("\n");
+}
+
 /* The scene, its integrator and size, and the gate or frames. */
 static void print_scene(const scene *s, const render_plan *p, double load_seconds)
 {
@@ -131,6 +162,7 @@ static void print_summary(const scene *s, const render_plan *p, const render_sta
                st->nonfinite_pixels);
     printf("\n");
     if (p->type == INTEGRATOR_PHOTON_POINTS) print_samplers(s, p);
+    else print_path_method(s, p);
     print_photon_stats(st);
     if (st->reductions > 0) print_cluster(s, p, st);
 }
