@@ -237,8 +237,12 @@ static int render_passes(const scene *s, const render_plan *p, const render_opti
                 !film_init(f, s->cam.width, s->cam.height, &p->window, err) &&
                 !(opt->resume && film_resume(f, opt->resume, err));
     const render_cluster *c = opt->cluster && opt->cluster->size > 1 ? opt->cluster : NULL;
-    if (c && c->agree_rc(c, !ready) && ready) /* a rank without its EDA tables or film: none starts */
-        ready = !dp_fail_kind(err, DP_ERROR_RANK, "another rank could not start the render (its message is above)");
+    /* a rank without its EDA tables or film: none starts, and every rank exits with the largest status (2 when
+     * a rank's cause is bad input), whichever rank's exit mpirun reports */
+    int all = c ? c->agree_rc(c, ready ? 0 : dp_exit_status(err->kind)) : 0;
+    if (all && ready)
+        ready = !dp_fail_kind(err, all == dp_exit_status(DP_ERROR_INPUT) ? DP_ERROR_INPUT : DP_ERROR_RANK,
+                              "another rank could not start the render (its message is above)");
     if (!ready) {
         eda_set_free(&eda);
         return -1;
