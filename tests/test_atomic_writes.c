@@ -301,6 +301,48 @@ static void test_atomic_set_and_stale(void **state)
     test_rmtree(dir);
 }
 
+/* The manifest "<stem>_frames.csv" (io.h ATOMIC_SET_MANIFEST): a reader who sees it sees the whole set. At
+ * every file moved into place (the wrote() callback, called right after each rename) the manifest is absent
+ * until the very last, which is the manifest itself — also when its name sorts before other files of the set
+ * ("s_viewer.html" after "s_frames.csv"). Broken variant: the files moved in plain name order with the old
+ * manifest left in place: the old manifest is seen beside new frames at the first callback. */
+static char manifest_path[9000];
+static int moves, manifest_seen_early, manifest_last;
+
+static void check_manifest(const char *path)
+{
+    int last = strstr(path, ATOMIC_SET_MANIFEST) != NULL;
+    if (!last && file_size(manifest_path) >= 0) manifest_seen_early++;
+    if (last) manifest_last = ++moves;
+    else moves++;
+}
+
+static void test_atomic_set_manifest_last(void **state)
+{
+    (void)state;
+    char *dir = test_tmpdir(), stem[512], path[9000];
+    dp_error err;
+    atomic_set set;
+    join(stem, sizeof stem, dir, "s");
+    join(manifest_path, sizeof manifest_path, dir, "s" ATOMIC_SET_MANIFEST);
+    test_write_file(manifest_path, "old set");
+    join(path, sizeof path, dir, "s_0000.txt");
+    test_write_file(path, "old");
+    assert_int_equal(atomic_set_open(&set, stem, &err), 0);
+    const char *files[] = {"_0000.txt", "_0001.txt", ATOMIC_SET_MANIFEST, "_viewer.html"};
+    for (int i = 0; i < 4; i++) {
+        snprintf(path, sizeof path, "%s%s", set.stem, files[i]);
+        test_write_file(path, "new");
+    }
+    moves = manifest_seen_early = manifest_last = 0;
+    assert_int_equal(atomic_set_commit(&set, check_manifest, &err), 0);
+    assert_int_equal(moves, 4);
+    assert_int_equal(manifest_seen_early, 0);
+    assert_int_equal(manifest_last, 4);
+    assert_int_equal(file_size(manifest_path), 3); /* the new manifest */
+    test_rmtree(dir);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -311,6 +353,7 @@ int main(void)
         cmocka_unit_test(test_atomic_fopen_fclose_fabort),
         cmocka_unit_test(test_frames_csv),
         cmocka_unit_test(test_atomic_set_and_stale),
+        cmocka_unit_test(test_atomic_set_manifest_last),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -64,9 +64,13 @@ void atomic_cleanup_on_signal(void);
  * "<dir>/.<base>.set.tmp.<pid>"; commit renames that folder to "<dir>/.<base>.set.commit.<pid>" (the commit
  * point) and moves its files to <dir>. A process killed before the commit point leaves the old files as
  * they were; one killed while moving leaves the commit folder, which the next atomic_clean_stale of the
- * same stem completes. */
+ * same stem completes. The set's manifest "<base>" ATOMIC_SET_MANIFEST (the frame sidecar) is the reader's sign
+ * that the set is whole: its old copy is removed before the first file moves and the new one moves last,
+ * also when a later run completes the move, so whenever it exists every file of its set is in place. */
+#define ATOMIC_SET_MANIFEST "_frames.csv"
 typedef struct {
     char dir[4096], base[4096], stage[4200], stem[8400];
+    char manifest[4200];
 } atomic_set;
 int atomic_set_open(atomic_set *s, const char *final_stem, dp_error *err);
 int atomic_set_commit(atomic_set *s, void (*wrote)(const char *path), dp_error *err);

@@ -246,6 +246,7 @@ int atomic_set_open(atomic_set *s, const char *stem, dp_error *err)
     if (n1 < 0 || n2 < 0 || n3 < 0 || (size_t)n1 >= sizeof s->base || (size_t)n2 >= sizeof s->stage ||
         (size_t)n3 >= sizeof s->stem)
         return dp_fail_kind(err, DP_ERROR_OUTPUT, "%s: path too long", stem);
+    snprintf(s->manifest, sizeof s->manifest, "%s" ATOMIC_SET_MANIFEST, s->base);
     live_add(s->stage, 2);
     remove_flat_dir(s->stage); /* a folder of a previous process with this pid */
     if (mkdir(s->stage, 0777) != 0) {
@@ -291,6 +292,20 @@ static int move_all(const atomic_set *s, const char *from, void (*wrote)(const c
     closedir(d);
     if (!rc) qsort(names, n, sizeof *names, cmp_names);
     char src[8400], dst[8400];
+    size_t last = n; /* the manifest's index: moved last, its old copy removed first */
+    for (size_t i = 0; i < n; i++)
+        if (s->manifest[0] && !strcmp(names[i], s->manifest)) last = i;
+    if (!rc && last < n) {
+        snprintf(dst, sizeof dst, "%s/%s", s->dir, names[last]);
+        if (unlink(dst) != 0 && errno != ENOENT)
+            rc = dp_fail_kind(err, DP_ERROR_OUTPUT, "%s: cannot remove the old manifest: %s", dst, strerror(errno));
+        if (!rc && last != n - 1) { /* to the end of the list */
+            char *m = names[last];
+            memmove(&names[last], &names[last + 1], (n - 1 - last) * sizeof *names);
+            names[n - 1] = m;
+        }
+        sync_parent_dir(dst);
+    }
     for (size_t i = 0; !rc && i < n; i++) {
         snprintf(src, sizeof src, "%s/%s", from, names[i]);
         snprintf(dst, sizeof dst, "%s/%s", s->dir, names[i]);
@@ -367,9 +382,10 @@ int atomic_clean_stale(const char *stem, void (*note)(const char *msg))
         if (pid_alive(pid ? pid : commit_pid)) {
             snprintf(msg, sizeof msg, "%s belongs to the running process %ld: left alone", path, pid ? pid : commit_pid);
         } else if (commit_pid) {
-            atomic_set s;
+            atomic_set s = {0};
             dp_error err;
             snprintf(s.dir, sizeof s.dir, "%s", dir);
+            snprintf(s.manifest, sizeof s.manifest, "%.*s" ATOMIC_SET_MANIFEST, (int)bl, base);
             if (move_all(&s, path, NULL, &err))
                 snprintf(msg, sizeof msg, "%s: a killed run (pid %ld) was moving its files into place; completing "
                          "that failed: %s", path, commit_pid, err.msg);

@@ -140,7 +140,7 @@ static int write_frames(const film *f, const char *stem, const char *ext, image_
     }
     if (extras_close(&x, f, stem, wrote, err)) return -1;
     char csv[STAGED_PATH_MAX];
-    snprintf(csv, sizeof csv, "%s_frames.csv", stem);
+    snprintf(csv, sizeof csv, "%s" ATOMIC_SET_MANIFEST, stem); /* the set's manifest (io.h) */
     if (frames_csv_write(csv, tw->frame_count, tw->start, tw->width, err)) return -1;
     if (wrote) wrote(csv);
     return 0;
@@ -179,20 +179,24 @@ int render_write_outputs(const film *f, const char *path, const char *integrator
     const char *dot;
     if (split_output_path(path, stem, sizeof stem, &dot, err) || io_make_parent_dirs(path, err)) return -1;
     if (f->window.frame_count <= 0) return write_all(f, stem, dot, integrator, plan, skip, wrote, err);
-    static atomic_set set; /* large; one write at a time */
-    if (atomic_set_open(&set, stem, err)) return -1;
-    if (write_all(f, set.stem, dot, integrator, plan, skip, NULL, err)) {
-        atomic_set_abort(&set);
+    atomic_set *set = malloc(sizeof *set); /* large (paths) */
+    if (!set) return dp_fail_kind(err, DP_ERROR_MEMORY, "%s: out of memory", stem);
+    int rc = atomic_set_open(set, stem, err);
+    if (!rc && write_all(f, set->stem, dot, integrator, plan, skip, NULL, err)) {
+        atomic_set_abort(set);
         /* the message names the final path, not the staging folder's */
-        char *at = strstr(err->msg, set.stem);
+        char *at = strstr(err->msg, set->stem);
         if (at) {
             char rest[sizeof err->msg];
-            snprintf(rest, sizeof rest, "%s", at + strlen(set.stem));
+            snprintf(rest, sizeof rest, "%s", at + strlen(set->stem));
             snprintf(at, sizeof err->msg - (size_t)(at - err->msg), "%s%s", stem, rest);
         }
-        return -1;
+        rc = -1;
+    } else if (!rc) {
+        rc = atomic_set_commit(set, wrote, err);
     }
-    return atomic_set_commit(&set, wrote, err);
+    free(set);
+    return rc;
 }
 
 /* The folder of a file path ("." for a bare name). */
