@@ -9,7 +9,9 @@
 #   uniform_pt  uniform-time path tracer (Jarabo et al. 2014 as the DARTS supplement B.4 corrects it)
 #   pt          plain path tracer
 #   pp          baseline progressive photon points
-#   darts_pt    DARTS path tracer (DA distance sampling + elliptical light connections)
+#   darts_pt    DARTS path tracer (DA distance sampling + elliptical light connections), as the paper's files key it
+#   darts_pt_eda  DARTS path tracer with elliptical light connections and EDA directions, DA off (not in the
+#               default set: METHODS="... darts_pt_eda"; its EDA tables are cached in tables/)
 #   darts_pp    DARTS photon points (DA + elliptical control vertices)
 # Photon beams are not a method of dartspp (refused with a message). The scene's own integrator keys (photon
 # counts, radii, bounces, gate) are kept; only the method's keys are set. Images, logs and error-against-time
@@ -33,6 +35,7 @@ methods="uniform_pt|$pt $off --set time_sampling=uniform
 pt|$pt $off
 pp|$pp $off
 darts_pt|$pt $on
+darts_pt_eda|$pt --set enable_guiding=false --set enable_elliptical=true --set eda=true
 darts_pp|$pp $on"
 only=${METHODS:-uniform_pt pt pp darts_pt darts_pp}
 s=1
@@ -73,6 +76,7 @@ paper() {
     pt) echo "≥ 10 at equal spp (paper §6.3, Fig. 11: at least an order of magnitude)" ;;
     pp) echo "> 1 in most scenes (paper §6.1)" ;;
     darts_pt) echo "1" ;;
+    darts_pt_eda) echo "(not in the paper: its PT results use no EDA)" ;;
     darts_pp) echo "< 1 (paper §6.1: DARTS PP further increased the gap)" ;;
     esac
 }

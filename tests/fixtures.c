@@ -243,3 +243,33 @@ void noise_image(image_rgb *img, int w, int h)
         img->rgb[i] = (float)(s >> 8) / 16777216.0f;
     }
 }
+
+long exr_passes(const char *path)
+{
+    int v = -1;
+    dp_error err;
+    if (exr_read_int_attribute(path, "dartspp.passes", &v, &err)) fail_msg("%s", err.msg);
+    return v;
+}
+
+long state_passes(const char *path)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f) return -1;
+    char line[256];
+    long passes = -1;
+    while (fgets(line, sizeof line, f) && passes < 0)
+        if (sscanf(line, "passes %ld", &passes) != 1) passes = -1;
+    fclose(f);
+    return passes;
+}
+
+void write_cbox_fog(const char *path, int res)
+{
+    char *text = read_all(CBOX_FOG "/transient.json", NULL), size[64];
+    snprintf(size, sizeof size, "[%d, %d]", res, res);
+    char *resized = replace1(text, "[512, 512]", size);
+    write_bytes(path, resized, strlen(resized));
+    free(text);
+    free(resized);
+}

@@ -26,6 +26,15 @@ char *replace1(const char *s, const char *from, const char *to);
 void rm_rf(const char *dir);
 char *tmpdir_or_fail(void);
 
+/* ---- what a render wrote ---- */
+
+/* The pass count in an EXR's dartspp.passes header (the test fails when it cannot be read). */
+long exr_passes(const char *path);
+/* The pass count in a checkpoint state's header (<stem>.state), or -1 when there is none (yet). */
+long state_passes(const char *path);
+/* Our fog Cornell box (scenes/cbox-fog/transient.json) at res × res pixels, written to path. */
+void write_cbox_fog(const char *path, int res);
+
 /* ---- the per-test fixture: scenes, buffers and one temp folder ---- */
 
 /* Per-test resources, released by the teardown even when an assertion fails part-way (no leak reports

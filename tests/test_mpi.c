@@ -2,7 +2,7 @@
  * pass count (photon points with and without DARTS, the path tracer, gate and frames) within the bound the
  * accumulation allows, --time with 2 ranks, Ctrl-C on mpirun, and a rank that cannot read its scene.
  * Both binaries are the release build (the same objects, so the same arithmetic). */
-#include "test_util.h"
+#include "fixtures.h"
 
 #include <sys/time.h>
 
@@ -21,18 +21,9 @@ static int setup(void **state)
     dir = test_tmpdir();
     if (!dir) return -1;
     /* our fog Cornell box at 40×40 pixels */
-    FILE *in = fopen(CBOX_FOG "/transient.json", "rb");
-    if (!in) return -1;
-    static char text[1 << 16];
-    size_t n = fread(text, 1, sizeof text - 1, in);
-    fclose(in);
-    text[n] = 0;
-    char *r = strstr(text, "[512, 512]");
-    if (!r) return -1;
-    memcpy(r, "[40,   40]", 10);
     char path[1024];
     snprintf(path, sizeof path, "%s/box.json", dir);
-    test_write_file(path, text);
+    write_cbox_fog(path, 40);
     return 0;
 }
 
@@ -51,14 +42,6 @@ static double now(void)
     struct timeval tv;
     gettimeofday(&tv, NULL);
     return tv.tv_sec + 1e-6 * tv.tv_usec;
-}
-
-static long passes_in(const char *path)
-{
-    int v = -1;
-    dp_error err;
-    if (exr_read_int_attribute(path, "dartspp.passes", &v, &err)) fail_msg("%s", err.msg);
-    return v;
 }
 
 /* Largest |a − b| / (|b| + tiny) over two images of the same size. */
@@ -96,8 +79,8 @@ static void one_vs_three(const char *name, const char *sets, int frames)
     snprintf(cmd, sizeof cmd, MPIRUN " -np 3 " MPI_BIN " render %s/box.json --threads 1 --spp %ld --seed 9 %s --quiet --output %s",
              dir, K, sets, b);
     if (test_run(cmd, out, sizeof out) != 0) fail_msg("%s: %s", cmd, out);
-    assert_int_equal(passes_in(a), K);
-    assert_int_equal(passes_in(b), K);
+    assert_int_equal(exr_passes(a), K);
+    assert_int_equal(exr_passes(b), K);
     double gate = max_rel_diff(b, a);
     print_message("  %-26s gate image: largest relative difference %.3g (bound %.3g)\n", name, gate, 2 * 0x1p-24);
     assert_true(gate <= 2 * 0x1p-24);
@@ -147,7 +130,7 @@ static void test_time_budget_two_ranks(void **state)
     assert_int_equal(sscanf(r, "rendered %ld passes in %lf s", &reported, &secs), 2);
     print_message("  2 ranks, --time 3: %ld passes in %.2f s of rendering, %.2f s in all\n", reported, secs, wall);
     assert_true(reported >= 2 && reported % 2 == 0);
-    assert_int_equal(passes_in(img), reported);
+    assert_int_equal(exr_passes(img), reported);
     double per_round = secs / (reported / 2);
     assert_true(secs <= 3.0 + per_round + 0.5);
     assert_true(secs >= 3.0 - 1.5 * per_round);
@@ -181,7 +164,7 @@ static void test_interrupt_writes_completed_passes(void **state)
     assert_int_equal(sscanf(r, "rendered %ld passes", &reported), 1);
     print_message("  interrupted after 4 s: %ld passes reported, %.1f s in all\n", reported, wall);
     assert_true(reported >= 2);
-    assert_int_equal(passes_in(img), reported);
+    assert_int_equal(exr_passes(img), reported);
     assert_true(wall < 20.0);
     assert_non_null(strstr(out, "exit="));
 }

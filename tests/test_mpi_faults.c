@@ -8,6 +8,7 @@
  * so. Rank 0 exits with status 4 in both (each rank runs in a shell that prints its status: mpirun reports
  * the killed rank's). The release binaries. */
 #include "child_process.h"
+#include "fixtures.h"
 
 #include <dirent.h>
 #include <signal.h>
@@ -35,14 +36,9 @@ static int setup(void **state)
     (void)state;
     dir = test_tmpdir();
     if (!dir) return -1;
-    char *text = read_text(CBOX_FOG "/transient.json");
-    char *r = strstr(text, "[512, 512]");
-    if (!r) return -1;
-    memcpy(r, "[40,   40]", 10);
     char path[1024];
     snprintf(path, sizeof path, "%s/box.json", dir);
-    test_write_file(path, text);
-    free(text);
+    write_cbox_fog(path, 40);
     return 0;
 }
 
@@ -52,27 +48,6 @@ static int teardown(void **state)
     test_rmtree(dir);
     dir = NULL;
     return 0;
-}
-
-static long exr_passes(const char *path)
-{
-    int v = -1;
-    dp_error err;
-    if (exr_read_int_attribute(path, "dartspp.passes", &v, &err)) fail_msg("%s", err.msg);
-    return v;
-}
-
-/* The pass count in a checkpoint state's header, or -1. */
-static long state_passes(const char *path)
-{
-    FILE *f = fopen(path, "rb");
-    if (!f) return -1;
-    char line[256];
-    long passes = -1;
-    while (fgets(line, sizeof line, f) && passes < 0)
-        if (sscanf(line, "passes %ld", &passes) != 1) passes = -1;
-    fclose(f);
-    return passes;
 }
 
 /* Whether process pid has `var` (e.g. "OMPI_COMM_WORLD_RANK=1") in its environment. */

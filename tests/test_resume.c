@@ -6,6 +6,7 @@
  * binary on the demo scene at 16x16. The reference is the uninterrupted render of the same command line:
  * what is tested is that resuming changes nothing, so no expected value comes from an earlier run. */
 #include "child_process.h"
+#include "fixtures.h"
 
 #include <fcntl.h>
 #include <signal.h>
@@ -61,19 +62,6 @@ static void assert_lit(const char *path)
     for (size_t i = 0; i < (size_t)img.width * img.height * 3; i++) sum += img.rgb[i];
     image_free(&img);
     if (!(sum > 0)) fail_msg("%s is black: the comparison would prove nothing", path);
-}
-
-/* The pass count in a checkpoint state's header, or -1. */
-static long state_passes(const char *path)
-{
-    FILE *f = fopen(path, "rb");
-    if (!f) return -1;
-    char line[256];
-    long passes = -1;
-    while (fgets(line, sizeof line, f) && passes < 0)
-        if (sscanf(line, "passes %ld", &passes) != 1) passes = -1;
-    fclose(f);
-    return passes;
 }
 
 static int run(const char *cmd, char *out, size_t n)
