@@ -273,3 +273,34 @@ void write_cbox_fog(const char *path, int res)
     free(text);
     free(resized);
 }
+
+static int cmp_cell_exp(const void *a, const void *b)
+{
+    double x = ((const chi_cell *)a)->exp, y = ((const chi_cell *)b)->exp;
+    return (x > y) - (x < y);
+}
+
+double chi2_pooled(chi_cell *cells, int n, double *chi2_out, int *dof_out, long *impossible)
+{
+    qsort(cells, (size_t)n, sizeof cells[0], cmp_cell_exp);
+    double chi2 = 0.0, po = 0.0, pe = 0.0;
+    int dof = 0;
+    if (impossible) *impossible = 0;
+    for (int c = 0; c < n; c++) {
+        if (impossible && cells[c].exp == 0.0) {
+            *impossible += (long)cells[c].obs;
+            continue;
+        }
+        if (cells[c].exp < 5.0 || (pe > 0.0 && pe < 5.0)) {
+            po += cells[c].obs, pe += cells[c].exp;
+            continue;
+        }
+        chi2 += (cells[c].obs - cells[c].exp) * (cells[c].obs - cells[c].exp) / cells[c].exp;
+        dof++;
+    }
+    if (pe > 0.0) chi2 += (po - pe) * (po - pe) / pe, dof++;
+    dof -= 1;
+    *chi2_out = chi2;
+    *dof_out = dof;
+    return dof > 0 ? test_gamma_q(0.5 * dof, 0.5 * chi2) : 0.0;
+}

@@ -26,6 +26,19 @@ char *replace1(const char *s, const char *from, const char *to);
 void rm_rf(const char *dir);
 char *tmpdir_or_fail(void);
 
+/* ---- χ² goodness of fit ---- */
+
+/* Observed and expected counts of one histogram cell. */
+typedef struct {
+    double obs, exp;
+} chi_cell;
+
+/* Pearson's χ² over the cells (sorted in place by expected count), cells expected below 5 pooled into one;
+ * the p-value (0 when no degree of freedom is left), with χ² and the degrees of freedom in *chi2_out and
+ * *dof_out. With `impossible` given, cells expected 0 are left out and their observations counted there (a
+ * sampler producing what its density says cannot happen). */
+double chi2_pooled(chi_cell *cells, int n, double *chi2_out, int *dof_out, long *impossible);
+
 /* ---- what a render wrote ---- */
 
 /* The pass count in an EXR's dartspp.passes header (the test fails when it cannot be read). */

@@ -58,7 +58,7 @@
  *     diffuse lobe weighted by the smooth 1 − F(θi) while the rough coat reflects more than F(θi). Now
  *     0.99911 ± 0.00055 with the coat_scale of rough_plastic.c.
  */
-#include "test_util.h"
+#include "fixtures.h"
 
 #include <complex.h>
 
@@ -297,16 +297,6 @@ static double cell_integral(const pdf_ctx *c, double m0, double m1, double p0, d
            cell_integral(c, m0, mm, pm, p1, depth + 1) + cell_integral(c, mm, m1, pm, p1, depth + 1);
 }
 
-typedef struct {
-    double obs, exp;
-} chi_cell;
-
-static int cmp_cell(const void *a, const void *b)
-{
-    double x = ((const chi_cell *)a)->exp, y = ((const chi_cell *)b)->exp;
-    return (x > y) - (x < y);
-}
-
 /* the seed of the χ² samples: $DARTSPP_BSDF_SEED when set (to rerun with other samples), else fixed */
 static uint64_t test_seed(void)
 {
@@ -383,27 +373,9 @@ static int chi2_case(const bcase *bc, int case_index, int wi_index, int n_tests)
     cells[NMU * NPHI].exp = fmax(0.0, (1.0 - total) * N);
 
     int ncell = NMU * NPHI + 1, dof = 0;
-    qsort(cells, (size_t)ncell, sizeof cells[0], cmp_cell);
-    double chi2 = 0.0, pool_o = 0.0, pool_e = 0.0;
-    long impossible = 0;
-    for (int c = 0; c < ncell; c++) {
-        if (cells[c].exp == 0.0) {
-            impossible += (long)cells[c].obs;
-            continue;
-        }
-        if (cells[c].exp < 5.0 || (pool_e > 0.0 && pool_e < 5.0)) {
-            pool_o += cells[c].obs;
-            pool_e += cells[c].exp;
-            continue;
-        }
-        chi2 += (cells[c].obs - cells[c].exp) * (cells[c].obs - cells[c].exp) / cells[c].exp;
-        dof++;
-    }
-    if (pool_e > 0.0) {
-        chi2 += (pool_o - pool_e) * (pool_o - pool_e) / pool_e;
-        dof++;
-    }
-    dof -= 1;
+    double chi2;
+    long impossible;
+    chi2_pooled(cells, ncell, &chi2, &dof, &impossible);
     double p = dof > 0 ? chi2_pvalue(chi2, dof) : 1.0;
     double alpha = 0.01 / n_tests;
 

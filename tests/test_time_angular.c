@@ -12,7 +12,7 @@
  *  - Jarabo's pdf r/(4π d₂) in place of ours: a, b, d, e on r < |l| (c passes: the directions are right);
  *  - no φ rotation (φ = 0): a, d on all four cases (b, c, e pass: the pdf and the times are right);
  *  - θ measured from −l: c on three cases, a, b on r = |l|, e on all (d passes: sampler and pdf agree). */
-#include "test_util.h"
+#include "fixtures.h"
 
 #include "dartspp/darts.h"
 
@@ -61,7 +61,6 @@ static uint64_t test_seed(void)
     return e && e[0] ? strtoull(e, NULL, 0) : 0x7a3du;
 }
 
-static double chi2_pvalue(double chi2, int dof) { return test_gamma_q(0.5 * dof, 0.5 * chi2); }
 
 /* ---------------------------------------------------------------- the test's own frame and quadrature */
 
@@ -142,37 +141,6 @@ static double rel_dev(double a, double b) { return fabs(a - b) / fmax(fmax(fabs(
 
 /* ---------------------------------------------------------------- χ² with pooling of small cells */
 
-typedef struct {
-    double obs, exp;
-} chi_cell;
-
-static int cmp_cell(const void *a, const void *b)
-{
-    double x = ((const chi_cell *)a)->exp, y = ((const chi_cell *)b)->exp;
-    return (x > y) - (x < y);
-}
-
-/* cells with an expected count below 5 are pooled; returns the p-value, *dof_out the degrees of freedom */
-static double chi2_cells(chi_cell *cells, int n, double *chi2_out, int *dof_out)
-{
-    qsort(cells, (size_t)n, sizeof cells[0], cmp_cell);
-    double chi2 = 0.0, po = 0.0, pe = 0.0;
-    int dof = 0;
-    for (int c = 0; c < n; c++) {
-        if (cells[c].exp < 5.0 || (pe > 0.0 && pe < 5.0)) {
-            po += cells[c].obs, pe += cells[c].exp;
-            continue;
-        }
-        chi2 += (cells[c].obs - cells[c].exp) * (cells[c].obs - cells[c].exp) / cells[c].exp;
-        dof++;
-    }
-    if (pe > 0.0) chi2 += (po - pe) * (po - pe) / pe, dof++;
-    dof -= 1;
-    *chi2_out = chi2;
-    *dof_out = dof;
-    return dof > 0 ? chi2_pvalue(chi2, dof) : 0.0;
-}
-
 /* ---------------------------------------------------------------- a. χ² of the directions */
 
 static int chi2_directions(const ta_case *c, int ci)
@@ -210,7 +178,7 @@ static int chi2_directions(const ta_case *c, int ci)
     cells[NMU * NPHI] = (chi_cell){(double)fails, fmax(0.0, 1.0 - total) * N_CHI2}; /* failed samples */
     double chi2;
     int dof;
-    double p = chi2_cells(cells, NMU * NPHI + 1, &chi2, &dof);
+    double p = chi2_pooled(cells, NMU * NPHI + 1, &chi2, &dof, NULL);
     int fail = p < ALPHA || bad > 0;
     print_message("  a. %-26s p %-9.3g (chi2 %.1f, dof %d)  sum of cells %.6f  failed draws %ld  "
                   "max rel dev pdf %.1e  bad %ld%s\n",
@@ -266,7 +234,7 @@ static int chi2_times(const ta_case *c, int ci)
     }
     double chi2;
     int dof;
-    double p = chi2_cells(cells, NT, &chi2, &dof);
+    double p = chi2_pooled(cells, NT, &chi2, &dof, NULL);
     int fail = p < ALPHA || outside > 0 || fails > 0;
     print_message("  c. %-26s t in [%.4g, %.4g]: p %-9.3g (chi2 %.1f, dof %d)  outside %ld  failed draws %ld%s\n",
                   c->name, t_min, t_max, p, chi2, dof, outside, fails, fail ? "  FAILED" : "");
