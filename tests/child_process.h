@@ -7,6 +7,15 @@
 
 #include <sys/types.h>
 
+/* The release programs the MPI tests run (test_mpi.c, test_mpi_faults.c): the same objects in both, so the
+ * same arithmetic; mpirun as root in a container: no ssh for one machine, more ranks than cores allowed. */
+#define MPI_BIN "build/dartspp-mpi"
+#define ONE_BIN "build/dartspp"
+#define MPIRUN_PATH "/usr/bin/mpirun"
+#define MPIRUN_ARGS "--allow-run-as-root", "--oversubscribe", "--mca", "plm_rsh_agent", "false", "--mca", \
+                    "btl_vader_single_copy_mechanism", "none"
+#define MPIRUN MPIRUN_PATH " --allow-run-as-root --oversubscribe --mca plm_rsh_agent false --mca btl_vader_single_copy_mechanism none"
+
 /* A command started in the background with its stdout and stderr in one file. */
 typedef struct {
     pid_t pid;

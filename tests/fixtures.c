@@ -304,3 +304,12 @@ double chi2_pooled(chi_cell *cells, int n, double *chi2_out, int *dof_out, long 
     *dof_out = dof;
     return dof > 0 ? test_gamma_q(0.5 * dof, 0.5 * chi2) : 0.0;
 }
+
+char *tmpdir_with_cbox_fog(int res)
+{
+    char *dir = test_tmpdir(), path[1024];
+    if (!dir) return NULL;
+    snprintf(path, sizeof path, "%s/box.json", dir);
+    write_cbox_fog(path, res);
+    return dir;
+}

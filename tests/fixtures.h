@@ -47,6 +47,8 @@ long exr_passes(const char *path);
 long state_passes(const char *path);
 /* Our fog Cornell box (scenes/cbox-fog/transient.json) at res × res pixels, written to path. */
 void write_cbox_fog(const char *path, int res);
+/* A fresh temp folder holding that box as box.json (the MPI tests' scene); NULL when none can be made. */
+char *tmpdir_with_cbox_fog(int res);
 
 /* ---- the per-test fixture: scenes, buffers and one temp folder ---- */
 

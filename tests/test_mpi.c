@@ -2,38 +2,28 @@
  * pass count (photon points with and without DARTS, the path tracer, gate and frames) within the bound the
  * accumulation allows, --time with 2 ranks, Ctrl-C on mpirun, and a rank that cannot read its scene.
  * Both binaries are the release build (the same objects, so the same arithmetic). */
+#include "child_process.h"
 #include "fixtures.h"
 
 #include <sys/time.h>
 
 #include "dartspp/io.h"
 
-#define MPI_BIN "build/dartspp-mpi"
-#define ONE_BIN "build/dartspp"
-/* as root in a container: no ssh needed for one machine, more ranks than cores allowed */
-#define MPIRUN "mpirun --allow-run-as-root --oversubscribe --mca plm_rsh_agent false --mca btl_vader_single_copy_mechanism none"
 
 static char *dir;
 
 static int setup(void **state)
 {
     (void)state;
-    dir = test_tmpdir();
-    if (!dir) return -1;
-    /* our fog Cornell box at 40×40 pixels */
-    char path[1024];
-    snprintf(path, sizeof path, "%s/box.json", dir);
-    write_cbox_fog(path, 40);
-    return 0;
+    dir = tmpdir_with_cbox_fog(40); /* our fog Cornell box at 40×40 pixels */
+    return dir ? 0 : -1;
 }
 
 static int teardown(void **state)
 {
     (void)state;
-    char cmd[1200];
-    snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir);
-    (void)!system(cmd);
-    free(dir);
+    test_rmtree(dir);
+    dir = NULL;
     return 0;
 }
 

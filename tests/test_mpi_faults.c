@@ -16,13 +16,6 @@
 
 #include "dartspp/io.h"
 
-#define MPI_BIN "build/dartspp-mpi"
-#define ONE_BIN "build/dartspp"
-#define MPIRUN_PATH "/usr/bin/mpirun"
-/* as root in a container: no ssh needed for one machine, more ranks than cores allowed */
-#define MPIRUN_ARGS "--allow-run-as-root", "--oversubscribe", "--mca", "plm_rsh_agent", "false", "--mca", \
-                    "btl_vader_single_copy_mechanism", "none"
-#define MPIRUN MPIRUN_PATH " --allow-run-as-root --oversubscribe --mca plm_rsh_agent false --mca btl_vader_single_copy_mechanism none"
 /* small photon counts: a pass takes a few tens of milliseconds */
 #define SETS "--threads 1 --seed 9 --set photon_count=20000 --set volume_photon_count=3000"
 
@@ -34,12 +27,8 @@ static char *dir;
 static int setup(void **state)
 {
     (void)state;
-    dir = test_tmpdir();
-    if (!dir) return -1;
-    char path[1024];
-    snprintf(path, sizeof path, "%s/box.json", dir);
-    write_cbox_fog(path, 40);
-    return 0;
+    dir = tmpdir_with_cbox_fog(40); /* our fog Cornell box at 40×40 pixels */
+    return dir ? 0 : -1;
 }
 
 static int teardown(void **state)
