@@ -16,7 +16,7 @@ mkdir -p refs
 cp "$shared/references/cbox-trans-gate16.15-dartspp-unbiased-40min.pfm" refs/cbox-trans-unbiased.pfm
 echo 0.00031 > refs/cbox-trans-unbiased.pfm.var
 bench/compare_methods.sh "$shared/scenes/cbox-trans/transient.json" "$secs" "$seeds" refs/cbox-trans-unbiased.pfm \
-    cbox-trans-methods
+    fig7-cbox-trans
 # name | scene | resolution | gate centre
 configs="dragon-4.125|dragon/scene-points-darts-short.json|240|4.125
 dragon-7.125|dragon/scene-points-darts-short.json|240|7.125
@@ -26,5 +26,5 @@ echo "$configs" | while IFS='|' read -r name file res centre; do
     set -- --set resolution="$res" --set transient_time_center="$centre"
     ref=refs/$name-$res.exr
     [ -f "$ref" ] || bench/reference.sh "$shared/scenes/$file" "$ref_secs" "$ref" "$@"
-    bench/compare_methods.sh "$shared/scenes/$file" "$secs" "$seeds" "$ref" "$name-methods" "$@"
+    bench/compare_methods.sh "$shared/scenes/$file" "$secs" "$seeds" "$ref" "fig7-$name" "$@"
 done

@@ -35,7 +35,7 @@ while IFS='|' read -r name scene args; do
   done
   if [ $same = 1 ]; then echo "$name: identical"; else echo "$name: DIFFER"; bad=1; fi
 done <<CASES
-demo-path-tracer|scenes/fogbox/fogbox.json|--set type=path_tracer
+demo-path-tracer|scenes/fogbox/fogbox.json|--set type=path_tracer --set enable_guiding=false --set enable_elliptical=false
 demo-baseline|scenes/fogbox/fogbox.json|$baseline
 demo-darts|scenes/fogbox/fogbox.json|
 demo-darts-eda|scenes/fogbox/fogbox.json|$eda
