@@ -1,5 +1,5 @@
 #!/bin/sh
-# A sweep of the DARTS paper's §6.3 (its Fig. 10: gate width, from delta-like to steady-like) on one scene:
+# A sweep of the DARTS paper (paper §6.3, its Fig. 10: gate width, from delta-like to steady-like) on one scene:
 # bench/sweep_gate.sh SCENE.json SECONDS SEEDS WIDTH... [-- render args...]
 # For each gate width (centred on the scene's gate centre) every method of bench/compare_methods.sh renders
 # for SECONDS, SEEDS seeds (>= 2), alternating; the table gives each method's variance at equal time from the
