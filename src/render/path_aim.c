@@ -202,7 +202,7 @@ void pt_aim_scatter_direction(pixel_ctx *c, path_state *ps)
     }
     const eda_table *et = pp->eda && pp->eda->table ? pp->eda->table[ps->medium] : NULL;
     if (et) { /* EDA toward the light with MIS against the phase function (docs/darts.md §8.2) */
-        ellipse_record vr; /* its own residual: the segment's record draws a fresh one (docs/darts.md §14) */
+        ellipse_record vr; /* its own residual; the segment's record draws another (docs/darts.md §14) */
         const darts_guide *g = c->aim.g;
         ellipse_record_init(&vr, g, &c->aim.bin, ps->o, ps->time, m->eta, g->residual, v3_avg(m->sigma_t),
                             rng_uniform(c->rng));
