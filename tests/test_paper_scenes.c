@@ -101,7 +101,7 @@ static void test_path_tracer_json_values(void **state)
     assert_int_equal(s->renderer.spp, 50);
     ASSERT_NEAR(s->renderer.timeout_seconds, 0.0, 0.0);
     /* emission 1000 is radiant intensity, in the gas */
-    ASSERT_VEC(s->lights[0].intensity, 1000, 1000, 1000, 1e-9);
+    ASSERT_VEC(s->lights[0].value, 1000, 1000, 1000, 1e-9);
     ASSERT_VEC(s->lights[0].pos, 2.779, 4.8, 2.4, 1e-12);
     assert_int_equal(s->lights[0].medium, 0);
     /* Cube.001 is the forward-BSDF boundary of the gas (int_medium); the walls have ext_medium gas */
@@ -166,7 +166,7 @@ static void test_transient_json_values(void **state)
     assert_int_equal(in->include_surfaces, 1);
     assert_int_equal(in->low_order_scattering, 1);
     ASSERT_NEAR(in->vacuum_eta, 1.0, 0.0);
-    ASSERT_VEC(s->lights[0].intensity, 1000, 1000, 1000, 1e-9);
+    ASSERT_VEC(s->lights[0].value, 1000, 1000, 1000, 1e-9);
     assert_int_equal(s->lights[0].medium, 0);
     assert_int_equal(s->cam.medium, 0);
     /* scatter.wo3 carries the gas: int_medium gas, no ext_medium -> vacuum outside */
@@ -187,7 +187,7 @@ static void test_scene_json_values(void **state)
     assert_int_equal(s->medium_count, 0);
     assert_int_equal(s->light_count, 1);
     double I = 200.0 / (4.0 * M_PI); /* "power": 200 -> intensity P / (4 pi) */
-    ASSERT_VEC(s->lights[0].intensity, I, I, I, 1e-12);
+    ASSERT_VEC(s->lights[0].value, I, I, I, 1e-12);
     ASSERT_VEC(s->lights[0].pos, 2.779, 4.8, 2.4, 1e-12);
     assert_int_equal(s->lights[0].medium, MEDIUM_VACUUM);
     assert_int_equal(s->cam.medium, MEDIUM_VACUUM);

@@ -134,7 +134,7 @@ static void test_frames_two_pulsed_emitters(void **state)
         load_scene(ts.path, NULL, 0, &s);
         assert_int_equal(s.integrator.window.frame_count, FR_FRAMES);
         assert_int_equal(s.light_count, 2);
-        assert_true(s.lights[1].pulse_start == 0.45 && s.lights[1].pulse_width == 0.3 && s.lights[0].pulse_start == 0);
+        assert_true(s.lights[1].pulse.start == 0.45 && s.lights[1].pulse.width == 0.3 && s.lights[0].pulse.start == 0);
         darts_guide g;
         scene_guide(&s, &g);
         if (m == DARTS) assert_true(g.active && g.control_vertices && g.frames == FR_FRAMES);

@@ -177,7 +177,7 @@ static const ss_expectation *ss_reference(const scene *s)
     static int cached[2];
     int unwarp = s->integrator.window.camera_unwarp;
     ss_expectation *e = &cache[unwarp];
-    ss_case a = {.cam = &s->cam, .light = s->lights[0].pos, .I = s->lights[0].intensity, .ss = s->media[0].sigma_s,
+    ss_case a = {.cam = &s->cam, .light = s->lights[0].pos, .I = s->lights[0].value, .ss = s->media[0].sigma_s,
                  .st = s->media[0].sigma_t, .g = 0.3, .eta = 1.0 / 0.8, .g0 = 3.0, .g1 = 4.0, .nodes = 8, .panels = 8,
                  .unwarp = unwarp};
     /* the scene as loaded is the one the quadrature assumes */

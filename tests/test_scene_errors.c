@@ -19,8 +19,8 @@ static void test_cli_bad_input(void **state)
     if (access(DARTSPP_BIN, X_OK) != 0)
         fail_msg("%s does not exist or is not executable: build it first (make build/san/dartspp)", DARTSPP_BIN);
     static const bad_case cases[] = {
-        {"unknown primitive type", "\"type\": \"quad\"", "\"type\": \"sphere\"", NULL,
-         {"primitives[0]", "sphere", "supported: mesh, quad, cube, point"}},
+        {"unknown primitive type", "\"type\": \"quad\"", "\"type\": \"cylinder\"", NULL,
+         {"primitives[0]", "cylinder", "supported: mesh, quad, disk, sphere, cube, point, spot"}},
         {"unknown BSDF type", "\"type\": \"lambert\"", "\"type\": \"oren_nayar\"", NULL,
          {"bsdfs[0]", "unsupported BSDF 'oren_nayar'", "supported: lambert"}},
         {"missing mesh file", "\"type\": \"quad\"", "\"type\": \"mesh\", \"file\": \"meshes/missing_floor.wo3\"", NULL,

@@ -1,11 +1,12 @@
 /* dartspp scene: the Tungsten JSON subset of the paper's scenes (docs/scene-format.md §2), `.wo3` and
- * `.obj` meshes, camera, point lights, BSDFs, homogeneous media, phase functions, the time window and
+ * `.obj` meshes, camera, emitters (include/dartspp/emitter.h), BSDFs, homogeneous media, phase functions, the time window and
  * the Embree 3 scene. A loaded scene is read-only: every later stage takes `const scene *`. */
 #ifndef DARTSPP_SCENE_H
 #define DARTSPP_SCENE_H
 
 #include "dartspp/bsdf.h"
 #include "dartspp/core.h"
+#include "dartspp/emitter.h"
 
 /* ---- materials: include/dartspp/bsdf.h; albedo textures ---- */
 typedef struct {
@@ -65,6 +66,7 @@ typedef struct {
     int overrides_media;          /* 0: a crossing keeps the current medium */
     int int_medium, ext_medium;   /* medium index or MEDIUM_VACUUM, used when overrides_media */
     uint32_t first_tri, tri_count;
+    int emitter;                  /* index into scene.lights of the area light it is, or -1 */
 } surface;
 
 /* medium on the far side of `s` for a ray leaving the hit point in direction d (Tungsten selectMedium) */
@@ -72,23 +74,6 @@ static inline int surface_next_medium(const surface *s, int current, vec3 d, vec
 {
     if (!s->overrides_media) return current;
     return v3_dot(d, ng) < 0.0 ? s->int_medium : s->ext_medium;
-}
-
-typedef struct {
-    char name[64];
-    vec3 pos;
-    vec3 intensity;   /* radiant intensity (W/sr); `power` P is stored as P/(4π) */
-    int medium;       /* ext_medium, else MEDIUM_VACUUM */
-    double pulse_start; /* time of emission (pulse_start, default 0) */
-    double pulse_width; /* a box pulse over [start, start + width) of unit total weight; 0: a delta (default) */
-} point_light;
-
-/* The emission time of one light path or light connection: the pulse start, plus a uniform draw across a
- * box pulse (docs/time.md §5: sampling τ_l ~ U[start, start + width) is unbiased for the box). A
- * delta pulse draws nothing, so its random numbers are those of a scene without pulses. */
-static inline double point_light_emission_time(const point_light *L, dp_rng *rng)
-{
-    return L->pulse_width > 0.0 ? L->pulse_start + L->pulse_width * rng_uniform(rng) : L->pulse_start;
 }
 
 typedef struct {
@@ -138,6 +123,7 @@ typedef struct {
     time_window window;
     double vacuum_speed;            /* vaccum_speed_of_light (the format's spelling) */
     double vacuum_eta;              /* 1 / vacuum_speed */
+    int light_selection_uniform;    /* light_selection: 0 "power" (by flux), 1 "uniform" */
     int enable_rr;                  /* path tracer: Russian roulette on throughput */
     int time_sampling_uniform;      /* path tracer: time_sampling 0 "none", 1 "uniform" (Jarabo et al. 2014) */
     double time_angular_share;      /* path tracer, uniform time: share of time-angular directions */
@@ -244,7 +230,7 @@ struct scene {
     int medium_count;
     surface *surfaces;
     int surface_count;
-    point_light *lights;
+    emitter *lights;         /* include/dartspp/emitter.h */
     int light_count;
     camera cam;
     integrator_settings integrator;

@@ -81,29 +81,45 @@ static void gather_surface(pixel_ctx *c, const surface_site *ss, unsigned lobes,
     }
 }
 
-/* Direct light at a surface the camera path continues through on a non-delta lobe: no photon carries the
- * unscattered light of a point light, so next-event estimation adds it (light → surface → camera), with the
- * continued lobes evaluated. Delta lobes cannot see a point light. */
+/* Direct light at a surface the camera path continues through on a non-delta lobe: the photons stored here
+ * serve the gathered lobes only, so next-event estimation adds it (light → surface → camera) to every light
+ * that allows it, with the continued lobes evaluated. Delta lobes see area lights by hits (hit_emission). */
 static void direct_light(pixel_ctx *c, const surface_site *ss, unsigned lobes, int med, vec3 thr, double t_cam,
                          int b_cam)
 {
     const scene *s = c->s;
     if (!bounces_count(&c->g->bounces, b_cam + 1)) return;
     for (int i = 0; i < s->light_count; i++) {
-        const point_light *L = &s->lights[i];
-        vec3 to = v3_sub(L->pos, ss->p);
-        double d2 = v3_dot(to, to);
-        if (!(d2 > 0.0)) continue;
-        vec3 w = v3_scale(to, 1.0 / sqrt(d2));
-        vec3 f = surface_eval_cos(ss, w, lobes);
+        const emitter *L = &s->lights[i];
+        if (!emitter_connectable(L)) continue;
+        double u[2] = {0.0, 0.0};
+        if (emitter_direct_draws(L)) u[0] = rng_uniform(c->rng), u[1] = rng_uniform(c->rng);
+        emitter_direct ed;
+        if (!emitter_sample_direct(s, L, ss->p, u, &ed)) continue;
+        vec3 f = surface_eval_cos(ss, ed.wi, lobes);
         if (v3_max(f) <= 0.0) continue;
         vec3 tr;
-        double t = t_cam + point_light_emission_time(L, c->rng);
+        double t = t_cam + emitter_pulse_sample(&L->pulse, c->rng);
         c->pix->rays += 1;
-        if (!scene_transmittance(s, surface_spawn(s, ss, w), surface_medium_toward(ss, med, w), L->pos, &tr, &t))
+        vec3 target = v3_is_zero(ed.n) ? ed.y
+                      : scene_offset_ray_origin(s, ed.y, v3_dot(ed.wi, ed.n) < 0.0 ? ed.n : v3_neg(ed.n));
+        if (!scene_transmittance(s, surface_spawn(s, ss, ed.wi), surface_medium_toward(ss, med, ed.wi), target, &tr, &t))
             continue;
-        film_pixel_splat(c->pix, t, v3_scale(v3_mul(v3_mul(v3_mul(thr, tr), L->intensity), f), 1.0 / d2), -1);
+        film_pixel_splat(c->pix, t, v3_scale(v3_mul(v3_mul(v3_mul(thr, tr), ed.value), f), 1.0 / ed.denom), -1);
     }
+}
+
+/* A camera walk hitting an area light from the camera or through delta lobes only: its emission (light
+ * that reached the walk otherwise was gathered from photons or connected by direct_light). */
+static void hit_emission(pixel_ctx *c, const hit_record *h, vec3 d, vec3 thr, double t_cam, int b_cam)
+{
+    const scene *s = c->s;
+    int i = s->surfaces[h->surface].emitter;
+    if (i < 0 || !bounces_count(&c->g->bounces, b_cam)) return;
+    const emitter *L = &s->lights[i];
+    vec3 le = emitter_hit_radiance(L, d, h->ng);
+    if (v3_is_zero(le)) return;
+    film_pixel_splat(c->pix, t_cam + emitter_pulse_sample(&L->pulse, c->rng), v3_mul(thr, le), -1);
 }
 
 /* The camera walk: volume gathers along every medium segment; at a surface, the gather over the lobes the
@@ -112,7 +128,7 @@ static void trace_sensor_path(pixel_ctx *c, vec3 d)
 {
     const scene *s = c->s;
     vec3 o = s->cam.pos, thr = v3s(1.0);
-    int med = s->cam.medium, b_cam = 1;
+    int med = s->cam.medium, b_cam = 1, after_delta = 1;
     double t_cam = 0.0;
     primary_line *line = c->line; /* set while the walk is still on the primary line */
     if (line) {
@@ -137,6 +153,7 @@ static void trace_sensor_path(pixel_ctx *c, vec3 d)
         if (!(c->g->camera_unwarp && b_cam == 1)) t_cam += medium_eta(s, med) * len;
         const surface *sf = &s->surfaces[h.surface];
         const bsdf *bs = &s->bsdfs[sf->bsdf];
+        if (after_delta) hit_emission(c, &h, d, thr, t_cam, b_cam);
         if (bsdf_is_passthrough(bs)) {
             vec3 n_out = v3_dot(d, h.ng) < 0.0 ? v3_neg(h.ng) : h.ng; /* the far side */
             med = surface_next_medium(sf, med, d, h.ng);
@@ -155,6 +172,7 @@ static void trace_sensor_path(pixel_ctx *c, vec3 d)
         if (!surface_sample_bsdf(&ss, u, split.cont, 0, &smp)) return;
         thr = v3_mul(thr, smp.weight);
         d = smp.w;
+        after_delta = (smp.lobe & BSDF_LOBE_SPECULAR) != 0;
         med = surface_medium_toward(&ss, med, d);
         o = surface_spawn(s, &ss, d);
         b_cam++;

@@ -1,4 +1,4 @@
-/* The photon pass (baseline photon points): light paths from the point lights, photons stored at medium
+/* The photon pass (baseline photon points): light paths from the emitters (include/dartspp/emitter.h), photons stored at medium
  * scattering vertices and at surface hits whose BSDF has gathered lobes (surface_photon_split). Paths are traced in batches in parallel into per-thread buffers
  * and merged in path order, so budgets are cut by path index and the result is thread-count independent. */
 #include <omp.h>
@@ -248,19 +248,34 @@ void trace_light_path(const scene *s, const photon_pass_input *in, int volume_op
                       path_count *pc)
 {
     const darts_guide *g = &in->guide;
-    int li = (int)(rng_uniform(rng) * s->light_count);
-    if (li >= s->light_count) li = s->light_count - 1;
-    const point_light *L = &s->lights[li];
-    double tau0 = point_light_emission_time(L, rng); /* the path's time starts at its emission */
-    light_path lp = {.s = s, .in = in, .g = g, .tb = tb, .pc = pc, .rng = rng, .o = L->pos, .med = L->medium,
+    double sel_pdf = 1.0;
+    int li = emitter_select(s, rng_uniform(rng), !s->integrator.light_selection_uniform, &sel_pdf);
+    const emitter *L = &s->lights[li];
+    double tau0 = emitter_pulse_sample(&L->pulse, rng); /* the path's time starts at its emission */
+    /* the start: a light with a position of its own draws it first, so that the bin is drawn from it; a
+     * point draws only its direction, after the bin (the draws of a scene of point lights are unchanged) */
+    emitter_ray er;
+    double u[4] = {0.0, 0.0, 0.0, 0.0};
+    int fixed = L->type == EMITTER_POINT || L->type == EMITTER_SPOT;
+    if (!fixed) {
+        for (int k = 0; k < 4; k++) u[k] = rng_uniform(rng);
+        emitter_sample_ray(s, L, u, &er);
+    }
+    vec3 start = fixed ? L->pos : er.p;
+    light_path lp = {.s = s, .in = in, .g = g, .tb = tb, .pc = pc, .rng = rng, .o = start, .med = L->medium,
                      .volume_open = volume_open, .time = tau0,
                      .bin = {.start = -INFINITY, .end = INFINITY, .pdf = 1.0, .frame = -1}};
-    if (g->active && !darts_sample_bin(g, L->pos, tau0, rng_uniform(rng), &lp.bin)) return;
+    if (g->active && !darts_sample_bin(g, start, tau0, rng_uniform(rng), &lp.bin)) return;
     lp.reach = lp.bin; /* the early exit keeps every path whose surface photons could still count */
     lp.reach.end += in->surface_slack;
-    double u1 = rng_uniform(rng), u2 = rng_uniform(rng);
-    lp.d = sample_uniform_sphere(u1, u2);
-    lp.beta = v3_scale(L->intensity, 4.0 * M_PI * s->light_count);
+    if (fixed) {
+        int n = L->type == EMITTER_POINT ? 2 : 3;
+        for (int k = 0; k < n; k++) u[k] = rng_uniform(rng);
+        emitter_sample_ray(s, L, u, &er);
+    }
+    lp.d = er.d;
+    if (!v3_is_zero(er.n)) lp.o = scene_offset_ray_origin(s, er.p, er.n); /* off an area light's surface */
+    lp.beta = v3_scale(er.flux, 1.0 / sel_pdf);
     new_vertex(&lp);
     while (lp.bounce + 1 < in->max_bounces && lp.time < in->t_end && !v3_is_zero(lp.beta)) {
         if (g->active && g->early_exit && !darts_can_reach(g, &lp.reach, lp.o, lp.time)) {

@@ -51,14 +51,10 @@ int pt_pass_aim_init(pt_pass *pp, dp_error *err)
         pt_pass_aim_free(pp);
         return dp_fail_kind(err, DP_ERROR_MEMORY, "%s: out of memory for the path tracer's light guides", s->path);
     }
-    double sum = 0.0;
-    for (int i = 0; i < n; i++) {
-        guide_for_light(p, s->lights[i].pos, &pp->guide[i]);
-        sum += dp_fmax(0.0, v3_avg(s->lights[i].intensity));
-    }
     double acc = 0.0;
     for (int i = 0; i < n; i++) {
-        acc += sum > 0.0 ? dp_fmax(0.0, v3_avg(s->lights[i].intensity)) / sum : 1.0 / n;
+        guide_for_light(p, s->lights[i].pos, &pp->guide[i]);
+        acc += emitter_selection_pdf(s, i, !s->integrator.light_selection_uniform);
         pp->light_cdf[i] = acc;
     }
     pp->light_cdf[n - 1] = 1.0;
@@ -84,13 +80,23 @@ int pt_aim_start(pixel_ctx *c, path_state *ps)
     a->light = i;
     a->sel_pdf = pp->light_cdf[i] - (i > 0 ? pp->light_cdf[i - 1] : 0.0);
     if (!(a->sel_pdf > 0.0)) return 0;
-    const point_light *L = &s->lights[i];
-    a->g = &pp->guide[i];
+    const emitter *L = &s->lights[i];
     a->pre_r = -1.0;
-    ps->time = point_light_emission_time(L, c->rng);
-    /* the earliest arrival: a straight line camera → light, or (unwarped, the camera segment free) none */
-    vec3 from = pp->p->window.camera_unwarp ? L->pos : s->cam.pos;
-    if (!darts_sample_bin(a->g, from, ps->time, rng_uniform(c->rng), &a->bin)) return 0;
+    ps->time = emitter_pulse_sample(&L->pulse, c->rng);
+    /* the light's point for this path: the target of its samplers and of its connections */
+    double up[2] = {0.0, 0.0};
+    if (emitter_direct_draws(L)) up[0] = rng_uniform(c->rng), up[1] = rng_uniform(c->rng);
+    emitter_sample_point(s, L, up, &a->pt);
+    a->guide = pp->guide[i];
+    a->guide.cam = a->pt.y;
+    a->g = &a->guide;
+    /* the earliest arrival: a straight line camera → light, or (unwarped, the camera segment free) none;
+     * emission through another point of the light (hits, beam crossings) can be up to `extent` nearer */
+    double slack = a->g->eta_lb * L->extent;
+    vec3 from = pp->p->window.camera_unwarp ? a->pt.y : s->cam.pos;
+    if (!darts_sample_bin(a->g, from, ps->time - slack, rng_uniform(c->rng), &a->bin)) return 0;
+    a->reach = a->bin;
+    a->reach.end += slack;
     a->on = 1;
     return 1;
 }
@@ -98,7 +104,31 @@ int pt_aim_start(pixel_ctx *c, path_state *ps)
 void pt_aim_connect(pixel_ctx *c, const path_state *ps, vec3 x, const phase_function *pf, const surface_site *ss)
 {
     const pt_aim *a = &c->aim;
-    pt_connect_light(c, ps, a->light, x, pf, ss, 0, 1.0 / (a->sel_pdf * a->bin.pdf), a->bin.frame);
+    const scene *s = c->pass->s;
+    const emitter *L = &s->lights[a->light];
+    emitter_direct ed;
+    int ok;
+    if (emitter_is_parallel_beam(L)) { /* surfaces only: medium vertices reach a beam by its crossings */
+        const double none[2] = {0.0, 0.0};
+        ok = !pf && emitter_sample_direct(s, L, x, none, &ed);
+    } else {
+        ok = emitter_connect_point(L, &a->pt, x, &ed);
+    }
+    if (ok) pt_connect_sample(c, ps, a->light, &ed, x, pf, ss, 0, 1.0 / (a->sel_pdf * a->bin.pdf), a->bin.frame);
+}
+
+/* An aimed path whose light is a parallel beam: no point of the beam is a target, so no control vertex, DA
+ * or EDA; each medium segment connects by its crossing of the beam (in the path's bin), after the early
+ * exit. */
+static int beam_segment(pixel_ctx *c, path_state *ps, const medium *m, double tmax, int *event, double *t)
+{
+    pt_aim *a = &c->aim;
+    if (a->g->early_exit && medium_scatters(m) && !pt_unwarped_camera_segment(c, ps) &&
+        !darts_can_reach(a->g, &a->reach, ps->o, ps->time))
+        return 0;
+    pt_beam_crossing(c, ps, a->light, tmax, 0, 1.0 / (a->sel_pdf * a->bin.pdf), a->bin.frame);
+    *t = medium_sample_free_flight(m, tmax, c->rng, &ps->beta, event);
+    return 1;
 }
 
 /* The light connection of a medium segment through a control vertex at distance t on it (paper §5.2, supplement
@@ -145,11 +175,12 @@ int pt_aim_medium_segment(pixel_ctx *c, path_state *ps, double tmax, int *event,
     const medium *m = &c->pass->s->media[ps->medium];
     pt_aim *a = &c->aim;
     const darts_guide *g = a->g;
+    if (emitter_is_parallel_beam(&c->pass->s->lights[a->light])) return beam_segment(c, ps, m, tmax, event, t);
     int aims = medium_scatters(m) && !pt_unwarped_camera_segment(c, ps);
     if (aims) {
         ellipse_record_init(&a->rec, g, &a->bin, ps->o, ps->time, m->eta, g->residual, v3_avg(m->sigma_t),
                             rng_uniform(c->rng));
-        if (g->early_exit && !darts_can_reach(g, &a->bin, ps->o, ps->time)) return 0;
+        if (g->early_exit && !darts_can_reach(g, &a->reach, ps->o, ps->time)) return 0;
         if (g->control_vertices) {
             ps->connected = 1;
             if (a->rec.valid && ps->medium_events + 1 <= m->max_bounces &&
@@ -187,7 +218,7 @@ static void uniform_time_direction(pixel_ctx *c, path_state *ps, const medium *m
     int ch = grey ? 0 : (int)dp_fmin(2.0, 3.0 * rng_uniform(c->rng));
     a->pre_r = -log1p(-rng_uniform(c->rng)) / v3_comp(m->sigma_t, ch);
     double u[3] = {rng_uniform(c->rng), rng_uniform(c->rng), rng_uniform(c->rng)}, w;
-    ps->d = time_angular_mix_sample(&m->phase, ps->d, ps->o, c->pass->s->lights[a->light].pos, a->pre_r,
+    ps->d = time_angular_mix_sample(&m->phase, ps->d, ps->o, a->pt.y, a->pre_r,
                                     c->pass->p->keys.time_angular_share, u, &w);
     ps->beta = v3_scale(ps->beta, w);
 }
@@ -196,11 +227,12 @@ void pt_aim_scatter_direction(pixel_ctx *c, path_state *ps)
 {
     const pt_pass *pp = c->pass;
     const medium *m = &pp->s->media[ps->medium];
-    if (pp->p->uniform_time) {
+    if (pp->p->uniform_time && !emitter_is_parallel_beam(&pp->s->lights[c->aim.light])) {
         uniform_time_direction(c, ps, m);
         return;
     }
-    const eda_table *et = pp->eda && pp->eda->table ? pp->eda->table[ps->medium] : NULL;
+    const eda_table *et = pp->eda && pp->eda->table && !emitter_is_parallel_beam(&pp->s->lights[c->aim.light])
+                              ? pp->eda->table[ps->medium] : NULL;
     if (et) { /* EDA toward the light with MIS against the phase function (docs/darts.md §8.2) */
         ellipse_record vr; /* its own residual; the segment's record draws another (docs/darts.md §14) */
         const darts_guide *g = c->aim.g;

@@ -2,8 +2,9 @@
  * at a light and a time bin (path_aim.c: the DARTS path tracer, enable_guiding / enable_elliptical / eda,
  * and the uniform-time path tracer, time_sampling "uniform").
  * Free-flight distance sampling (spectral: one channel picked, pdf averaged over channels), phase and BSDF
- * sampling, next-event estimation to every point light through index-matched boundaries, path time η·d on
- * every segment from the light's emission time (pulse_start, a uniform draw across a box pulse), the camera
+ * sampling, next-event estimation to every light that allows it through index-matched boundaries (a parallel
+ * beam by the crossings of the segments), emission where a path from the camera or a delta lobe hits an area
+ * light, path time η·d on every segment from the light's emission time (the pulse), the camera
  * leg included (camera-warped) or, with camera_unwarp, the segment from the sensor to the first scattering
  * vertex left out (docs/time.md §2.2), box gate or frames via the film.
  * Bounces (docs/design.md §5.1): a path of n segments, the light connection included, counts iff
@@ -13,29 +14,47 @@
 
 #include "path_tracer_internal.h"
 
-void pt_connect_light(pixel_ctx *c, const path_state *ps, int i, vec3 x, const phase_function *pf,
-                      const surface_site *ss, int draw_emission, double w, int frame)
+/* Where a shadow ray toward the light sample ends: its point, or just before an area light's surface. */
+static vec3 shadow_target(const scene *s, const emitter_direct *ed)
+{
+    if (v3_is_zero(ed->n)) return ed->y;
+    return scene_offset_ray_origin(s, ed->y, v3_dot(ed->wi, ed->n) < 0.0 ? ed->n : v3_neg(ed->n));
+}
+
+void pt_connect_sample(pixel_ctx *c, const path_state *ps, int i, const emitter_direct *ed, vec3 x,
+                       const phase_function *pf, const surface_site *ss, int draw_emission, double w, int frame)
 {
     const scene *s = c->pass->s;
-    const point_light *L = &s->lights[i];
-    vec3 to = v3_sub(L->pos, x);
-    double d2 = v3_dot(to, to);
-    if (d2 <= 0.0) return;
-    vec3 wl = v3_scale(to, 1.0 / sqrt(d2));
+    const emitter *L = &s->lights[i];
+    vec3 wl = ed->wi;
     vec3 f = ss ? surface_eval_cos(ss, wl, BSDF_LOBES_ALL) : v3s(phase_eval(pf, ps->d, wl));
     if (v3_max(f) <= 0.0) return;
     vec3 tr;
-    double t = ps->time + (draw_emission ? point_light_emission_time(L, c->rng) : 0.0);
+    double t = ps->time + (draw_emission ? emitter_pulse_sample(&L->pulse, c->rng) : 0.0);
     c->pix->rays += 1;
     vec3 o = ss ? surface_spawn(s, ss, wl) : x;
-    if (!scene_transmittance(s, o, ss ? surface_medium_toward(ss, ps->medium, wl) : ps->medium, L->pos, &tr, &t))
+    if (!scene_transmittance(s, o, ss ? surface_medium_toward(ss, ps->medium, wl) : ps->medium, shadow_target(s, ed),
+                             &tr, &t))
         return;
-    film_pixel_splat(c->pix, t, v3_scale(v3_mul(v3_mul(v3_mul(ps->beta, tr), L->intensity), f), w / d2), frame);
+    film_pixel_splat(c->pix, t, v3_scale(v3_mul(v3_mul(v3_mul(ps->beta, tr), ed->value), f), w / ed->denom), frame);
 }
 
-/* NEE from x (a medium vertex, phase pf) or the surface site ss (x = its point): to every point light on a
- * plain path, the contribution β·Tr·I·f/d² with f the phase function or the BSDF with its cosine; to its one
- * light on an aimed path. */
+/* The light connection of light i from x, by its direct-light sample. A medium vertex does not connect to a
+ * parallel beam: the segments' crossings do (pt_beam_crossing). */
+static void connect_light(pixel_ctx *c, const path_state *ps, int i, vec3 x, const phase_function *pf,
+                          const surface_site *ss)
+{
+    const emitter *L = &c->pass->s->lights[i];
+    if (!emitter_connectable(L) || (pf && emitter_is_parallel_beam(L))) return;
+    double u[2] = {0.0, 0.0};
+    if (emitter_direct_draws(L)) u[0] = rng_uniform(c->rng), u[1] = rng_uniform(c->rng);
+    emitter_direct ed;
+    if (emitter_sample_direct(c->pass->s, L, x, u, &ed)) pt_connect_sample(c, ps, i, &ed, x, pf, ss, 1, 1.0, -1);
+}
+
+/* NEE from x (a medium vertex, phase pf) or the surface site ss (x = its point): to every light on a plain
+ * path, the contribution β·Tr·f·(the light sample's value) with f the phase function or the BSDF with its
+ * cosine; to its one light on an aimed path. */
 static void connect_lights(pixel_ctx *c, const path_state *ps, vec3 x, const phase_function *pf,
                            const surface_site *ss)
 {
@@ -43,7 +62,59 @@ static void connect_lights(pixel_ctx *c, const path_state *ps, vec3 x, const pha
         pt_aim_connect(c, ps, x, pf, ss);
         return;
     }
-    for (int i = 0; i < c->pass->s->light_count; i++) pt_connect_light(c, ps, i, x, pf, ss, 1, 1.0, -1);
+    for (int i = 0; i < c->pass->s->light_count; i++) connect_light(c, ps, i, x, pf, ss);
+}
+
+/* The crossing of a parallel beam (docs/emitters.md §4.2): a vertex at t in [t0, t1], the part of the
+ * segment inside the beam, by a σ-exponential truncated to it (uniform where σ·(t1 − t0) is tiny); its
+ * estimate β·σs·e^{−σt·t}/p(t) times the deterministic connection along −axis. It estimates the light that
+ * the segment's medium vertices would connect to, which they then leave out. */
+void pt_beam_crossing(pixel_ctx *c, const path_state *ps, int i, double tmax, int draw_emission, double w, int frame)
+{
+    const scene *s = c->pass->s;
+    const medium *m = &s->media[ps->medium];
+    const emitter *L = &s->lights[i];
+    double t0, t1;
+    if (!medium_scatters(m) || ps->medium_events + 1 > m->max_bounces ||
+        !bounces_count(&c->pass->p->bounces, ps->depth + 2) || !emitter_beam_crossing(L, ps->o, ps->d, tmax, &t0, &t1))
+        return;
+    double len = t1 - t0, sigma = v3_avg(m->sigma_t), a = sigma * len, u = rng_uniform(c->rng), t, pdf;
+    if (a > 1e-6) {
+        double mass = -expm1(-a);
+        t = t0 - log1p(-u * mass) / sigma;
+        pdf = sigma * exp(-sigma * (t - t0)) / mass;
+    } else {
+        t = t0 + u * len;
+        pdf = 1.0 / len;
+    }
+    if (!(pdf > 0.0) || !(t >= t0 && t <= t1)) return;
+    path_state v = *ps;
+    v.o = v3_add(ps->o, v3_scale(ps->d, t));
+    v.time = ps->time + (c->pass->p->window.camera_unwarp && ps->depth == 0 ? 0.0 : m->eta * t);
+    v.depth = ps->depth + 1;
+    v.beta = v3_mul(ps->beta, v3_scale(v3_mul(m->sigma_s, v3_exp_neg(v3_scale(m->sigma_t, t))), 1.0 / pdf));
+    emitter_direct ed;
+    const double none[2] = {0.0, 0.0};
+    if (emitter_sample_direct(s, L, v.o, none, &ed)) pt_connect_sample(c, &v, i, &ed, v.o, &m->phase, NULL, draw_emission, w, frame);
+}
+
+/* A camera path hitting an area light: its emission, on a path whose last vertex was the camera or a delta
+ * lobe (next-event estimation counts the rest); an aimed path counts only its own light. */
+static void hit_emission(pixel_ctx *c, const path_state *ps, const hit_record *h)
+{
+    const scene *s = c->pass->s;
+    int i = s->surfaces[h->surface].emitter;
+    if (i < 0 || !ps->after_delta || !bounces_count(&c->pass->p->bounces, ps->depth + 1)) return;
+    if (c->aim.on && i != c->aim.light) return;
+    const emitter *L = &s->lights[i];
+    vec3 le = emitter_hit_radiance(L, ps->d, h->ng);
+    if (v3_is_zero(le)) return;
+    if (c->aim.on) {
+        film_pixel_splat(c->pix, ps->time, v3_scale(v3_mul(ps->beta, le), 1.0 / (c->aim.sel_pdf * c->aim.bin.pdf)),
+                         c->aim.bin.frame);
+        return;
+    }
+    film_pixel_splat(c->pix, ps->time + emitter_pulse_sample(&L->pulse, c->rng), v3_mul(ps->beta, le), -1);
 }
 
 /* Time of a segment of length len in a region of index eta: η·len, but nothing for the camera segment
@@ -62,6 +133,7 @@ static int scatter_medium(pixel_ctx *c, path_state *ps, double t)
     ps->o = v3_add(ps->o, v3_scale(ps->d, t));
     ps->time += segment_time(c, ps, m->eta, t);
     ps->depth++;
+    ps->after_delta = 0;
     if (++ps->medium_events > m->max_bounces) return 0;
     if (!ps->connected && bounces_count(&c->pass->p->bounces, ps->depth + 1)) connect_lights(c, ps, ps->o, &m->phase, NULL);
     if (c->aim.on) {
@@ -81,6 +153,7 @@ static int scatter_surface(pixel_ctx *c, path_state *ps, const hit_record *h)
     const surface *sf = &s->surfaces[h->surface];
     const bsdf *b = &s->bsdfs[sf->bsdf];
     ps->time += segment_time(c, ps, medium_eta(s, ps->medium), h->t);
+    hit_emission(c, ps, h);
     if (bsdf_is_passthrough(b)) {
         vec3 n_out = v3_dot(ps->d, h->ng) < 0.0 ? v3_neg(h->ng) : h->ng; /* the far side */
         ps->medium = surface_next_medium(sf, ps->medium, ps->d, h->ng);
@@ -98,6 +171,7 @@ static int scatter_surface(pixel_ctx *c, path_state *ps, const hit_record *h)
     if (!surface_sample_bsdf(&ss, u, BSDF_LOBES_ALL, 0, &smp)) return 0;
     ps->beta = v3_mul(ps->beta, smp.weight);
     ps->d = smp.w;
+    ps->after_delta = (smp.lobe & BSDF_LOBE_SPECULAR) != 0;
     ps->medium = surface_next_medium(sf, ps->medium, ps->d, h->ng);
     ps->o = surface_spawn(s, &ss, ps->d);
     return 1;
@@ -123,6 +197,8 @@ static int medium_distance(pixel_ctx *c, path_state *ps, double tmax, int *event
 {
     ps->connected = 0;
     if (c->aim.on) return pt_aim_medium_segment(c, ps, tmax, event, t);
+    for (int i = 0; i < c->pass->s->light_count; i++)
+        if (emitter_is_parallel_beam(&c->pass->s->lights[i])) pt_beam_crossing(c, ps, i, tmax, 1, 1.0, -1);
     *t = medium_sample_free_flight(&c->pass->s->media[ps->medium], tmax, c->rng, &ps->beta, event);
     return 1;
 }
@@ -130,7 +206,7 @@ static int medium_distance(pixel_ctx *c, path_state *ps, double tmax, int *event
 static void trace_camera_path(pixel_ctx *c, vec3 d)
 {
     const scene *s = c->pass->s;
-    path_state ps = {.o = s->cam.pos, .d = d, .medium = s->cam.medium, .beta = v3s(1.0)};
+    path_state ps = {.o = s->cam.pos, .d = d, .medium = s->cam.medium, .beta = v3s(1.0), .after_delta = 1};
     if (c->pass->aimed && !pt_aim_start(c, &ps)) return;
     for (int guard = 0; guard < 100000; guard++) {
         if (ps.depth >= c->pass->p->bounces.max - 1) return; /* no later path can count */

@@ -25,8 +25,12 @@ typedef struct {
     int on;
     int light;
     double sel_pdf;
-    const darts_guide *g;
+    emitter_point pt;    /* the light's point the path aims at and connects to (area lights, diverging beams) */
+    darts_guide guide;   /* the light's guide with pt.y as its target */
+    const darts_guide *g;/* &guide */
     darts_bin bin;
+    darts_bin reach;     /* the bin's end widened by η_lb·extent: no contribution through any other point of
+                          * the light can arrive before the early exit's bound says */
     ellipse_record rec;  /* at the start of the current medium segment (valid: the residual can reach the bin) */
     double pre_r;        /* uniform time: the distance drawn at a medium vertex before its direction; < 0: none */
 } pt_aim;
@@ -41,6 +45,8 @@ typedef struct {
     int medium_events; /* medium vertices since the last surface (a medium's own max_bounces) */
     int connected; /* the segment that led to the current medium vertex had its light connection (a control
                     * vertex): the vertex makes none */
+    int after_delta; /* the last vertex was the camera or a delta lobe: a hit on an area light counts its
+                      * emission (elsewhere next-event estimation has counted it) */
 } path_state;
 
 typedef struct {
@@ -66,11 +72,15 @@ void pt_aim_scatter_direction(pixel_ctx *c, path_state *ps);
 /* The light connection of the aimed path from x (a medium vertex, or the surface site ss), as
  * connect_lights but to its one light, weighted 1/(sel_pdf·bin.pdf) and counted in its bin only. */
 void pt_aim_connect(pixel_ctx *c, const path_state *ps, vec3 x, const phase_function *pf, const surface_site *ss);
-/* path_tracer.c: the connection to light i from x (medium vertex, phase pf) or the site ss, scaled by w and
- * counted in `frame` (-1: any); its time is the path's plus the light leg's, plus an emission time drawn for
- * the connection when draw_emission (plain paths: aimed paths drew theirs at the start). */
-void pt_connect_light(pixel_ctx *c, const path_state *ps, int i, vec3 x, const phase_function *pf,
-                      const surface_site *ss, int draw_emission, double w, int frame);
+/* path_tracer.c: the connection to light i by the sample ed from x (medium vertex, phase pf) or the site ss,
+ * scaled by w and counted in `frame` (-1: any); its time is the path's plus the light leg's, plus an
+ * emission time drawn for the connection when draw_emission (plain paths: aimed paths drew theirs at the
+ * start). */
+void pt_connect_sample(pixel_ctx *c, const path_state *ps, int i, const emitter_direct *ed, vec3 x,
+                       const phase_function *pf, const surface_site *ss, int draw_emission, double w, int frame);
+/* Parallel beams: the connection of a medium segment (ps->o along ps->d, next surface at tmax) to beam i by a
+ * vertex sampled where the segment crosses the beam (docs/emitters.md §4.2), scaled by w, in `frame`. */
+void pt_beam_crossing(pixel_ctx *c, const path_state *ps, int i, double tmax, int draw_emission, double w, int frame);
 /* Whether a time-0 camera segment (unwarped) is the current one: no DARTS sampler aims along it. */
 static inline int pt_unwarped_camera_segment(const pixel_ctx *c, const path_state *ps)
 {

@@ -52,6 +52,9 @@ static const scene_key table[] = {
     {.name = "enable_consistency_checks", IN(consistency_checks), .type = KEY_BOOL, .read_by = ALL,
      .changes_image = 1, .def = 0,
      .meaning = "A direction on different sides of the shading and geometric normals is refused"},
+    {.name = "light_selection", IN(light_selection_uniform), CHOICES("power", "uniform"), .read_by = ALL,
+     .changes_image = 1, .def = 0,
+     .meaning = "How a light path (and an aimed camera path) picks its light: in proportion to the light's flux, or uniformly"},
     /* ---- integrator: the path tracer ---- */
     {.name = "enable_rr", IN(enable_rr), .type = KEY_BOOL, .read_by = PT, .changes_image = 1, .def = 1,
      .meaning = "Russian roulette on the path throughput"},

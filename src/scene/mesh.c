@@ -111,3 +111,48 @@ void mesh_make_cube(tri_mesh *m)
     }
     m->has_uvs = 1;
 }
+
+/* Tungsten's disk: radius 1 in the local xz-plane, emitting and facing +y. A fan of MESH_DISK_SEGMENTS
+ * triangles from the centre; (c, p_{k+1}, p_k) winds to +y. UVs as Tungsten's: (φ/(2π) + ½, ρ). */
+void mesh_make_disk(tri_mesh *m)
+{
+    const int n = MESH_DISK_SEGMENTS;
+    if (tri_mesh_add_vertex(m, 0, 0, 0)) return;
+    m->uv[0] = 0.5f;
+    m->uv[1] = 0.0f;
+    for (int k = 0; k <= n; k++) { /* the seam vertex twice, so that u runs 0..1 */
+        double phi = 2.0 * M_PI * k / n - M_PI;
+        if (tri_mesh_add_vertex(m, cos(phi), 0, sin(phi))) return;
+        m->uv[2 * (size_t)(k + 1)] = (float)((double)k / n);
+        m->uv[2 * (size_t)(k + 1) + 1] = 1.0f;
+    }
+    m->has_uvs = 1;
+    for (int k = 0; k < n; k++) tri_mesh_add_tri(m, 0, (uint32_t)k + 2, (uint32_t)k + 1);
+}
+
+/* Tungsten's sphere: radius 1 about the origin. MESH_SPHERE_RINGS bands of latitude, twice as many
+ * segments of longitude, the poles as fans; vertex normals radial; outward winding. */
+void mesh_make_sphere(tri_mesh *m)
+{
+    const int nr = MESH_SPHERE_RINGS, ns = 2 * MESH_SPHERE_RINGS;
+    for (int i = 0; i <= nr; i++) {
+        double theta = M_PI * i / nr;
+        for (int j = 0; j <= ns; j++) {
+            double phi = 2.0 * M_PI * j / ns;
+            double x = sin(theta) * cos(phi), y = cos(theta), z = sin(theta) * sin(phi);
+            if (tri_mesh_add_vertex(m, x, y, z)) return;
+            size_t v = m->nv - 1;
+            m->nrm[3 * v] = (float)x, m->nrm[3 * v + 1] = (float)y, m->nrm[3 * v + 2] = (float)z;
+            m->uv[2 * v] = (float)((double)j / ns);
+            m->uv[2 * v + 1] = (float)(1.0 - (double)i / nr);
+        }
+    }
+    m->has_normals = m->has_uvs = 1;
+    for (int i = 0; i < nr; i++)
+        for (int j = 0; j < ns; j++) {
+            uint32_t a = (uint32_t)(i * (ns + 1) + j), b = a + 1, c = a + (uint32_t)(ns + 1), d = c + 1;
+            /* seen from outside, (a, b, c) runs counter-clockwise: a at θ_i, b at φ + dφ, c at θ + dθ */
+            if (i > 0) tri_mesh_add_tri(m, a, b, c);
+            if (i < nr - 1) tri_mesh_add_tri(m, b, d, c);
+        }
+}

@@ -46,6 +46,11 @@ int mesh_load_wo3(const char *path, tri_mesh *m, dp_error *err);
 int mesh_load_obj(const char *path, tri_mesh *m, dp_error *err);
 void mesh_make_quad(tri_mesh *m);   /* unit square in the local xz-plane, normal +y */
 void mesh_make_cube(tri_mesh *m);   /* [-0.5, 0.5]^3, outward normals */
+/* Tessellations of Tungsten's analytic shapes (the renderer traces triangles only): */
+void mesh_make_disk(tri_mesh *m);   /* unit disk in the local xz-plane, normal +y, MESH_DISK_SEGMENTS around */
+void mesh_make_sphere(tri_mesh *m); /* unit sphere, outward normals, smooth vertex normals */
+#define MESH_DISK_SEGMENTS 256
+#define MESH_SPHERE_RINGS 64        /* latitude bands; twice as many longitude segments */
 
 /* ---- per-triangle attributes and per-surface flags, private to the scene module ----
  * scene.rt_scene points to this record (the Embree scene is one of its members), so that the public
@@ -72,6 +77,15 @@ int scene_rt_add_mesh(scene *s, int surf, uint32_t first, const tri_mesh *m, con
 /* Embree scene over s->verts/s->tris, one geometry per surface (geomID = surface index). */
 int scene_build_embree(scene *s, dp_error *err);
 void scene_release_embree(scene *s);
+
+/* ---- media and emitters (scene_load.c, light_load.c) ---- */
+/* A medium reference: a name, null or "" (vacuum), or an inline object (appended to s->media). */
+int medium_ref(json_ctx *c, scene *s, const cJSON *v, const char *where, const char *key, int *out);
+/* A point, spot, collimated or directional_point primitive, appended to s->lights. */
+int light_parse(json_ctx *c, scene *s, const cJSON *v, const char *where, const char *type, const xform *T);
+/* The emission of surface sf (its triangles appended, not yet in s->surfaces): an area light appended to
+ * s->lights, sf->emitter set. */
+int light_parse_area(json_ctx *c, scene *s, const cJSON *v, const char *where, const char *type, surface *sf);
 
 /* ---- BSDFs and textures ---- */
 /* A bsdf object of the scene file (docs/scene-format.md §2.4); textures are loaded into s->textures. */

@@ -174,7 +174,7 @@ static int parse_media(json_ctx *c, const cJSON *root, scene *s)
 }
 
 /* A medium reference: a name or an inline object (appended to s->media). */
-static int medium_ref(json_ctx *c, scene *s, const cJSON *v, const char *where, const char *key, int *out)
+int medium_ref(json_ctx *c, scene *s, const cJSON *v, const char *where, const char *key, int *out)
 {
     if (cJSON_IsNull(v)) {
         *out = MEDIUM_VACUUM;
@@ -307,6 +307,15 @@ static int load_shape(json_ctx *c, scene *s, const cJSON *v, const char *where, 
     *flags = 0;
     if (!strcmp(type, "quad")) mesh_make_quad(m);
     else if (!strcmp(type, "cube")) mesh_make_cube(m);
+    else if (!strcmp(type, "sphere")) {
+        mesh_make_sphere(m);
+        *flags = SURF_SMOOTH;
+    } else if (!strcmp(type, "disk")) {
+        double cone;
+        if (jget_number(c, v, where, "cone_angle", 90.0, &cone)) return -1;
+        if (cone != 90.0) return jfail(c, where, "cone_angle", "only 90 (the whole hemisphere) is supported (got %g)", cone);
+        mesh_make_disk(m);
+    }
     else {
         const char *file = NULL;
         if (jget_string(c, v, where, "file", &file) <= 0) return file ? -1 : jfail(c, where, "file", "missing (a mesh needs a file)");
@@ -324,31 +333,20 @@ static int load_shape(json_ctx *c, scene *s, const cJSON *v, const char *where, 
     return 0;
 }
 
-static int parse_point_light(json_ctx *c, scene *s, const cJSON *v, const char *where, const xform *T)
+/* Tungsten's disk and sphere are round whatever the scale: radius = the longest of the axes that span them
+ * (docs/emitters.md §2.4), so those axes are stretched to that length before tessellating through T. */
+static xform shape_transform(const char *type, const xform *T)
 {
-    point_light L = {0};
-    const char *name = "";
-    if (jget_string(c, v, where, "name", &name) < 0) return -1;
-    snprintf(L.name, sizeof L.name, "%s", name);
-    L.pos = T->pos;
-    int has_e = (jget_item(c, v, "emission") != NULL), has_p = (jget_item(c, v, "power") != NULL);
-    if (has_e && has_p) return jfail(c, where, "power", "give either emission or power, not both");
-    if (!has_e && !has_p) return jfail(c, where, "emission", "a point light needs emission (intensity) or power");
-    if (jget_vec3(c, v, where, has_e ? "emission" : "power", v3s(0), &L.intensity)) return -1;
-    if (L.intensity.x < 0 || L.intensity.y < 0 || L.intensity.z < 0)
-        return jfail(c, where, has_e ? "emission" : "power", "must be >= 0");
-    if (has_p) L.intensity = v3_scale(L.intensity, DP_INV_4PI);
-    if (jget_number_range(c, v, where, "pulse_start", 0.0, 0.0, 0.0, &L.pulse_start) ||
-        jget_number_range(c, v, where, "pulse_width", 0.0, 0.0, 0.0, &L.pulse_width))
-        return -1;
-    L.medium = MEDIUM_VACUUM;
-    const cJSON *em = jget_item(c, v, "ext_medium");
-    if (em && medium_ref(c, s, em, where, "ext_medium", &L.medium)) return -1;
-    point_light *grown = realloc(s->lights, ((size_t)s->light_count + 1) * sizeof(point_light));
-    if (!grown) return jfail(c, where, NULL, "out of memory");
-    s->lights = grown;
-    s->lights[s->light_count++] = L;
-    return 0;
+    xform r = *T;
+    int disk = !strcmp(type, "disk"), sphere = !strcmp(type, "sphere");
+    if (!disk && !sphere) return r;
+    double lx = v3_len(T->x), ly = v3_len(T->y), lz = v3_len(T->z);
+    double R = dp_fmax(lx, lz);
+    if (sphere) R = dp_fmax(R, ly);
+    if (lx > 0) r.x = v3_scale(T->x, R / lx);
+    if (lz > 0) r.z = v3_scale(T->z, R / lz);
+    if (sphere && ly > 0) r.y = v3_scale(T->y, R / ly);
+    return r;
 }
 
 static int parse_surface(json_ctx *c, scene *s, const cJSON *names, const cJSON *v, const char *where,
@@ -358,8 +356,6 @@ static int parse_surface(json_ctx *c, scene *s, const cJSON *names, const cJSON 
     const char *name = "";
     if (jget_string(c, v, where, "name", &name) < 0) return -1;
     snprintf(sf.name, sizeof sf.name, "%s", name[0] ? name : where);
-    if ((jget_item(c, v, "emission") != NULL) || (jget_item(c, v, "power") != NULL))
-        return jfail(c, where, "emission", "emissive %s primitives (area lights) are not supported (supported lights: point)", type);
     if (bsdf_ref(c, s, names, jget_item(c, v, "bsdf"), where, &sf.bsdf)) return -1;
     const cJSON *im = jget_item(c, v, "int_medium");
     const cJSON *em = jget_item(c, v, "ext_medium");
@@ -370,9 +366,14 @@ static int parse_surface(json_ctx *c, scene *s, const cJSON *names, const cJSON 
     tri_mesh m = {0};
     unsigned flags;
     int rc = load_shape(c, s, v, where, type, &m, &flags);
-    if (!rc) rc = append_surface_mesh(c, s, &m, T, &sf, where, flags);
+    xform Ts = shape_transform(type, T);
+    if (!rc) rc = append_surface_mesh(c, s, &m, &Ts, &sf, where, flags);
     tri_mesh_free(&m);
     if (rc) return rc;
+    sf.emitter = -1;
+    if (((jget_item(c, v, "emission") != NULL) || (jget_item(c, v, "power") != NULL)) &&
+        light_parse_area(c, s, v, where, type, &sf))
+        return -1;
     surface *grown = realloc(s->surfaces, ((size_t)s->surface_count + 1) * sizeof(surface));
     if (!grown) return jfail(c, where, NULL, "out of memory");
     s->surfaces = grown;
@@ -396,10 +397,14 @@ static int parse_primitives(json_ctx *c, const cJSON *root, scene *s, const cJSO
         xform T;
         if (xform_parse(c, jget_item(c, v, "transform"), w, &T)) return -1;
         int rc;
-        if (!strcmp(type, "point")) rc = parse_point_light(c, s, v, w, &T);
-        else if (!strcmp(type, "mesh") || !strcmp(type, "quad") || !strcmp(type, "cube"))
+        if (!strcmp(type, "point") || !strcmp(type, "spot") || !strcmp(type, "collimated") ||
+            !strcmp(type, "directional_point"))
+            rc = light_parse(c, s, v, w, type, &T);
+        else if (!strcmp(type, "mesh") || !strcmp(type, "quad") || !strcmp(type, "cube") || !strcmp(type, "disk") ||
+                 !strcmp(type, "sphere"))
             rc = parse_surface(c, s, names, v, w, type, &T);
-        else rc = jfail(c, w, "type", "unsupported primitive '%s' (supported: mesh, quad, cube, point)", type);
+        else rc = jfail(c, w, "type", "unsupported primitive '%s' (supported: mesh, quad, disk, sphere, cube, point, spot, "
+                        "collimated, directional_point)", type);
         if (rc) return rc;
         jnote_unread_keys(c, v, w, mark);
     }
@@ -472,14 +477,14 @@ static void set_dir(scene *s, const char *path)
 static void warn_dark_scene(json_ctx *c, const scene *s)
 {
     if (s->light_count == 0) {
-        jwarn(c, "primitives: the scene has no light (a primitive of type \"point\" with power or emission): the "
-                 "image will be black");
+        jwarn(c, "primitives: the scene has no light (a point, spot, collimated or directional_point primitive, or a "
+                 "shape with emission or power): the image will be black");
         return;
     }
     int lit = 0;
     for (int i = 0; i < s->light_count; i++) {
-        const point_light *L = &s->lights[i];
-        if (L->intensity.x > 0 || L->intensity.y > 0 || L->intensity.z > 0) lit++;
+        const emitter *L = &s->lights[i];
+        if (L->flux.x > 0 || L->flux.y > 0 || L->flux.z > 0) lit++;
         else jwarn(c, "primitives: light '%s' has zero power: it emits nothing", L->name);
     }
     if (!lit) {
@@ -492,11 +497,14 @@ static void warn_dark_scene(json_ctx *c, const scene *s)
     for (int m = 0; m < s->medium_count; m++)
         if (s->media[m].eta < eta) eta = s->media[m].eta;
     double earliest = INFINITY, dist = 0;
-    const point_light *first = NULL;
+    const emitter *first = NULL;
     for (int i = 0; i < s->light_count; i++) {
-        const point_light *L = &s->lights[i];
-        if (!(L->intensity.x > 0 || L->intensity.y > 0 || L->intensity.z > 0)) continue;
-        double d = tw->camera_unwarp ? 0.0 : v3_len(v3_sub(L->pos, s->cam.pos)), t = L->pulse_start + d * eta;
+        const emitter *L = &s->lights[i];
+        if (!(L->flux.x > 0 || L->flux.y > 0 || L->flux.z > 0)) continue;
+        if (L->pulse.shape == PULSE_GAUSSIAN && L->pulse.width > 0.0) return; /* no earliest emission */
+        /* the nearest emitting point is at most `extent` nearer than the light's reference point */
+        double d = tw->camera_unwarp ? 0.0 : dp_fmax(0.0, v3_len(v3_sub(L->pos, s->cam.pos)) - L->extent);
+        double t = L->pulse.start + d * eta;
         if (t < earliest) earliest = t, dist = d, first = L;
     }
     double end = time_window_end(tw);
@@ -509,7 +517,7 @@ static void warn_dark_scene(json_ctx *c, const scene *s)
         jwarn(c, "integrator: the time %s ends at %g, before any light path can reach the camera: the earliest "
                  "arrival is %g (light '%s': pulse_start %g + distance to the camera %g x the smallest time per "
                  "length %g): the image will be black", tw->frame_count > 0 ? "window of the frames" : "gate", end,
-              earliest, first->name, first->pulse_start, dist, eta);
+              earliest, first->name, first->pulse.start, dist, eta);
 }
 
 static int parse_all(json_ctx *c, cJSON *root, scene *s, const scene_load_options *opt)
@@ -563,6 +571,7 @@ void scene_free(scene *s)
     free(s->bsdfs);
     free(s->media);
     free(s->surfaces);
+    for (int i = 0; i < s->light_count; i++) emitter_free(&s->lights[i]);
     free(s->lights);
     free(s->verts);
     free(s->tris);

@@ -1,0 +1,120 @@
+/* The collimated beam (the DARTS authors' `collimated`, with our `divergence`; docs/emitters.md §2.3): a disc
+ * of `radius` around the position, across the axis toward look_at.
+ *   - divergence 0: every point of the disc sends a parallel ray along the axis. `emission` is the
+ *     irradiance E across the beam (flux E·πr²); radius 0 is a single ray whose `emission` is its flux.
+ *     Inside the beam's half-cylinder the radiance is E·δ(ω − axis): a point there sees the emitter along
+ *     −axis only, with no 1/d² and no cosine (docs/emitters.md §4.1).
+ *   - divergence δ > 0: each point of the disc emits a constant radiance L = E/(π sin²δ) into the cone of
+ *     half-angle δ about the axis (cosine-weighted directions), so the flux stays E·πr²; radius 0 is a point
+ *     with intensity Φ·cosθ/(π sin²δ) inside the cone.
+ * directional_point (Liu et al. 2022's pencil beam) is the radius-0, divergence-0 case; the loader turns its
+ * units into these. */
+#include "emitter_internal.h"
+
+static double disc_area(const emitter *e) { return M_PI * e->radius * e->radius; }
+static double sin2_div(const emitter *e) { return dp_fmax(0.0, 1.0 - e->cos_div * e->cos_div); }
+
+vec3 collimated_flux(const emitter *e)
+{
+    return e->radius > 0.0 ? v3_scale(e->value, disc_area(e)) : e->value;
+}
+
+/* uniform on the disc (concentric radius sqrt(u)), p_A = 1/(πr²); the centre for radius 0 */
+void collimated_sample_point(const emitter *e, const double u[2], emitter_point *pt)
+{
+    pt->n = e->axis;
+    if (!(e->radius > 0.0)) {
+        pt->y = e->pos;
+        pt->pdf_a = 1.0;
+        return;
+    }
+    double rho = e->radius * sqrt(u[0]), phi = 2.0 * M_PI * u[1];
+    pt->y = v3_add(e->pos, v3_add(v3_scale(e->e1, rho * cos(phi)), v3_scale(e->e2, rho * sin(phi))));
+    pt->pdf_a = 1.0 / disc_area(e);
+}
+
+/* a direction in the cone of half-angle δ with density ∝ cosθ: sin²θ = sin²δ·u */
+static vec3 cone_cosine_dir(const emitter *e, double u1, double u2)
+{
+    double s2 = sin2_div(e) * u1, c = sqrt(dp_fmax(0.0, 1.0 - s2)), s = sqrt(s2), phi = 2.0 * M_PI * u2;
+    return v3_norm(v3_add(v3_scale(e->axis, c), v3_add(v3_scale(e->e1, s * cos(phi)), v3_scale(e->e2, s * sin(phi)))));
+}
+
+void collimated_sample_ray(const emitter *e, const double u[4], emitter_ray *r)
+{
+    emitter_point pt;
+    collimated_sample_point(e, u, &pt);
+    r->p = pt.y;
+    r->n = v3s(0.0); /* the disc is not a surface: rays start in the emitter's medium as they are */
+    r->d = e->cos_div < 1.0 ? cone_cosine_dir(e, u[2], u[3]) : e->axis;
+    r->flux = collimated_flux(e); /* position and direction sampled exactly as emitted */
+}
+
+/* x in the half-cylinder of the parallel beam: s = (x − pos)·axis > 0 and |(x − pos) − s·axis| ≤ r */
+static int parallel_beam_direct(const emitter *e, vec3 x, emitter_direct *out)
+{
+    vec3 w = v3_sub(x, e->pos);
+    double s = v3_dot(w, e->axis);
+    if (!(s > 0.0)) return 0;
+    vec3 perp = v3_sub(w, v3_scale(e->axis, s));
+    if (v3_dot(perp, perp) > e->radius * e->radius) return 0;
+    out->y = v3_add(e->pos, perp);
+    out->wi = v3_neg(e->axis);
+    out->dist = s;
+    out->value = e->value; /* E: the directional delta absorbs the geometry term */
+    out->denom = 1.0;
+    return 1;
+}
+
+/* the connection from x to a fixed point y of a diverging beam: L·cosθ_y/(|x−y|²·p_A) with L = E/(π sin²δ)
+ * (radius 0: I(θ)/|x−y|² with I = Φ·cosθ/(π sin²δ)), zero outside the cone */
+int collimated_connect_point(const emitter *e, const emitter_point *pt, vec3 x, emitter_direct *out)
+{
+    if (!(e->cos_div < 1.0)) return 0; /* parallel rays: a fixed point cannot reach x */
+    vec3 to = v3_sub(pt->y, x);
+    double d2 = v3_dot(to, to);
+    if (!(d2 > 0.0)) return 0;
+    out->y = pt->y;
+    out->dist = sqrt(d2);
+    out->wi = v3_scale(to, 1.0 / out->dist);
+    double cos_y = -v3_dot(out->wi, e->axis);
+    if (!(cos_y >= e->cos_div)) return 0;
+    out->value = v3_scale(e->value, cos_y / (M_PI * sin2_div(e) * pt->pdf_a));
+    out->denom = d2;
+    return 1;
+}
+
+int collimated_sample_direct(const emitter *e, vec3 x, const double u[2], emitter_direct *out)
+{
+    if (!(e->cos_div < 1.0)) return e->radius > 0.0 ? parallel_beam_direct(e, x, out) : 0;
+    emitter_point pt;
+    collimated_sample_point(e, u, &pt);
+    return collimated_connect_point(e, &pt, x, out);
+}
+
+/* The ray o + t·d against the half-cylinder {s > 0, |perp| ≤ r}: the quadratic |w⊥ + t·d⊥|² = r² across
+ * the axis, cut by s(t) = w·a + t·d·a > 0 and [0, tmax]. */
+int collimated_beam_crossing(const emitter *e, vec3 o, vec3 d, double tmax, double *t0, double *t1)
+{
+    vec3 a = e->axis, w = v3_sub(o, e->pos);
+    double wa = v3_dot(w, a), da = v3_dot(d, a);
+    vec3 wp = v3_sub(w, v3_scale(a, wa)), dp = v3_sub(d, v3_scale(a, da));
+    double A = v3_dot(dp, dp), B = v3_dot(wp, dp), C = v3_dot(wp, wp) - e->radius * e->radius;
+    double lo = 0.0, hi = tmax;
+    if (A > 1e-300) {
+        double disc = B * B - A * C;
+        if (!(disc > 0.0)) return 0;
+        double q = sqrt(disc);
+        lo = dp_fmax(lo, (-B - q) / A);
+        hi = dp_fmin(hi, (-B + q) / A);
+    } else if (C > 0.0) {
+        return 0; /* parallel to the axis, outside the beam */
+    }
+    if (da > 0.0) lo = dp_fmax(lo, -wa / da);
+    else if (da < 0.0) hi = dp_fmin(hi, -wa / da);
+    else if (!(wa > 0.0)) return 0;
+    if (!(hi > lo) || !isfinite(hi)) return 0;
+    *t0 = lo;
+    *t1 = hi;
+    return 1;
+}

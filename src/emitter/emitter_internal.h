@@ -1,0 +1,35 @@
+/* The emitter module's per-type functions (one file per emitter), dispatched by emitter.c. */
+#ifndef DARTSPP_EMITTER_INTERNAL_H
+#define DARTSPP_EMITTER_INTERNAL_H
+
+#include "dartspp/emitter.h"
+#include "dartspp/scene.h"
+
+/* point.c */
+void point_sample_ray(const emitter *e, const double u[4], emitter_ray *r);
+int point_connect(const emitter *e, vec3 x, emitter_direct *out);
+vec3 point_flux(const emitter *e);
+
+/* spot.c */
+double spot_falloff(const emitter *e, double cos_theta);
+void spot_sample_ray(const emitter *e, const double u[4], emitter_ray *r);
+int spot_connect(const emitter *e, vec3 x, emitter_direct *out);
+vec3 spot_flux(const emitter *e);
+/* the smoothstep ring's cosθ from a uniform (inverse of 2t³ − t⁴), exposed for the tests through spot_sample_ray */
+double spot_ring_t(double u);
+
+/* collimated.c */
+void collimated_sample_point(const emitter *e, const double u[2], emitter_point *pt);
+void collimated_sample_ray(const emitter *e, const double u[4], emitter_ray *r);
+int collimated_sample_direct(const emitter *e, vec3 x, const double u[2], emitter_direct *out);
+int collimated_connect_point(const emitter *e, const emitter_point *pt, vec3 x, emitter_direct *out);
+int collimated_beam_crossing(const emitter *e, vec3 o, vec3 d, double tmax, double *t0, double *t1);
+vec3 collimated_flux(const emitter *e);
+
+/* area.c */
+int area_prepare(const scene *s, emitter *e);
+void area_sample_point(const scene *s, const emitter *e, const double u[2], emitter_point *pt);
+void area_sample_ray(const scene *s, const emitter *e, const double u[4], emitter_ray *r);
+int area_connect_point(const emitter *e, const emitter_point *pt, vec3 x, emitter_direct *out);
+
+#endif
