@@ -103,7 +103,7 @@ static void test_cli_mirror_warnings(void **state)
     (void)state;
     if (access(DARTSPP_BIN, X_OK) != 0)
         fail_msg("%s does not exist or is not executable: build it first (make build/san/dartspp)", DARTSPP_BIN);
-    static const char *pt_says = "the path tracer cannot connect to point lights", *darts_says = "DARTS time bounds";
+    static const char *pt_says = "the path tracer cannot connect through it to lights", *darts_says = "DARTS time bounds";
     static const char *pp = "\"type\": \"progressive_transient_photon_map\", \"photon_count\": 2000, "
                             "\"volume_photon_count\": 1000, \"volume_gather_radius\": 0.2, \"gather_radius\": 0.2, "
                             "\"enable_guiding\": true, \"enable_elliptical\": true";

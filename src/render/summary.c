@@ -99,6 +99,34 @@ static void print_path_method(const scene *s, const render_plan *p)
     printf("\n");
 }
 
+/* How the integrator reaches one light (docs/emitters.md §7). */
+static const char *light_technique(const emitter *e, const render_plan *p)
+{
+    if (p->type == INTEGRATOR_PHOTON_POINTS) return "light paths";
+    if (!emitter_connectable(e)) return "cannot be reached (a parallel beam of radius 0: only photon points render it)";
+    if (emitter_is_parallel_beam(e))
+        return p->darts.active || p->uniform_time ? "beam crossings of the camera segments (no control vertex, DA or EDA "
+                                                    "toward it)" : "beam crossings of the camera segments";
+    if (emitter_hittable(e)) return "next-event estimation, and hits after the camera or a delta lobe";
+    return "next-event estimation";
+}
+
+/* The lights: type, flux, the probability a light path (or an aimed camera path) picks it, and how the
+ * integrator reaches it. */
+static void print_lights(const scene *s, const render_plan *p)
+{
+    int by_power = !s->integrator.light_selection_uniform;
+    printf("lights (selected %s):", by_power ? "in proportion to flux" : "uniformly");
+    for (int i = 0; i < s->light_count; i++) {
+        const emitter *e = &s->lights[i];
+        printf("%s '%s' (%s, flux %.4g, p %.3g%s): %s", i ? ";" : "", e->name, e->type_name, v3_avg(e->flux),
+               emitter_selection_pdf(s, i, by_power),
+               e->pulse.width > 0 ? (e->pulse.shape == PULSE_GAUSSIAN ? ", gaussian pulse" : ", box pulse") : "",
+               light_technique(e, p));
+    }
+    printf("\n");
+}
+
 /* The scene, its integrator and size, and the gate or frames. */
 static void print_scene(const scene *s, const render_plan *p, double load_seconds)
 {
@@ -163,6 +191,7 @@ static void print_summary(const scene *s, const render_plan *p, const render_sta
     printf("\n");
     if (p->type == INTEGRATOR_PHOTON_POINTS) print_samplers(s, p);
     else print_path_method(s, p);
+    if (s->light_count > 0) print_lights(s, p);
     print_photon_stats(st);
     if (st->reductions > 0) print_cluster(s, p, st);
 }

@@ -20,10 +20,14 @@ static void warn_mirrors(const scene *s, const render_plan *p)
         if (!delta && (bsdf_lobes(b) & BSDF_LOBE_SPECULAR)) delta = s->surfaces[i].name;
         if (!continued && surface_photon_split(b, &p->shading).cont) continued = s->surfaces[i].name;
     }
-    if (delta && p->type == INTEGRATOR_PATH_TRACER && s->light_count > 0)
-        fprintf(stderr, "warning: %s: surface '%s' is specular: the path tracer cannot connect to point lights "
-                "through it, so light reflected or refracted by it before any diffuse or medium vertex (caustics) "
-                "is missing from the image; photon points render it\n", s->path, delta);
+    const char *point_like = NULL;
+    for (int i = 0; i < s->light_count && !point_like; i++)
+        if (!emitter_hittable(&s->lights[i])) point_like = s->lights[i].name;
+    if (delta && p->type == INTEGRATOR_PATH_TRACER && point_like)
+        fprintf(stderr, "warning: %s: surface '%s' is specular: the path tracer cannot connect through it to lights "
+                "without area (point, spot, collimated; here '%s'), so their light reflected or refracted by it before "
+                "any diffuse or medium vertex (caustics) is missing from the image; photon points render it\n", s->path,
+                delta, point_like);
     const darts_plan *d = &p->darts;
     if (continued && p->type == INTEGRATOR_PHOTON_POINTS && d->active && d->mirrors == DARTS_MIRRORS_STRAIGHT &&
         d->side.seen)
@@ -60,8 +64,20 @@ static void warn_mixed_eta(const scene *s, const render_plan *p)
     fprintf(stderr, "\n");
 }
 
+/* A light the path tracer cannot reach at all (docs/emitters.md §7): its light is missing from the image. */
+static void warn_unreachable_lights(const scene *s, const render_plan *p)
+{
+    if (p->type != INTEGRATOR_PATH_TRACER) return;
+    for (int i = 0; i < s->light_count; i++)
+        if (!emitter_connectable(&s->lights[i]) && v3_max(s->lights[i].flux) > 0.0)
+            fprintf(stderr, "warning: %s: light '%s' (%s) is a parallel beam of radius 0: the path tracer can neither "
+                    "connect to it nor hit it, so its light is missing from the image; give it a radius or a "
+                    "divergence, or render with photon points\n", s->path, s->lights[i].name, s->lights[i].type_name);
+}
+
 void run_warn(const scene *s, const render_plan *p)
 {
+    warn_unreachable_lights(s, p);
     warn_mirrors(s, p);
     warn_mixed_eta(s, p);
 }
