@@ -264,3 +264,50 @@ void scene_guide(const scene *s, darts_guide *g)
     plan_free(&p);
 }
 
+
+/* ---- per-tile totals ---- */
+
+static double frame_total(const film *f, int k)
+{
+    double v = 0.0;
+    size_t n = (size_t)f->width * f->height * 3;
+    for (size_t i = 0; i < n; i++) v += f->frame_sum[n * (size_t)k + i];
+    return v;
+}
+
+int cell_probe(void *ctx, const film *f, const render_stats *st, dp_error *err)
+{
+    (void)err;
+    cell_totals *t = ctx;
+    if (st->passes == 1) memset(t->last, 0, sizeof t->last);
+    if (t->n == t->cap) {
+        t->cap = t->cap ? 2 * t->cap : 1024;
+        t->x = realloc(t->x, (size_t)t->cap * CELLS * sizeof(double));
+        assert_non_null(t->x);
+    }
+    double v[CELLS] = {0};
+    for (int y = 0; y < f->height; y++)
+        for (int x = 0; x < f->width; x++)
+            for (int c = 0; c < 3; c++)
+                v[(y * TILES / f->height) * TILES + x * TILES / f->width] += f->sum[3 * ((size_t)y * f->width + x) + c];
+    for (int k = 0; k < t->frames; k++) v[NT + k] = frame_total(f, k);
+    for (int i = 0; i < CELLS; i++) {
+        t->x[(size_t)t->n * CELLS + i] = (v[i] - t->last[i]) / f->last_weight; /* this pass's estimate */
+        t->last[i] = v[i];
+    }
+    t->n++;
+    return 0;
+}
+
+void cell_mean_se(const cell_totals *t, int v, double *mean, double *se)
+{
+    double s = 0, s2 = 0;
+    for (long i = 0; i < t->n; i++) {
+        double x = t->x[(size_t)i * CELLS + v];
+        s += x;
+        s2 += x * x;
+    }
+    *mean = s / t->n;
+    *se = sqrt(fmax(0.0, (s2 - t->n * *mean * *mean) / (t->n - 1)) / t->n);
+}
+

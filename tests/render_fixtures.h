@@ -76,6 +76,26 @@ extern const char *const DARTS_KEYS;
 extern const char *const BASELINE_KEYS;
 
 /* The box's materials and its five Lambertian walls (2 × 2 × 2, open towards -z), opening the primitives list. */
+/* ---- per-tile totals (the per-tile comparisons of unbiased or equally smoothed estimators) ----
+ * Per pass: the total of each of TILES × TILES tiles of the gate image (all channels) and, in frame mode,
+ * of each frame; the spread over thousands of passes gives standard errors with thousands of degrees of
+ * freedom. */
+#define TILES 4
+#define NT (TILES * TILES)
+#define MAX_FRAMES 4
+#define CELLS (NT + MAX_FRAMES)
+typedef struct {
+    int frames;
+    long n, cap;
+    double *x; /* per pass: CELLS totals */
+    double last[CELLS];
+} cell_totals;
+
+/* render_options.after_pass for a cell_totals (ctx; frames set, the rest zero). */
+int cell_probe(void *ctx, const film *f, const render_stats *st, dp_error *err);
+/* Mean over the passes of cell v and its standard error. */
+void cell_mean_se(const cell_totals *t, int v, double *mean, double *se);
+
 #define BOX_WALLS                                                                                                  \
     "  \"bsdfs\": [ { \"name\": \"white\", \"type\": \"lambert\", \"albedo\": 0.7 },"                                  \
     "               { \"name\": \"red\", \"type\": \"lambert\", \"albedo\": [0.7, 0.15, 0.1] },"                       \

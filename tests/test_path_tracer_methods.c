@@ -10,63 +10,6 @@
  * header of each case. */
 #include "render_fixtures.h"
 
-#define TILES 4
-#define NT (TILES * TILES)
-#define MAX_FRAMES 4
-#define CELLS (NT + MAX_FRAMES)
-
-/* Per-pass totals of every tile of the gate image and (frame mode) of every frame. */
-typedef struct {
-    int frames;
-    long n, cap;
-    double *x; /* per pass: CELLS totals */
-    double last[CELLS];
-} cell_totals;
-
-static double frame_total(const film *f, int k)
-{
-    double v = 0.0;
-    size_t n = (size_t)f->width * f->height * 3;
-    for (size_t i = 0; i < n; i++) v += f->frame_sum[n * (size_t)k + i];
-    return v;
-}
-
-static int cell_probe(void *ctx, const film *f, const render_stats *st, dp_error *err)
-{
-    (void)err;
-    cell_totals *t = ctx;
-    if (st->passes == 1) memset(t->last, 0, sizeof t->last);
-    if (t->n == t->cap) {
-        t->cap = t->cap ? 2 * t->cap : 1024;
-        t->x = realloc(t->x, (size_t)t->cap * CELLS * sizeof(double));
-        assert_non_null(t->x);
-    }
-    double v[CELLS] = {0};
-    for (int y = 0; y < f->height; y++)
-        for (int x = 0; x < f->width; x++)
-            for (int c = 0; c < 3; c++)
-                v[(y * TILES / f->height) * TILES + x * TILES / f->width] += f->sum[3 * ((size_t)y * f->width + x) + c];
-    for (int k = 0; k < t->frames; k++) v[NT + k] = frame_total(f, k);
-    for (int i = 0; i < CELLS; i++) {
-        t->x[(size_t)t->n * CELLS + i] = (v[i] - t->last[i]) / f->last_weight; /* this pass's estimate */
-        t->last[i] = v[i];
-    }
-    t->n++;
-    return 0;
-}
-
-static void mean_se(const cell_totals *t, int v, double *mean, double *se)
-{
-    double s = 0, s2 = 0;
-    for (long i = 0; i < t->n; i++) {
-        double x = t->x[(size_t)i * CELLS + v];
-        s += x;
-        s2 += x * x;
-    }
-    *mean = s / t->n;
-    *se = sqrt(fmax(0.0, (s2 - t->n * *mean * *mean) / (t->n - 1)) / t->n);
-}
-
 /* The fog box (render_fixtures.c) at 16² with the path tracer, a gate or frames (`time`), and the method's
  * keys; lights: NULL for the box's own, else the primitives text replacing it. */
 static void method_totals(const char *time, const char *method, int unwarp, const char *lights, long passes,
@@ -112,8 +55,8 @@ static double compare_cells(const char *label, const cell_totals *ref, const cel
     int cells = NT + m->frames;
     for (int v = 0; v < cells; v++) {
         double mr, sr, mm, sm;
-        mean_se(ref, v, &mr, &sr);
-        mean_se(m, v, &mm, &sm);
+        cell_mean_se(ref, v, &mr, &sr);
+        cell_mean_se(m, v, &mm, &sm);
         if (v < NT) {
             tot_r += mr, tot_m += mm, var_r += sr * sr, var_m += sm * sm;
         }

@@ -186,11 +186,11 @@ static void check_against_quadrature_seeds(const char *phase, double g, double s
     dp_error err;
     scene_load_options lo = {0};
     if (scene_load(path, &lo, &s, &err)) fail_msg("%s", err.msg);
-    analytic_case a = {.cam = s.cam.pos, .light = s.lights[0].pos, .I = s.lights[0].intensity,
+    analytic_case a = {.cam = s.cam.pos, .light = s.lights[0].pos, .I = s.lights[0].value,
                        .ss = s.media[0].sigma_s, .st = s.media[0].sigma_t, .g = g, .eta = 1.0 / speed,
                        .gated = gated, .g0 = g0, .g1 = g1, .unwarp = tm.unwarp, .p0 = tm.p0, .pw = tm.pw};
     assert_int_equal(s.integrator.window.camera_unwarp, tm.unwarp);
-    assert_true(s.lights[0].pulse_start == tm.p0 && s.lights[0].pulse_width == tm.pw);
+    assert_true(s.lights[0].pulse.start == tm.p0 && s.lights[0].pulse.width == tm.pw);
     int n = s.cam.width * s.cam.height * 3;
     double *sum = calloc(n, sizeof(double)), *sq = calloc(n, sizeof(double));
     for (int k = 0; k < seeds; k++) {
