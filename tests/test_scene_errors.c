@@ -342,8 +342,9 @@ static void test_whole_numbers_and_bounces(void **state)
 /* Issue 32: scenes that load and can only render black, or gain energy, say so before the render (the
  * scene's notes, printed before it starts): no light, a light of zero power, a gate that ends before the
  * earliest arrival of any light path (the base scene's light is sqrt(17) = 4.123 from the camera in fog of
- * η = 1, and the gate [5.75, 6.25) is reachable), a gate that ends before the pulse starts, an albedo above 1.
- * Legal scenes that are not dark stay silent. */
+ * η = 1, and the gate [5.75, 6.25) is reachable), a gate that ends before the pulse starts, an albedo above 1;
+ * issue 34: a light with no ext_medium in a scene that is all the camera's fog. Legal scenes that are not dark
+ * stay silent. */
 static void test_dark_scene_warnings(void **state)
 {
     (void)state;
@@ -368,6 +369,9 @@ static void test_dark_scene_warnings(void **state)
         {"unwarped gate before the pulse", "\"power\": 100", "\"power\": 100, \"pulse_start\": 7",
          {"gate ends at 6.25", "before any light emits", "black"}, 1},
         {"albedo 5", "\"albedo\": 0.5", "\"albedo\": 5", {"bsdfs[0].albedo", "bsdf 'white'", "above 1"}, 0},
+        /* issue 34: the light's paths would start in vacuum while everything else is the camera's fog */
+        {"light without ext_medium in fog", "\"power\": 100,\n     \"ext_medium\": \"fog\"}", "\"power\": 100}",
+         {"light 'light' has no ext_medium", "camera is in medium 'fog'", "\"ext_medium\": \"fog\""}, 0},
         {"albedo [0.5, 1.2, 0.5]", "\"albedo\": 0.5", "\"albedo\": [0.5, 1.2, 0.5]", {"bsdf 'white'", "above 1", NULL}, 0},
         {"base scene", NULL, NULL, {NULL, NULL, NULL}, 0},
         {"gate just reachable", "\"transient_time_center\": 6", "\"transient_time_center\": 4", {NULL, NULL, NULL}, 0},

@@ -3,8 +3,8 @@
  * The samplers are those of the DARTS photon pass (src/darts) with the light, not the camera, as the target:
  * the residual of a camera-path vertex is its light leg, which always counts in the path's time.
  *
- * Per camera path: one light, chosen in proportion to its intensity (channel mean), with its emission time
- * (the pulse) drawn first, then its target bin (the gate; in frame mode one frame, uniform in time over the
+ * Per camera path: one light, chosen as light_selection says (docs/emitters.md §5), with its emission time
+ * (the pulse) drawn first, then one point of it as the target (docs/emitters.md §6), then its target bin (the gate; in frame mode one frame, uniform in time over the
  * reachable part of the window; uniform time: the whole window). Every contribution of the path goes to that
  * light only and is divided by the two probabilities.
  * Per medium segment (docs/darts.md §14): an ellipse record (fresh residual T), the early exit, the light

@@ -520,6 +520,23 @@ static void warn_dark_scene(json_ctx *c, const scene *s)
               earliest, first->name, first->pulse.start, dist, eta);
 }
 
+/* A light whose paths start in vacuum (no ext_medium) while the camera is in a medium and no surface sets
+ * media, so that the whole scene is the camera's medium to camera paths: light paths from it would not
+ * scatter or attenuate before they meet a surface, while camera paths connect to it through the medium.
+ * Legal, and almost always a forgotten ext_medium. */
+static void warn_light_outside_medium(json_ctx *c, const scene *s)
+{
+    if (s->cam.medium == MEDIUM_VACUUM) return;
+    for (int i = 0; i < s->surface_count; i++)
+        if (s->surfaces[i].overrides_media) return;
+    for (int i = 0; i < s->light_count; i++)
+        if (s->lights[i].medium == MEDIUM_VACUUM)
+            jwarn(c, "primitives: light '%s' has no ext_medium, so its light paths start in vacuum, while the camera "
+                     "is in medium '%s' and no surface sets media: photon points would see it unattenuated and "
+                     "camera paths through the medium; set \"ext_medium\": \"%s\" on it", s->lights[i].name,
+                  s->media[s->cam.medium].name, s->media[s->cam.medium].name);
+}
+
 static int parse_all(json_ctx *c, cJSON *root, scene *s, const scene_load_options *opt)
 {
     if (!cJSON_IsObject(root)) return jfail(c, "(top level)", NULL, "expected a JSON object");
@@ -532,6 +549,7 @@ static int parse_all(json_ctx *c, cJSON *root, scene *s, const scene_load_option
     if (!rc) rc = settings_parse(c, root, s);
     if (!rc) jnote_unread_keys(c, root, "", 0);
     if (!rc) warn_dark_scene(c, s);
+    if (!rc) warn_light_outside_medium(c, s);
     cJSON_Delete((cJSON *)names);
     return rc;
 }
