@@ -231,7 +231,7 @@ static void lamp_box_text(char *text, size_t len, const char *integrator, const 
     " \"photon_count\": 4000, \"volume_photon_count\": 1e6, \"gather_photon_count\": 256, \"gather_radius\": 0.15," \
     " \"volume_gather_radius\": 0.08, \"fixed_volume_radius\": true, \"alpha\": 0.7, \"volume_alpha\": 0.7"
 #define DARTS_KEYS ", \"enable_guiding\": true, \"enable_elliptical\": true"
-#define GATE ", \"transient_time_center\": 5.0, \"transient_time_width\": 1.0"
+#define GATE ", \"transient_time_center\": 4.2, \"transient_time_width\": 2.0"
 
 static void tile_render(const char *integrator, const char *lights, long passes, uint64_t seed, cell_totals *t,
                         double *seconds)
@@ -263,18 +263,22 @@ static double compare_tiles(const char *label, const cell_totals *ref, const cel
                             double t_m)
 {
     double zmax = 0.0, tot_r = 0, tot_m = 0, var_r = 0, var_m = 0;
+    int lit = 0;
     for (int v = 0; v < NT; v++) {
         double mr, sr, mm, sm;
         cell_mean_se(ref, v, &mr, &sr);
         cell_mean_se(m, v, &mm, &sm);
+        if (mr == 0.0 && mm == 0.0 && sr == 0.0 && sm == 0.0) continue; /* dark in both: nothing reaches the tile */
         assert_true(mr > 0.0 && mm > 0.0);
+        lit++;
         tot_r += mr, tot_m += mm, var_r += sr * sr, var_m += sm * sm;
         double d = fmax(0.0, fabs(mm - mr) - bias * mr);
         zmax = fmax(zmax, d / sqrt(sr * sr + sm * sm));
     }
-    print_message("  %-40s total %.5g (se %.2g) vs %.5g (se %.2g), %+.2f %%; max |z| %.2f%s; seconds %.1f vs %.1f\n",
-                  label, tot_m, sqrt(var_m), tot_r, sqrt(var_r), 100.0 * (tot_m - tot_r) / tot_r, zmax,
-                  bias > 0 ? " after the bias budget" : "", t_m, t_ref);
+    print_message("  %-40s total %.5g (se %.2g) vs %.5g (se %.2g), %+.2f %%; max |z| %.2f over %d lit tiles%s; seconds "
+                  "%.1f vs %.1f\n", label, tot_m, sqrt(var_m), tot_r, sqrt(var_r), 100.0 * (tot_m - tot_r) / tot_r, zmax,
+                  lit, bias > 0 ? " after the bias budget" : "", t_m, t_ref);
+    assert_true(lit >= 4);
     return zmax;
 }
 
@@ -329,7 +333,7 @@ static void test_area_and_spot(void **state)
 {
     (void)state;
     const tile_case tc[] = {
-        {"DARTS path tracer", "\"enable_guiding\": true, \"enable_elliptical\": true", 1500, 0, 0},
+        {"DARTS path tracer", "\"enable_guiding\": true, \"enable_elliptical\": true", 3000, 0, 0},
         {"DARTS path tracer, uniform selection",
          "\"enable_guiding\": true, \"enable_elliptical\": true, \"light_selection\": \"uniform\"", 1500, 0, 0},
         {"uniform-time path tracer", "\"time_sampling\": \"uniform\"", 1500, 0, 0},
@@ -340,12 +344,26 @@ static void test_area_and_spot(void **state)
     check_tiles(PANEL_AND_SPOT, GATE, tc, (int)(sizeof tc / sizeof tc[0]), 6000, 300);
 }
 
+/* A narrow gate on the camera's direct view of the panel (3.0 to 3.6 away, box pulse 0.3 wide): an aimed
+ * path's target is one point of the panel, and a hit on a nearer point arrives earlier than that point
+ * could, so the bin and the early exit are widened by the light's extent (docs/emitters.md §6). Broken
+ * variant: without the widening, the DARTS path tracer loses the hits (see tests/README.md). Tiles the gate
+ * leaves dark in both are skipped by compare_tiles only when both are exactly 0. */
+static void test_gate_on_the_panel(void **state)
+{
+    (void)state;
+    const tile_case tc[] = {
+        {"panel's direct view: DARTS path tracer", "\"enable_guiding\": true, \"enable_elliptical\": true", 3000, 0, 0},
+    };
+    check_tiles(PANEL_AND_SPOT, ", \"transient_time_center\": 3.35, \"transient_time_width\": 0.3", tc, 1, 30000, 300);
+}
+
 /* The same, camera-unwarped (the camera segment takes no time). */
 static void test_area_and_spot_unwarped(void **state)
 {
     (void)state;
     const tile_case tc[] = {
-        {"unwarped DARTS path tracer", "\"enable_guiding\": true, \"enable_elliptical\": true", 1500, 0, 0},
+        {"unwarped DARTS path tracer", "\"enable_guiding\": true, \"enable_elliptical\": true", 3000, 0, 0},
         {"unwarped baseline photon points vs PT", "\"enable_guiding\": false", 300, 0, PP_BIAS},
         {"unwarped DARTS photon points", "\"enable_guiding\": true, \"enable_elliptical\": true", 300, 1, 0},
     };
@@ -359,7 +377,7 @@ static void test_beam_in_box(void **state)
 {
     (void)state;
     const tile_case tc[] = {
-        {"beam: DARTS path tracer", "\"enable_guiding\": true, \"enable_elliptical\": true", 1500, 0, 0},
+        {"beam: DARTS path tracer", "\"enable_guiding\": true, \"enable_elliptical\": true", 3000, 0, 0},
         {"beam: baseline photon points vs PT", "\"enable_guiding\": false", 300, 0, PP_BIAS},
         {"beam: DARTS photon points", "\"enable_guiding\": true, \"enable_elliptical\": true", 300, 1, 0},
     };
@@ -372,6 +390,7 @@ int main(void)
         cmocka_unit_test(test_beam_single_scatter),
         cmocka_unit_test(test_area_and_spot),
         cmocka_unit_test(test_area_and_spot_unwarped),
+        cmocka_unit_test(test_gate_on_the_panel),
         cmocka_unit_test(test_beam_in_box),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
