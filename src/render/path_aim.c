@@ -51,12 +51,15 @@ int pt_pass_aim_init(pt_pass *pp, dp_error *err)
         pt_pass_aim_free(pp);
         return dp_fail_kind(err, DP_ERROR_MEMORY, "%s: out of memory for the path tracer's light guides", s->path);
     }
+    /* a light the path tracer cannot reach (a radius-0 parallel beam) is never chosen: its paths would
+     * contribute nothing, and leaving it out changes no expectation */
     double acc = 0.0;
     for (int i = 0; i < n; i++) {
         guide_for_light(p, s->lights[i].pos, &pp->guide[i]);
-        acc += emitter_selection_pdf(s, i, !s->integrator.light_selection_uniform);
+        if (emitter_connectable(&s->lights[i])) acc += emitter_selection_pdf(s, i, !s->integrator.light_selection_uniform);
         pp->light_cdf[i] = acc;
     }
+    for (int i = 0; i < n; i++) pp->light_cdf[i] = acc > 0.0 ? pp->light_cdf[i] / acc : (i + 1.0) / n;
     pp->light_cdf[n - 1] = 1.0;
     return 0;
 }
