@@ -2,6 +2,7 @@
  * no output written; mirror warnings on a render that runs) and in process (bad values, coefficients that
  * overflow once combined, bad BSDF keys). Small scenes written by the test, each one change away from a
  * valid base scene. */
+#include "child_process.h"
 #include "fixtures.h"
 
 /* ---- bad input through the command line ---- */
@@ -407,6 +408,43 @@ static void test_dark_scene_warnings(void **state)
     if (failures) fail_msg("%d scenes not warned about as required", failures);
 }
 
+/* Issue 34: a camera declared in a medium it sits outside of (the authors' collimated slab scenes put it in
+ * the slab's medium 1 mm outside the slab) is warned about before the render, naming both media and the
+ * surface; the same scene with the camera's medium matching the surface's side is silent. Broken variant:
+ * the side taken from d·n > 0 instead of d·n < 0: the camera declared in fog is not warned about. */
+static void test_cli_camera_medium_warning(void **state)
+{
+    (void)state;
+    static const char says[] = "the camera is declared in medium 'fog', but surface 'slab'";
+    const char *slab = "{\"name\": \"slab\", \"type\": \"cube\", \"bsdf\": {\"type\": \"forward\"}, \"int_medium\": \"fog\","
+                       " \"transform\": {\"position\": [0, 0.5, 0], \"scale\": [3, 1, 3]}},\n"
+                       "    {\"name\": \"light\", \"type\": \"point\"";
+    const char *dir = fx_dir();
+    char *out = fx_keep(malloc(16384));
+    int failures = 0;
+    for (int outside = 0; outside < 2; outside++) {
+        char *a = replace1(BASE_SCENE, "{\"name\": \"light\", \"type\": \"point\"", slab);
+        /* the camera at (0, 1, -4) is outside the slab: declared in fog (the scene's own) or in vacuum */
+        char *text = outside ? strdup(a) : replace1(a, "\"fov\": 45, \"medium\": \"fog\"", "\"fov\": 45");
+        free(a);
+        char path[1100], exr[1100], cmd[3000];
+        snprintf(path, sizeof path, "%s/cam_medium_%d.json", dir, outside);
+        snprintf(exr, sizeof exr, "%s/cam_medium_%d.exr", dir, outside);
+        write_bytes(path, text, strlen(text));
+        free(text);
+        snprintf(cmd, sizeof cmd, "%s render '%s' --spp 1 --quiet --output '%s'", DARTSPP_BIN, path, exr);
+        int rc = test_run(cmd, out, 16384);
+        int warned = strstr(out, says) != NULL;
+        print_message("[camera %s the slab, declared in %s] exit %d, warned %d\n", "outside", outside ? "fog" : "vacuum",
+                      rc, warned);
+        if (rc != 0 || warned != outside) {
+            failures++;
+            print_tail(out);
+        }
+    }
+    if (failures) fail_msg("%d cases not as required", failures);
+}
+
 #define T(f) cmocka_unit_test_teardown(f, teardown_fx)
 
 int main(void)
@@ -414,6 +452,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         T(test_cli_bad_input),
         T(test_cli_mirror_warnings),
+        T(test_cli_camera_medium_warning),
         T(test_bad_values_in_process),
         T(test_derived_coefficients_stay_finite),
         T(test_bsdf_key_errors),

@@ -84,9 +84,35 @@ int collimated_connect_point(const emitter *e, const emitter_point *pt, vec3 x, 
     return 1;
 }
 
+/* A diverging beam of radius > 0 seen from x at the distance s in front of its disc: the points of the disc
+ * that send light to x are those within s·tanδ of x's foot on the disc's plane (their ray to x lies in the
+ * cone). The sample is drawn uniformly from the smaller of that footprint and the disc, and is zero outside
+ * the other: either way the value L·cosθ_y/(d²·p_A) stays below about E/cos²δ, where a uniform point of the
+ * whole disc gives up to E·r²/(s²·sin²δ), unbounded as s → 0 (an estimator of infinite variance next to the
+ * disc). Written for this emitter; no library samples it. */
+static int diverging_disc_direct(const emitter *e, vec3 x, const double u[2], emitter_direct *out)
+{
+    double s = v3_dot(v3_sub(x, e->pos), e->axis);
+    if (!(s > 0.0)) return 0;
+    double tan_div = sqrt(sin2_div(e)) / e->cos_div, rc = s * tan_div;
+    if (!(rc < e->radius)) {
+        emitter_point pt;
+        collimated_sample_point(e, u, &pt);
+        return collimated_connect_point(e, &pt, x, out);
+    }
+    vec3 foot = v3_sub(x, v3_scale(e->axis, s));
+    double rho = rc * sqrt(u[0]), phi = 2.0 * M_PI * u[1];
+    emitter_point pt = {.y = v3_add(foot, v3_add(v3_scale(e->e1, rho * cos(phi)), v3_scale(e->e2, rho * sin(phi)))),
+                        .n = e->axis, .pdf_a = 1.0 / (M_PI * rc * rc)};
+    vec3 off = v3_sub(pt.y, e->pos);
+    if (v3_dot(off, off) > e->radius * e->radius) return 0;
+    return collimated_connect_point(e, &pt, x, out);
+}
+
 int collimated_sample_direct(const emitter *e, vec3 x, const double u[2], emitter_direct *out)
 {
     if (!(e->cos_div < 1.0)) return e->radius > 0.0 ? parallel_beam_direct(e, x, out) : 0;
+    if (e->radius > 0.0) return diverging_disc_direct(e, x, u, out);
     emitter_point pt;
     collimated_sample_point(e, u, &pt);
     return collimated_connect_point(e, &pt, x, out);

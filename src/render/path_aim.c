@@ -114,6 +114,11 @@ void pt_aim_connect(pixel_ctx *c, const path_state *ps, vec3 x, const phase_func
     if (emitter_is_parallel_beam(L)) { /* surfaces only: medium vertices reach a beam by its crossings */
         const double none[2] = {0.0, 0.0};
         ok = !pf && emitter_sample_direct(s, L, x, none, &ed);
+    } else if (L->type == EMITTER_COLLIMATED && L->radius > 0.0) {
+        /* a diverging beam's disc: a fixed point of it lights only a narrow cone, so each connection draws its
+         * own point where x can see it (docs/emitters.md §4) */
+        double u[2] = {rng_uniform(c->rng), rng_uniform(c->rng)};
+        ok = emitter_sample_direct(s, L, x, u, &ed);
     } else {
         ok = emitter_connect_point(L, &a->pt, x, &ed);
     }

@@ -75,8 +75,44 @@ static void warn_unreachable_lights(const scene *s, const render_plan *p)
                     "divergence, or render with photon points\n", s->path, s->lights[i].name, s->lights[i].type_name);
 }
 
+/* The camera's declared medium against the geometry around it: along a few camera rays (the image centre and
+ * the middle of each quadrant), the first surface that sets media tells which medium is on the camera's side
+ * of it (ext_medium in front of it, int_medium behind). A camera declared in a medium it sits outside of
+ * (the authors' collimated slab scenes put the camera in the slab's medium 1 mm outside the slab) gets that
+ * medium along its first leg, where light paths, which follow the surfaces, never see it: the path tracer and
+ * photon points then render different scenes. Legal; warned about with both media named. */
+static void warn_camera_medium(const scene *s)
+{
+    static const double at[5][2] = {{0.5, 0.5}, {0.25, 0.25}, {0.75, 0.25}, {0.25, 0.75}, {0.75, 0.75}};
+    for (int k = 0; k < 5; k++) {
+        vec3 o = s->cam.pos, d = camera_ray_dir(&s->cam, at[k][0] * s->cam.width, at[k][1] * s->cam.height);
+        int med = s->cam.medium;
+        hit_record h;
+        for (int crossing = 0; crossing < 64 && scene_intersect(s, o, d, INFINITY, &h); crossing++) {
+            const surface *sf = &s->surfaces[h.surface];
+            if (sf->overrides_media) {
+                int here = v3_dot(d, h.ng) < 0.0 ? sf->ext_medium : sf->int_medium;
+                if (here != med) {
+                    fprintf(stderr, "warning: %s: the camera is declared in %s%s%s, but surface '%s' in front of it has "
+                            "%s%s%s on the camera's side: camera paths take the declared medium up to that surface, "
+                            "light paths the surface's, so the path tracer and photon points render different "
+                            "scenes; set the camera's medium to the surface's side\n", s->path,
+                            med == MEDIUM_VACUUM ? "vacuum" : "medium '", med == MEDIUM_VACUUM ? "" : s->media[med].name,
+                            med == MEDIUM_VACUUM ? "" : "'", sf->name, here == MEDIUM_VACUUM ? "vacuum" : "medium '",
+                            here == MEDIUM_VACUUM ? "" : s->media[here].name, here == MEDIUM_VACUUM ? "" : "'");
+                    return;
+                }
+                break;
+            }
+            if (!bsdf_is_passthrough(&s->bsdfs[sf->bsdf])) break; /* an opaque surface first: nothing to tell */
+            o = scene_offset_ray_origin(s, h.p, v3_dot(d, h.ng) > 0.0 ? h.ng : v3_neg(h.ng));
+        }
+    }
+}
+
 void run_warn(const scene *s, const render_plan *p)
 {
+    warn_camera_medium(s);
     warn_unreachable_lights(s, p);
     warn_mirrors(s, p);
     warn_mixed_eta(s, p);
