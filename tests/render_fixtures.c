@@ -311,3 +311,25 @@ void cell_mean_se(const cell_totals *t, int v, double *mean, double *se)
     *se = sqrt(fmax(0.0, (s2 - t->n * *mean * *mean) / (t->n - 1)) / t->n);
 }
 
+
+void cell_render(const char *text, long passes, uint64_t seed, int frames, cell_totals *t, double *seconds)
+{
+    tmp_scene ts;
+    tmp_scene_write(&ts, text);
+    scene s;
+    load_scene(ts.path, NULL, 0, &s);
+    memset(t, 0, sizeof *t);
+    t->frames = frames;
+    render_options ro = {.threads = 2, .seed = seed, .spp = passes, .after_pass = cell_probe, .after_pass_ctx = t};
+    film f;
+    render_stats st;
+    dp_error err;
+    double t0 = dp_seconds();
+    if (render_scene(&s, &ro, &f, &st, &err)) fail_msg("%s", err.msg);
+    *seconds = dp_seconds() - t0;
+    assert_int_equal(st.nonfinite, 0);
+    assert_int_equal(t->n, passes);
+    film_free(&f);
+    scene_free(&s);
+    tmp_scene_remove(&ts);
+}

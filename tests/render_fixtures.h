@@ -95,6 +95,10 @@ typedef struct {
 int cell_probe(void *ctx, const film *f, const render_stats *st, dp_error *err);
 /* Mean over the passes of cell v and its standard error. */
 void cell_mean_se(const cell_totals *t, int v, double *mean, double *se);
+/* Renders the scene `text` (written to a temp folder) for `passes` passes with 2 threads and `seed` into the
+ * per-pass cells of t (frames: the frame count to record); *seconds the render's wall time. Fails the test on
+ * an error, a suppressed non-finite sample or a missing pass. */
+void cell_render(const char *text, long passes, uint64_t seed, int frames, cell_totals *t, double *seconds);
 
 #define BOX_WALLS                                                                                                  \
     "  \"bsdfs\": [ { \"name\": \"white\", \"type\": \"lambert\", \"albedo\": 0.7 },"                                  \

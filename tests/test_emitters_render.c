@@ -238,23 +238,7 @@ static void tile_render(const char *integrator, const char *lights, long passes,
 {
     char text[16384];
     lamp_box_text(text, sizeof text, integrator, lights);
-    tmp_scene ts;
-    tmp_scene_write(&ts, text);
-    scene s;
-    load_scene(ts.path, NULL, 0, &s);
-    memset(t, 0, sizeof *t);
-    render_options ro = {.threads = 2, .seed = seed, .spp = passes, .after_pass = cell_probe, .after_pass_ctx = t};
-    film f;
-    render_stats st;
-    dp_error err;
-    double t0 = dp_seconds();
-    if (render_scene(&s, &ro, &f, &st, &err)) fail_msg("%s", err.msg);
-    *seconds = dp_seconds() - t0;
-    assert_int_equal(st.nonfinite, 0);
-    assert_int_equal(t->n, passes);
-    film_free(&f);
-    scene_free(&s);
-    tmp_scene_remove(&ts);
+    cell_render(text, passes, seed, 0, t, seconds);
 }
 
 /* Largest |z| of m against ref over the 16 tiles, with a bias allowance `bias` (a fraction of the reference

@@ -28,24 +28,7 @@ static void method_totals(const char *time, const char *method, int unwarp, cons
         snprintf(rest, sizeof rest, "%s", end + strlen("} } ],"));
         snprintf(at, sizeof text - (size_t)(at - text), "%s ],%s", lights, rest);
     }
-    tmp_scene ts;
-    tmp_scene_write(&ts, text);
-    scene s;
-    load_scene(ts.path, NULL, 0, &s);
-    memset(t, 0, sizeof *t);
-    t->frames = frames;
-    render_options ro = {.threads = 2, .seed = seed, .spp = passes, .after_pass = cell_probe, .after_pass_ctx = t};
-    film f;
-    render_stats st;
-    dp_error err;
-    double t0 = dp_seconds();
-    if (render_scene(&s, &ro, &f, &st, &err)) fail_msg("%s", err.msg);
-    *seconds = dp_seconds() - t0;
-    assert_int_equal(st.nonfinite, 0);
-    assert_int_equal(t->n, passes);
-    film_free(&f);
-    scene_free(&s);
-    tmp_scene_remove(&ts);
+    cell_render(text, passes, seed, frames, t, seconds);
 }
 
 /* Largest |z| of the method against the reference over the tiles (and frames). Prints both totals. */

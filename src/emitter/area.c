@@ -84,16 +84,10 @@ void area_sample_ray(const scene *s, const emitter *e, const double u[4], emitte
 /* L_e·cosθ_y/(|x−y|²·p_A), front side only */
 int area_connect_point(const emitter *e, const emitter_point *pt, vec3 x, emitter_direct *out)
 {
-    vec3 to = v3_sub(pt->y, x);
-    double d2 = v3_dot(to, to);
-    if (!(d2 > 0.0)) return 0;
-    out->y = pt->y;
-    out->dist = sqrt(d2);
-    out->wi = v3_scale(to, 1.0 / out->dist);
+    if (!emitter_leg(pt->y, x, out)) return 0;
     double cos_y = -v3_dot(out->wi, pt->n);
     if (!(cos_y > 0.0)) return 0;
     out->value = v3_scale(e->value, cos_y / pt->pdf_a);
-    out->denom = d2;
     out->n = pt->n;
     return 1;
 }

@@ -71,16 +71,10 @@ static int parallel_beam_direct(const emitter *e, vec3 x, emitter_direct *out)
 int collimated_connect_point(const emitter *e, const emitter_point *pt, vec3 x, emitter_direct *out)
 {
     if (!(e->cos_div < 1.0)) return 0; /* parallel rays: a fixed point cannot reach x */
-    vec3 to = v3_sub(pt->y, x);
-    double d2 = v3_dot(to, to);
-    if (!(d2 > 0.0)) return 0;
-    out->y = pt->y;
-    out->dist = sqrt(d2);
-    out->wi = v3_scale(to, 1.0 / out->dist);
+    if (!emitter_leg(pt->y, x, out)) return 0;
     double cos_y = -v3_dot(out->wi, e->axis);
     if (!(cos_y >= e->cos_div)) return 0;
     out->value = v3_scale(e->value, cos_y / (M_PI * sin2_div(e) * pt->pdf_a));
-    out->denom = d2;
     return 1;
 }
 

@@ -5,6 +5,21 @@
 #include "dartspp/emitter.h"
 #include "dartspp/scene.h"
 
+/* The geometry of a connection from x to the emitter point y: out->y, the unit direction out->wi from x
+ * toward y, the length out->dist and out->denom = |x − y|² (the callers' 1/d², kept as one division);
+ * 0 when x is y. */
+static inline int emitter_leg(vec3 y, vec3 x, emitter_direct *out)
+{
+    vec3 to = v3_sub(y, x);
+    double d2 = v3_dot(to, to);
+    if (!(d2 > 0.0)) return 0;
+    out->y = y;
+    out->dist = sqrt(d2);
+    out->wi = v3_scale(to, 1.0 / out->dist);
+    out->denom = d2;
+    return 1;
+}
+
 /* point.c */
 void point_sample_ray(const emitter *e, const double u[4], emitter_ray *r);
 int point_connect(const emitter *e, vec3 x, emitter_direct *out);

@@ -15,13 +15,7 @@ void point_sample_ray(const emitter *e, const double u[4], emitter_ray *r)
 /* NEE: I/|x − p|², a delta in position (no pdf, no MIS) */
 int point_connect(const emitter *e, vec3 x, emitter_direct *out)
 {
-    vec3 to = v3_sub(e->pos, x);
-    double d2 = v3_dot(to, to);
-    if (!(d2 > 0.0)) return 0;
-    out->y = e->pos;
-    out->dist = sqrt(d2);
-    out->wi = v3_scale(to, 1.0 / out->dist);
+    if (!emitter_leg(e->pos, x, out)) return 0;
     out->value = e->value;
-    out->denom = d2;
     return 1;
 }

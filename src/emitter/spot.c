@@ -72,15 +72,9 @@ void spot_sample_ray(const emitter *e, const double u[4], emitter_ray *r)
 
 int spot_connect(const emitter *e, vec3 x, emitter_direct *out)
 {
-    vec3 to = v3_sub(e->pos, x);
-    double d2 = v3_dot(to, to);
-    if (!(d2 > 0.0)) return 0;
-    out->y = e->pos;
-    out->dist = sqrt(d2);
-    out->wi = v3_scale(to, 1.0 / out->dist);
+    if (!emitter_leg(e->pos, x, out)) return 0;
     double f = spot_falloff(e, -v3_dot(out->wi, e->axis));
     if (!(f > 0.0)) return 0;
     out->value = v3_scale(e->value, f);
-    out->denom = d2;
     return 1;
 }
