@@ -1,8 +1,13 @@
 #!/bin/sh
-# Path-tracer reference image of a scene: bench/reference.sh SCENE.json [SECONDS] [OUT.exr] [extra render args]
+# Reference image of a scene: bench/reference.sh SCENE.json [SECONDS] [OUT.exr] [extra render args]
 # Renders the scene with the reference path tracer (integrator type overridden) for SECONDS in all
 # (default 600) on all cores, as CHUNKS (default 4) independent renders of SECONDS/CHUNKS with different
-# seeds, merged by `dartspp merge` into OUT (default refs/<scene stem>-pt.exr). The spread of the chunks
+# seeds, merged by `dartspp merge` into OUT (default refs/<scene stem>-pt.exr).
+# METHOD=scene renders with the scene file's own integrator instead (e.g. the paper's DARTS photon points,
+# consistent: its radii shrink without end), for scenes where the path tracer cannot reach a useful noise
+# level; check such a reference against the path tracer (bench/tile_check.py). PASSES=N makes each chunk
+# N passes (--spp) instead of a wall time, so that the chunks can be paused (kill -STOP / -CONT) while the
+# machine is needed for timing, and SECONDS is then only a label. The spread of the chunks
 # gives the variance of the reference's own noise, written to OUT.var (one number, per channel value):
 # every MSE measured against OUT is too high by about that much, and bench/equal_time.sh subtracts it.
 # A sidecar OUT.txt records the command, date, machine and passes: the reference's cost.
@@ -20,16 +25,23 @@ bin=${DARTSPP:-build/dartspp}
 mkdir -p "$(dirname "$out")"
 log="$out.txt"
 per=$(awk -v s="$secs" -v k="$chunks" 'BEGIN { printf "%g", s / k }')
+case ${METHOD:-pt} in
+pt) how="--set type=path_tracer"; what="path tracer" ;;
+scene) how=""; what="the scene's own integrator" ;;
+*) echo "$0: METHOD must be pt or scene" >&2; exit 2 ;;
+esac
+if [ -n "${PASSES:-}" ]; then budget="--spp $PASSES"; size="$PASSES passes"; else budget="--time $per"; size="$per s"; fi
 {
-    echo "reference: $scene, path tracer, $secs s as $chunks chunks of $per s"
+    echo "reference: $scene, $what, $chunks chunks of $size"
     echo "date: $(date -u +%Y-%m-%dT%H:%MZ)  machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ *//')"
-    echo "command: $bin render $scene --set type=path_tracer --time $per --seed 7919+k --output ${out%.*}.chunkK.${out##*.} --quiet $*"
+    echo "command: $bin render $scene $how $budget --seed 7919+k --output ${out%.*}.chunkK.${out##*.} --quiet $*"
 } > "$log"
 parts=""
 k=0
 while [ "$k" -lt "$chunks" ]; do
     part="${out%.*}.chunk$k.${out##*.}"
-    "$bin" render "$scene" --set type=path_tracer --time "$per" --seed $((7919 + k)) --checkpoint 60 --output "$part" \
+    # shellcheck disable=SC2086
+    "$bin" render "$scene" $how $budget --seed $((7919 + k)) --checkpoint 60 --output "$part" \
         --quiet "$@" | grep '^rendered' | sed "s/^/chunk $k: /" >> "$log"
     parts="$parts $part"
     k=$((k + 1))
