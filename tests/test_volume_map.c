@@ -1,7 +1,10 @@
 /* Volume photon map: every beam query must return exactly the photons a brute-force scan accepts, with
  * the same t and d2, for random, axis-parallel, inside-the-cloud, zero-length and unbounded segments, zero
  * and huge radii, empty and one-photon maps and duplicate positions; and the visit order must not depend
- * on the build (run twice, or with another thread count). Photons carry their input index in `bounce`. */
+ * on the build (run twice, or with another thread count). Photons carry their input index in `bounce`.
+ * The query with a time window must visit, in order, the plain query's photons minus some outside the
+ * window and never one inside it (the film's gate test, computed as the sensor pass does), for random and
+ * boundary times and both camera legs. */
 #include "test_util.h"
 
 #include "dartspp/photon.h"
@@ -487,6 +490,184 @@ static void test_visit_order_deterministic(void **state)
     free(ph);
 }
 
+/* ---- time windows ---- */
+
+/* A window query's inputs and what it visited: every photon, and those whose total time the film counts. */
+typedef struct {
+    beam_time_filter w;
+    double start, width;
+    int frames;
+    vec3 o;
+    hit_list all, in;
+} window_visit;
+
+/* The sensor pass's time (volume_photon_splat) and the gate test of film_time_slot, in the same double
+ * operations. */
+static int window_counts(const window_visit *v, const photon *p, double t)
+{
+    double leg = v->w.projected ? t : v3_len(v3_sub(pos_of(p), v->o));
+    double rel = (v->w.t0 + p->time + v->w.eta * leg - v->start) / v->width;
+    return rel >= 0.0 && rel < v->frames;
+}
+
+static void collect_window(void *ctx, const photon *p, double t, double d2)
+{
+    window_visit *v = ctx;
+    hit_push(&v->all, p->bounce, t, d2);
+    if (window_counts(v, p, t)) hit_push(&v->in, p->bounce, t, d2);
+}
+
+/* Is a (in order) a subsequence of b? */
+static int is_subsequence(const hit_list *a, const hit_list *b)
+{
+    size_t j = 0;
+    for (size_t i = 0; i < a->n; i++) {
+        while (j < b->n && b->v[j].idx != a->v[i].idx) j++;
+        if (j == b->n) return 0;
+        j++;
+    }
+    return 1;
+}
+
+/* Runs the plain and the window query; asserts the window query's photons are the plain query's minus some
+ * the film would not count, and that the counted ones are the same in the same order. Returns the number
+ * of photons the window spared, and adds the counted ones to *counted. */
+static size_t check_window_query(const volume_photon_map *m, vec3 o, vec3 d, double tmax, const window_visit *setup,
+                                 size_t *counted)
+{
+    window_visit plain = *setup, win = *setup;
+    plain.o = win.o = o;
+    photon_map_query_beam(m, o, d, tmax, collect_window, &plain);
+    photon_map_query_beam_window(m, o, d, tmax, &win.w, collect_window, &win);
+    if (win.in.n != plain.in.n)
+        fail_msg("o=(%.17g %.17g %.17g) d=(%.17g %.17g %.17g) tmax=%g t0=%.17g eta=%g %s window [%.17g, %.17g): "
+                 "plain query %zu photons in the window, window query %zu", o.x, o.y, o.z, d.x, d.y, d.z, tmax,
+                 setup->w.t0, setup->w.eta, setup->w.projected ? "projected" : "euclidean", setup->w.lo, setup->w.hi,
+                 plain.in.n, win.in.n);
+    for (size_t i = 0; i < win.in.n; i++) assert_int_equal(win.in.v[i].idx, plain.in.v[i].idx);
+    assert_true(is_subsequence(&win.all, &plain.all));
+    size_t spared = plain.all.n - win.all.n;
+    *counted += win.in.n;
+    free(plain.all.v);
+    free(plain.in.v);
+    free(win.all.v);
+    free(win.in.v);
+    return spared;
+}
+
+/* A gate as the sensor pass makes it: [start, start + width·frames). */
+static window_visit make_window(double t0, double eta, int projected, double start, double width, int frames)
+{
+    window_visit v = {.start = start, .width = width, .frames = frames > 0 ? frames : 1};
+    v.w = (beam_time_filter){.t0 = t0, .eta = eta, .projected = projected, .lo = start, .hi = start + width * v.frames};
+    return v;
+}
+
+/* Random photons with random times (light paths of length 0..3), random beams, gates and legs. */
+static void test_window_random(void **state)
+{
+    (void)state;
+    const size_t n = 20000;
+    const double r = 0.05;
+    photon *ph = random_cloud(n, 131);
+    dp_rng g = rng_stream(132, 0, 0);
+    for (size_t i = 0; i < n; i++) ph[i].time = 3.0 * rng_uniform(&g);
+    volume_photon_map *m = build_or_fail(ph, n, r);
+    static const double etas[3] = {0.0, 1.0, 1.33};
+    size_t spared = 0, counted = 0;
+    for (int i = 0; i < 2000; i++) {
+        vec3 o = random_point(&g, -0.5, 1.5);
+        vec3 d = random_dir(&g);
+        double tmax = i % 4 == 0 ? INFINITY : 2.0 * rng_uniform(&g);
+        double t0 = i % 3 == 0 ? 0.0 : rng_uniform(&g);
+        window_visit v = make_window(t0, etas[i % 3], (i / 3) % 2, 5.0 * rng_uniform(&g), 0.02 + 0.5 * rng_uniform(&g),
+                                     (int)(rng_next_u64(&g) % 4));
+        spared += check_window_query(m, o, d, tmax, &v, &counted);
+    }
+    assert_true(counted > 2000); /* the windows do count photons (3219) */
+    assert_true(spared > 8000);  /* and the query skips many that they do not (13170) */
+    volume_map_free(m);
+    free(ph);
+}
+
+/* A gate whose end the film's test (rel < frames, rel = (t - start)/width) still counts: a photon with a
+ * total time of exactly start + width·frames is inside, so only the margin keeps its node. */
+static window_visit inclusive_end_window(dp_rng *g, double t0, double eta, int projected)
+{
+    for (int tries = 0; tries < 100000; tries++) {
+        int frames = 1 + (int)(rng_next_u64(g) % 5);
+        window_visit v = make_window(t0, eta, projected, 0.1 + 3.0 * rng_uniform(g), 0.05 + rng_uniform(g), frames);
+        if ((v.w.hi - v.start) / v.width < v.frames) return v;
+    }
+    fail_msg("no gate found whose end counts");
+    return make_window(0, 0, 0, 0, 1, 1);
+}
+
+/* Times on the window's boundaries: eta = 0 (the unwarped sensor segment), photon times exactly at the
+ * gate's ends and one ulp either side; then eta > 0 with times that put every photon's Euclidean total
+ * within rounding of the end, seen from one origin. The window query must keep every counted photon. */
+static void test_window_boundaries(void **state)
+{
+    (void)state;
+    const size_t n = 20000;
+    const double r = 0.05;
+    photon *ph = random_cloud(n, 141);
+    dp_rng g = rng_stream(142, 0, 0);
+    size_t spared = 0, counted = 0;
+    for (int round = 0; round < 20; round++) {
+        window_visit v = inclusive_end_window(&g, 0.0, 0.0, round % 2);
+        double ends[6] = {v.w.lo, nextafter(v.w.lo, -INFINITY), nextafter(v.w.lo, INFINITY),
+                          v.w.hi, nextafter(v.w.hi, -INFINITY), nextafter(v.w.hi, INFINITY)};
+        for (size_t i = 0; i < n; i++) ph[i].time = ends[(i * 7 + (size_t)round) % 6 < 3 ? 3 + i % 3 : i % 3];
+        for (size_t i = 0; i < n; i += 2) ph[i].time = ends[3 + i % 3]; /* mostly the end, the hard side */
+        volume_photon_map *m = build_or_fail(ph, n, r);
+        for (int i = 0; i < 50; i++)
+            spared += check_window_query(m, random_point(&g, -0.5, 1.5), random_dir(&g), i % 2 ? INFINITY : 1.0, &v, &counted);
+        volume_map_free(m);
+    }
+    for (int round = 0; round < 20; round++) {
+        vec3 o = random_point(&g, -0.5, 1.5);
+        window_visit v = inclusive_end_window(&g, rng_uniform(&g), round % 2 ? 1.0 : 1.33, 0);
+        for (size_t i = 0; i < n; i++) {
+            double leg = v3_len(v3_sub(pos_of(&ph[i]), o));
+            double target = i % 2 ? v.w.hi : v.w.lo;
+            ph[i].time = target - v.w.t0 - v.w.eta * leg;
+        }
+        volume_photon_map *m = build_or_fail(ph, n, r);
+        for (int i = 0; i < 50; i++)
+            spared += check_window_query(m, o, random_dir(&g), i % 2 ? INFINITY : 1.0, &v, &counted);
+        volume_map_free(m);
+    }
+    assert_true(counted > 1000);
+    (void)spared;
+    free(ph);
+}
+
+/* Non-finite times and radii: NaN and infinite times never count, and an infinite radius (infinite node
+ * boxes) still gives the plain query's counted photons. */
+static void test_window_nonfinite(void **state)
+{
+    (void)state;
+    const size_t n = 5000;
+    photon *ph = random_cloud(n, 151);
+    dp_rng g = rng_stream(152, 0, 0);
+    static const double odd[3] = {NAN, INFINITY, -INFINITY};
+    for (size_t i = 0; i < n; i++) ph[i].time = i % 5 == 0 ? odd[(i / 5) % 3] : 2.0 * rng_uniform(&g);
+    const double radii[2] = {0.05, INFINITY};
+    size_t counted = 0;
+    for (int k = 0; k < 2; k++) {
+        volume_photon_map *m = build_or_fail(ph, n, radii[k]);
+        for (int i = 0; i < 60; i++) {
+            window_visit v = make_window(0.5 * rng_uniform(&g), i % 2 ? 1.0 : 0.0, (i / 2) % 2, 2.0 * rng_uniform(&g),
+                                         0.1 + 0.3 * rng_uniform(&g), i % 3);
+            check_window_query(m, random_point(&g, -0.5, 1.5), random_dir(&g), i % 3 ? INFINITY : 1.0, &v, &counted);
+        }
+        volume_map_free(m);
+    }
+    assert_true(counted > 0);
+    free(ph);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -505,6 +686,9 @@ int main(void)
         cmocka_unit_test(test_rays_through_photons),
         cmocka_unit_test(test_photons_at_radius),
         cmocka_unit_test(test_visit_order_deterministic),
+        cmocka_unit_test(test_window_random),
+        cmocka_unit_test(test_window_boundaries),
+        cmocka_unit_test(test_window_nonfinite),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

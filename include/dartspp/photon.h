@@ -30,6 +30,23 @@ size_t volume_map_size(const volume_photon_map *m);
 typedef void (*beam_visit_fn)(void *ctx, const photon *p, double t, double d2);
 void photon_map_query_beam(const volume_photon_map *m, vec3 o, vec3 d, double tmax, beam_visit_fn visit, void *ctx);
 
+/* A time window on a beam query. A photon p visited at parameter t has the total time
+ *   t0 + p->time + eta · leg,   leg = t (projected) or |p - o| (Euclidean),
+ * and the caller counts it only inside [lo, hi) (lo <= hi; hi may be INFINITY). */
+typedef struct {
+    double t0;     /* time at the segment origin */
+    double eta;    /* time per unit of leg (0: the leg takes no time) */
+    int projected; /* leg = t; 0: leg = |p - o| */
+    double lo, hi; /* the window */
+} beam_time_filter;
+
+/* photon_map_query_beam, skipping the subtrees none of whose photons can have a total time in [lo, hi):
+ * bounds from the node's box and its photons' time range, widened by a relative margin (1e-9) for the
+ * rounding of the caller's own time computation. So it visits, in the same order, the photons of the plain
+ * query minus some outside the window (never one inside it): the caller still tests each photon's time. */
+void photon_map_query_beam_window(const volume_photon_map *m, vec3 o, vec3 d, double tmax, const beam_time_filter *w,
+                                  beam_visit_fn visit, void *ctx);
+
 /* The same search as photon_map_query_knn, on a volume map (built with any r): k nearest within R in
  * (d2, index) order, indices into the array given to volume_map_build. */
 int photon_map_query_knn_tree(const volume_photon_map *m, vec3 x, int k, double R, int *idx, double *d2);

@@ -46,6 +46,11 @@ void primary_line_gather_beam(const scene *s, const gather_input *g, film_pixel 
  * segments. Both gathers (beam queries and the splat) use it. */
 void volume_photon_splat(const gather_input *g, film_pixel *pix, const medium *m, vec3 o, vec3 d, vec3 thr,
                          double t_cam, int b_cam, const photon *p, double t, double d2);
+/* The beam query of a camera segment o + t·d, 0 <= t <= len, in medium m (thr, t_cam at o, b_cam camera
+ * segments), each photon found given to volume_photon_splat. On a gated film the query skips the subtrees
+ * whose photons all fall outside the gate (photon_map_query_beam_window): the same contributions, less walk. */
+void volume_beam_gather(const gather_input *g, film_pixel *pix, const medium *m, vec3 o, vec3 d, double len, vec3 thr,
+                        double t_cam, int b_cam);
 /* Its second half, once the bounce count is checked and the film slot of the path time is known to
  * count: inline, as the splat calls it for every pixel a photon covers. */
 static inline void volume_photon_splat_slot(const gather_input *g, film_pixel *pix, const medium *m, vec3 d, vec3 thr,

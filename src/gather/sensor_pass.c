@@ -15,7 +15,8 @@ typedef struct {
 } pixel_ctx;
 
 typedef struct {
-    pixel_ctx *c;
+    const gather_input *g;
+    film_pixel *pix;
     const medium *m;
     vec3 o, d;
     vec3 thr;        /* camera throughput up to the segment origin */
@@ -38,7 +39,31 @@ void volume_photon_splat(const gather_input *g, film_pixel *pix, const medium *m
 static void visit_volume_photon(void *ctx, const photon *p, double t, double d2)
 {
     const beam_ctx *b = ctx;
-    volume_photon_splat(b->c->g, b->c->pix, b->m, b->o, b->d, b->thr, b->t_cam, b->b_cam, p, t, d2);
+    volume_photon_splat(b->g, b->pix, b->m, b->o, b->d, b->thr, b->t_cam, b->b_cam, p, t, d2);
+}
+
+/* The gate as the beam query's time window: the path time of volume_photon_splat (the sensor's own segment
+ * takes no time when unwarped) and the window [start, start + width·frames) that film_time_slot counts.
+ * 0 when the film is not gated: every time counts, nothing to prune. */
+static int gate_filter(const gather_input *g, const film *f, const medium *m, double t_cam, int b_cam,
+                       beam_time_filter *w)
+{
+    const time_window *tw = &f->window;
+    if (!tw->gated || !(tw->width > 0.0)) return 0; /* gated implies width > 0 (settings.c); lo <= hi relies on it */
+    *w = (beam_time_filter){.t0 = t_cam, .eta = g->camera_unwarp && b_cam == 1 ? 0.0 : m->eta,
+                            .projected = g->camera_leg_projected, .lo = tw->start, .hi = time_window_end(tw)};
+    return 1;
+}
+
+void volume_beam_gather(const gather_input *g, film_pixel *pix, const medium *m, vec3 o, vec3 d, double len, vec3 thr,
+                        double t_cam, int b_cam)
+{
+    beam_ctx b = {g, pix, m, o, d, thr, t_cam, b_cam};
+    beam_time_filter w;
+    if (gate_filter(g, pix->f, m, t_cam, b_cam, &w))
+        photon_map_query_beam_window(g->vol, o, d, len, &w, visit_volume_photon, &b);
+    else
+        photon_map_query_beam(g->vol, o, d, len, visit_volume_photon, &b);
 }
 
 /* Keeps a medium segment of the primary line for the splat; 0 when the line is full (then the caller
@@ -144,9 +169,8 @@ static void trace_sensor_path(pixel_ctx *c, vec3 d)
         double len = hit ? h.t : INFINITY;
         if (med != MEDIUM_VACUUM) {
             const medium *m = &s->media[med];
-            beam_ctx b = {c, m, o, d, thr, t_cam, b_cam};
             if (c->g->vol && !(line && record_line_segment(s, line, med, o, d, len, thr, t_cam)))
-                photon_map_query_beam(c->g->vol, o, d, len, visit_volume_photon, &b);
+                volume_beam_gather(c->g, c->pix, m, o, d, len, thr, t_cam, b_cam);
             thr = v3_mul(thr, v3_exp_neg(v3_scale(m->sigma_t, len)));
         }
         if (!hit || v3_is_zero(thr)) return;

@@ -219,27 +219,12 @@ int volume_splat(const scene *s, const gather_input *g, film *f, const primary_l
     return 0;
 }
 
-typedef struct {
-    const gather_input *g;
-    film_pixel *pix;
-    const medium *m;
-    vec3 o, d, thr;
-    double t_cam;
-} segment_visit;
-
-static void visit_segment_photon(void *ctx, const photon *p, double t, double d2)
-{
-    const segment_visit *v = ctx;
-    volume_photon_splat(v->g, v->pix, v->m, v->o, v->d, v->thr, v->t_cam, 1, p, t, d2);
-}
-
 void primary_line_gather_beam(const scene *s, const gather_input *g, film_pixel *pix, const primary_line *line)
 {
     vec3 d = v3(line->d[0], line->d[1], line->d[2]);
     for (int k = 0; k < line->n; k++) {
         const line_segment *sg = &line->seg[k];
-        segment_visit v = {g, pix, &s->media[sg->medium], v3_add(s->cam.pos, v3_scale(d, sg->t0)), d,
-                           v3(sg->thr[0], sg->thr[1], sg->thr[2]), sg->t_cam};
-        photon_map_query_beam(g->vol, v.o, d, sg->t1 - sg->t0, visit_segment_photon, &v);
+        volume_beam_gather(g, pix, &s->media[sg->medium], v3_add(s->cam.pos, v3_scale(d, sg->t0)), d, sg->t1 - sg->t0,
+                           v3(sg->thr[0], sg->thr[1], sg->thr[2]), sg->t_cam, 1);
     }
 }

@@ -6,12 +6,14 @@
  * k are the contiguous range [j·n >> k, (j+1)·n >> k) of the tree-ordered arrays, so no ranges are stored.
  * The build splits each range at its middle along the largest extent of its photons (a selection, not a
  * sort: O(n) per level), and each node keeps the float box of its photons grown by r plus a tiny padding
- * that absorbs rounding. Subtrees are built as OpenMP tasks; each is deterministic, so the map does not
- * depend on the thread count.
+ * that absorbs rounding, and the range of its photons' times (for the queries with a time window). Subtrees
+ * are built as OpenMP tasks; each is deterministic, so the map does not depend on the thread count.
  *
  * Query: iterative depth-first traversal (left child first, so the order is fixed by the map) with a slab
  * test that stays exact for zero direction components, then the photon test in double:
- *   w = p - o,  t = w·d,  v = w - t·d,  d2 = v·v   (= |w|^2 - t^2, without its cancellation; never < 0). */
+ *   w = p - o,  t = w·d,  v = w - t·d,  d2 = v·v   (= |w|^2 - t^2, without its cancellation; never < 0).
+ * With a time window, a node is also skipped when no photon in its box, with a time in its range, can have
+ * a total time inside the window (window_may_count). */
 #include "dartspp/photon.h"
 
 #include <float.h>
@@ -28,10 +30,16 @@
 #define AXIS_SAMPLES 64             /* points looked at to choose a split axis */
 #define PIVOT_SAMPLES 255           /* keys sampled to place a pivot in long ranges */
 #define PIVOT_SAMPLE_MIN 4096       /* ranges at least this long use a sampled pivot */
+#define WINDOW_MARGIN 1e-9          /* time window widening relative to the magnitudes summed (rounding) */
 
 typedef struct {
     float lo[3], hi[3];
 } node_box;
+
+/* The photons' times under a node: exact doubles (min and max; NaN times are ignored below the leaves). */
+typedef struct {
+    double lo, hi;
+} time_range;
 
 /* A photon position and its index in the caller's array: the build sorts these 16-byte items, and they
  * stay in tree order as the compact position array that the leaf tests read. */
@@ -45,6 +53,7 @@ struct volume_photon_map {
     int depth;          /* level of the leaves; the tree has 2^(depth+1) - 1 nodes */
     double r2;          /* gather radius squared */
     node_box *boxes;    /* per node: photons' box grown by r (+ padding), rounded outward to float */
+    time_range *times;  /* per node: its photons' time range (a separate array: the plain query never reads it) */
     point_item *points; /* positions, tree order */
     photon *photons;    /* photon copies, tree order */
 };
@@ -55,6 +64,8 @@ typedef struct {
     double pad; /* how far node boxes reach beyond their photons */
     point_item *points;
     node_box *boxes;
+    const photon *ph;   /* the caller's photons (points[i].src indexes them): their times */
+    time_range *times;
 } builder;
 
 /* ---- build ---- */
@@ -124,6 +135,24 @@ static void union_box(node_box *box, const node_box *l, const node_box *r)
         box->lo[a] = fminf(l->lo[a], r->lo[a]);
         box->hi[a] = fmaxf(l->hi[a], r->hi[a]);
     }
+}
+
+static void leaf_times(time_range *tr, const photon *ph, const point_item *pts, size_t count)
+{
+    double lo = ph[pts[0].src].time, hi = lo;
+    for (size_t i = 1; i < count; i++) {
+        double t = ph[pts[i].src].time;
+        lo = t < lo ? t : lo;
+        hi = t > hi ? t : hi;
+    }
+    tr->lo = lo;
+    tr->hi = hi;
+}
+
+static void union_times(time_range *tr, const time_range *l, const time_range *r)
+{
+    tr->lo = fmin(l->lo, r->lo);
+    tr->hi = fmax(l->hi, r->hi);
 }
 
 static float median_of_three(float a, float b, float c)
@@ -220,6 +249,7 @@ static void build_node(const builder *b, size_t node, int level, size_t j)
     size_t lo = range_start(b->n, j, level), hi = range_start(b->n, j + 1, level);
     if (level == b->depth) {
         leaf_box(&b->boxes[node], b->points + lo, hi - lo, b->pad);
+        leaf_times(&b->times[node], b->ph, b->points + lo, hi - lo);
         return;
     }
     size_t mid = range_start(b->n, 2 * j + 1, level + 1);
@@ -234,6 +264,7 @@ static void build_node(const builder *b, size_t node, int level, size_t j)
         build_node(b, 2 * node + 2, level + 1, 2 * j + 1);
     }
     union_box(&b->boxes[node], &b->boxes[2 * node + 1], &b->boxes[2 * node + 2]);
+    union_times(&b->times[node], &b->times[2 * node + 1], &b->times[2 * node + 2]);
 }
 
 /* malloc, but big arrays come 2 MiB-aligned and ask for transparent huge pages: a 10^7-photon map then
@@ -285,7 +316,8 @@ size_t volume_map_bytes(size_t n)
 {
     if (n == 0) return sizeof(volume_photon_map);
     size_t node_count = ((size_t)2 << leaf_depth(n)) - 1;
-    return sizeof(volume_photon_map) + node_count * sizeof(node_box) + n * (sizeof(point_item) + sizeof(photon));
+    return sizeof(volume_photon_map) + node_count * (sizeof(node_box) + sizeof(time_range)) +
+           n * (sizeof(point_item) + sizeof(photon));
 }
 
 volume_photon_map *volume_map_build(const photon *ph, size_t n, double r, dp_error *err)
@@ -310,9 +342,10 @@ volume_photon_map *volume_map_build(const photon *ph, size_t n, double r, dp_err
     m->depth = leaf_depth(n);
     size_t node_count = ((size_t)2 << m->depth) - 1;
     m->boxes = alloc_array(node_count, sizeof *m->boxes);
+    m->times = alloc_array(node_count, sizeof *m->times);
     m->points = alloc_array(n, sizeof *m->points);
     m->photons = alloc_array(n, sizeof *m->photons);
-    if (!m->boxes || !m->points || !m->photons) {
+    if (!m->boxes || !m->times || !m->points || !m->photons) {
         dp_fail_kind(err, DP_ERROR_MEMORY, "volume photon map: out of memory for %zu photons", n);
         volume_map_free(m);
         return NULL;
@@ -323,7 +356,7 @@ volume_photon_map *volume_map_build(const photon *ph, size_t n, double r, dp_err
         return NULL;
     }
     /* boxes reach r beyond their photons, plus PAD_REL of the coordinate scale to cover rounding */
-    builder b = {n, m->depth, r + PAD_REL * (r + max_abs), m->points, m->boxes};
+    builder b = {n, m->depth, r + PAD_REL * (r + max_abs), m->points, m->boxes, ph, m->times};
     build_tree(&b);
     copy_photons_in_tree_order(ph, m->points, m->photons, n);
     return m;
@@ -333,6 +366,7 @@ void volume_map_free(volume_photon_map *m)
 {
     if (!m) return;
     free(m->boxes);
+    free(m->times);
     free(m->points);
     free(m->photons);
     free(m);
@@ -413,7 +447,45 @@ static void visit_leaf(const volume_photon_map *m, const beam *q, size_t first, 
     for (int k = 0; k < count; k++) visit(ctx, &m->photons[first + (size_t)accepted[k]], ts[k], d2s[k]);
 }
 
-void photon_map_query_beam(const volume_photon_map *m, vec3 o, vec3 d, double tmax, beam_visit_fn visit, void *ctx)
+/* The leg's range over the photons of a box, and the largest |p - o| (the scale of the leg's rounding):
+ * Euclidean, from the nearest point of the box to its farthest corner; projected, the range of (p - o)·d
+ * over the box within the visited [0, tmax]. */
+static void leg_range(const beam *q, const node_box *box, int projected, double *lo, double *hi, double *far)
+{
+    double near2 = 0.0, far2 = 0.0, t_lo = 0.0, t_hi = 0.0;
+    for (int a = 0; a < 3; a++) {
+        double l = box->lo[a] - q->o[a], h = box->hi[a] - q->o[a];
+        double gap = l > 0.0 ? l : (h < 0.0 ? -h : 0.0), reach = -l > h ? -l : h;
+        near2 += gap * gap;
+        far2 += reach * reach;
+        double pl = l * q->d[a], ph = h * q->d[a];
+        t_lo += pl < ph ? pl : ph;
+        t_hi += pl < ph ? ph : pl;
+    }
+    *far = sqrt(far2);
+    *lo = projected ? dp_fmax(t_lo, 0.0) : sqrt(near2);
+    *hi = projected ? dp_fmin(t_hi, q->tmax) : *far;
+}
+
+/* Can a photon of this node have a total time in [w->lo, w->hi)? Its total lies within the sum of the
+ * bounds of its three terms; the window is widened by WINDOW_MARGIN of the magnitudes summed, which covers
+ * the rounding of the caller's time and of the film's test. Every NaN (0·inf on infinite boxes, NaN times)
+ * makes both comparisons false: the node is kept. */
+static int window_may_count(const beam *q, const beam_time_filter *w, const node_box *box, const time_range *tr)
+{
+    double leg_lo, leg_hi, far;
+    leg_range(q, box, w->projected, &leg_lo, &leg_hi, &far);
+    double e_lo = w->eta * leg_lo, e_hi = w->eta * leg_hi;
+    if (e_lo > e_hi) { double x = e_lo; e_lo = e_hi; e_hi = x; } /* eta < 0 */
+    double total_lo = w->t0 + tr->lo + e_lo, total_hi = w->t0 + tr->hi + e_hi;
+    double scale = fabs(w->t0) + dp_fmax(fabs(tr->lo), fabs(tr->hi)) + fabs(w->eta) * far + fabs(w->lo) + fabs(w->hi);
+    double margin = WINDOW_MARGIN * scale;
+    return !(total_hi < w->lo - margin || total_lo >= w->hi + margin);
+}
+
+/* Depth-first traversal, left child first; w NULL: no time window. */
+static void query_beam(const volume_photon_map *m, vec3 o, vec3 d, double tmax, const beam_time_filter *w,
+                       beam_visit_fn visit, void *ctx)
 {
     if (!m || m->n == 0 || !visit || !(tmax >= 0.0) || !v3_is_finite(o) || !v3_is_finite(d)) return;
     beam q = make_beam(o, d, tmax, m->r2);
@@ -424,6 +496,7 @@ void photon_map_query_beam(const volume_photon_map *m, vec3 o, vec3 d, double tm
     while (top > 0) {
         size_t node = stack[--top];
         if (!beam_meets_box(&q, &m->boxes[node])) continue;
+        if (w && !window_may_count(&q, w, &m->boxes[node], &m->times[node])) continue;
         if (node < first_leaf) {
             stack[top++] = 2 * node + 2; /* right below left: the left subtree is visited first */
             stack[top++] = 2 * node + 1;
@@ -432,6 +505,17 @@ void photon_map_query_beam(const volume_photon_map *m, vec3 o, vec3 d, double tm
         size_t leaf = node - first_leaf;
         visit_leaf(m, &q, range_start(m->n, leaf, m->depth), range_start(m->n, leaf + 1, m->depth), visit, ctx);
     }
+}
+
+void photon_map_query_beam(const volume_photon_map *m, vec3 o, vec3 d, double tmax, beam_visit_fn visit, void *ctx)
+{
+    query_beam(m, o, d, tmax, NULL, visit, ctx);
+}
+
+void photon_map_query_beam_window(const volume_photon_map *m, vec3 o, vec3 d, double tmax, const beam_time_filter *w,
+                                  beam_visit_fn visit, void *ctx)
+{
+    query_beam(m, o, d, tmax, w, visit, ctx);
 }
 
 /* ---- k nearest neighbours (the surface map's search) ----
