@@ -644,7 +644,8 @@ static void test_window_boundaries(void **state)
 }
 
 /* Non-finite times and radii: NaN and infinite times never count, and an infinite radius (infinite node
- * boxes) still gives the plain query's counted photons. */
+ * boxes) still gives the plain query's counted photons; half the times NaN, so that a NaN heads many
+ * leaves (a range taken from it must not hide the leaf's other photons from its parent). */
 static void test_window_nonfinite(void **state)
 {
     (void)state;
@@ -652,10 +653,12 @@ static void test_window_nonfinite(void **state)
     photon *ph = random_cloud(n, 151);
     dp_rng g = rng_stream(152, 0, 0);
     static const double odd[3] = {NAN, INFINITY, -INFINITY};
-    for (size_t i = 0; i < n; i++) ph[i].time = i % 5 == 0 ? odd[(i / 5) % 3] : 2.0 * rng_uniform(&g);
-    const double radii[2] = {0.05, INFINITY};
+    const double radii[3] = {0.05, INFINITY, 0.05};
     size_t counted = 0;
-    for (int k = 0; k < 2; k++) {
+    for (int k = 0; k < 3; k++) {
+        /* one in 5 odd; then half NaN, the others growing along x (so siblings' ranges differ) */
+        for (size_t i = 0; i < n; i++)
+            ph[i].time = k < 2 ? (i % 5 == 0 ? odd[(i / 5) % 3] : 2.0 * rng_uniform(&g)) : (i % 2 ? NAN : 2.0 * ph[i].pos[0]);
         volume_photon_map *m = build_or_fail(ph, n, radii[k]);
         for (int i = 0; i < 60; i++) {
             window_visit v = make_window(0.5 * rng_uniform(&g), i % 2 ? 1.0 : 0.0, (i / 2) % 2, 2.0 * rng_uniform(&g),

@@ -36,7 +36,8 @@ typedef struct {
     float lo[3], hi[3];
 } node_box;
 
-/* The photons' times under a node: exact doubles (min and max; NaN times are ignored below the leaves). */
+/* The photons' times under a node: exact doubles. NaN times (which no window counts) are left out (fmin,
+ * fmax), so a node whose photons all have one has a NaN range, which no window prunes and no union keeps. */
 typedef struct {
     double lo, hi;
 } time_range;
@@ -140,10 +141,9 @@ static void union_box(node_box *box, const node_box *l, const node_box *r)
 static void leaf_times(time_range *tr, const photon *ph, const point_item *pts, size_t count)
 {
     double lo = ph[pts[0].src].time, hi = lo;
-    for (size_t i = 1; i < count; i++) {
-        double t = ph[pts[i].src].time;
-        lo = t < lo ? t : lo;
-        hi = t > hi ? t : hi;
+    for (size_t i = 1; i < count; i++) { /* fmin, not <: a NaN first time must not hide the others */
+        lo = fmin(lo, ph[pts[i].src].time);
+        hi = fmax(hi, ph[pts[i].src].time);
     }
     tr->lo = lo;
     tr->hi = hi;
