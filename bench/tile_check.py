@@ -1,4 +1,4 @@
-#!/usr/bin/env python3
+#!/usr/bin/python3
 """Checks a reference image against independent renders of another estimator, tile by tile.
 
     bench/tile_check.py --tiles N --ref R0.pfm R1.pfm ... --check C0.pfm C1.pfm ...
