@@ -485,6 +485,42 @@ static void test_never_non_finite(void **state)
             }
 }
 
+/* bsdf_regularized: a rough conductor or pbrt plastic smoother than the floor evaluates as the same model
+ * prepared with roughness = the floor (α = roughness for both distributions); one already rougher, and the
+ * other models, evaluate as before. */
+static double max_diff(vec3 a, vec3 b) { return fmax(fabs(a.x - b.x), fmax(fabs(a.y - b.y), fabs(a.z - b.z))); }
+
+static void test_regularized(void **state)
+{
+    (void)state;
+    const bsdf_type raised[] = {BSDF_ROUGH_CONDUCTOR, BSDF_PBRT_PLASTIC};
+    const bsdf_type kept[] = {BSDF_LAMBERT, BSDF_ROUGH_PLASTIC, BSDF_ROUGH_DIELECTRIC, BSDF_MIRROR};
+    vec3 albedo = v3(0.8, 0.6, 0.4);
+    for (size_t t = 0; t < sizeof raised / sizeof *raised; t++) {
+        bsdf smooth = prepared(raised[t]), rough = prepared(raised[t]);
+        smooth.roughness = 0.05;
+        rough.roughness = 0.3;
+        dp_error err;
+        if (bsdf_prepare(&smooth, &err) || bsdf_prepare(&rough, &err)) fail_msg("%s", err.msg);
+        bsdf reg = bsdf_regularized(&smooth, 0.3), same = bsdf_regularized(&rough, 0.1);
+        int differs = 0;
+        for (int i = 0; i < 40; i++) {
+            vec3 wi = dir(0.03 * i, 0.7 * i), wo = dir(0.025 * i + 0.01, 0.7 * i + M_PI + 0.02 * i);
+            vec3 got = bsdf_eval(&reg, albedo, wi, wo, ~0u), want = bsdf_eval(&rough, albedo, wi, wo, ~0u);
+            vec3 before = bsdf_eval(&smooth, albedo, wi, wo, ~0u);
+            assert_true(max_diff(got, want) <= 1e-12 * (1.0 + v3_max(want)));
+            vec3 kept_eval = bsdf_eval(&same, albedo, wi, wo, ~0u);
+            assert_true(max_diff(kept_eval, want) == 0.0);
+            differs |= max_diff(before, want) > 1e-6 * (1.0 + v3_max(want));
+        }
+        assert_true(differs); /* the floor changes the smooth model's values, so the check above can fail */
+    }
+    for (size_t t = 0; t < sizeof kept / sizeof *kept; t++) {
+        bsdf b = prepared(kept[t]), r = bsdf_regularized(&b, 0.9);
+        assert_true(memcmp(&b, &r, sizeof b) == 0);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -500,6 +536,7 @@ int main(void)
         cmocka_unit_test(test_coated_closed_forms),
         cmocka_unit_test(test_frame),
         cmocka_unit_test(test_never_non_finite),
+        cmocka_unit_test(test_regularized),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -76,11 +76,53 @@ static void test_radius_schedule_used_by_integrator(void **state)
     }
 }
 
+/* The glossy regularization floor (plan_glossy_regularization) is glossy_regularization · R_i/R_0 of the
+ * surface schedule: the key's value at the first iteration, strictly decreasing to 0 (so the estimate stays
+ * consistent), 0 when the key is 0 and for the path tracer. */
+static void test_glossy_regularization_schedule(void **state)
+{
+    (void)state;
+    const char *integ[] = {
+        "\"type\": \"progressive_transient_photon_map\", \"gather_radius\": 0.08, \"alpha\": 0.5,"
+        " \"glossy_regularization\": 0.3, \"transient_time_center\": 5, \"transient_time_width\": 1",
+        "\"type\": \"progressive_transient_photon_map\", \"gather_radius\": 0.08, \"alpha\": 0.5,"
+        " \"glossy_regularization\": 0, \"transient_time_center\": 5, \"transient_time_width\": 1",
+        "\"type\": \"path_tracer\", \"glossy_regularization\": 0.3, \"transient_time_center\": 5"};
+    for (int k = 0; k < 3; k++) {
+        char text[8192];
+        box_scene_text(text, sizeof text, 8, integ[k]);
+        tmp_scene t;
+        tmp_scene_write(&t, text);
+        scene s;
+        load_scene(t.path, NULL, 0, &s);
+        render_plan p;
+        dp_error err;
+        if (plan_resolve(&s, &p, &err)) fail_msg("%s", err.msg);
+        double prev = INFINITY;
+        const long iters[] = {0, 1, 2, 10, 1000, 1000000};
+        for (size_t i = 0; i < sizeof iters / sizeof *iters; i++) {
+            double a = plan_glossy_regularization(&p, iters[i]);
+            if (k > 0) {
+                assert_true(a == 0.0);
+                continue;
+            }
+            assert_float_equal(a, 0.3 * radius_closed_form(0.08, 0.5, iters[i], 2) / 0.08, 1e-9);
+            assert_true(a < prev);
+            prev = a;
+        }
+        if (k == 0) assert_true(prev < 0.3 * 0.05); /* 1e6 iterations: below a twentieth of the start */
+        plan_free(&p);
+        scene_free(&s);
+        tmp_scene_remove(&t);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_radius_schedule_closed_form),
         cmocka_unit_test(test_radius_schedule_used_by_integrator),
+        cmocka_unit_test(test_glossy_regularization_schedule),
     };
     /* DARTSPP_TEST_FILTER=name (cmocka wildcards) runs only the matching tests */
     if (getenv("DARTSPP_TEST_FILTER")) cmocka_set_test_filter(getenv("DARTSPP_TEST_FILTER"));

@@ -60,6 +60,60 @@ static void test_threads_bit_identical(void **state)
     assert_true(memcmp(a->sum, c->sum, n * sizeof(double)) != 0);
 }
 
+/* Replaces the bsdf of the box wall whose transform starts with `where` by a smooth gold rough conductor. */
+static void make_wall_glossy(char *text, size_t len, const char *where)
+{
+    char key[160], *at;
+    snprintf(key, sizeof key, "\"bsdf\": \"white\", \"transform\": { \"position\": %s", where);
+    if (!(at = strstr(text, key))) {
+        snprintf(key, sizeof key, "\"bsdf\": \"green\", \"transform\": { \"position\": %s", where);
+        at = strstr(text, key);
+    }
+    assert_non_null(at);
+    const char *glossy = "\"bsdf\": { \"type\": \"rough_conductor\", \"material\": \"Au\", \"roughness\": 0.05 }";
+    size_t old_len = strlen(at) - strlen(strstr(at, ", \"transform\""));
+    assert_true(strlen(text) - old_len + strlen(glossy) < len);
+    memmove(at + strlen(glossy), at + old_len, strlen(at + old_len) + 1);
+    memcpy(at, glossy, strlen(glossy));
+}
+
+/* glossy_regularization acts only at camera vertices reached through a glossy bounce: with one glossy wall
+ * (the back wall: the camera's glossy hits continue to diffuse walls and the fog, which are gathered) the
+ * image is bit-identical to the unregularized one; with the left wall glossy too (back → left → light
+ * connection) it changes. */
+static void test_glossy_regularization_scope(void **state)
+{
+    (void)state;
+    const char *integ = "\"type\": \"progressive_transient_photon_map\", \"photon_count\": 3000,"
+                        " \"volume_photon_count\": 3000, \"gather_radius\": 0.2, \"volume_gather_radius\": 0.2,"
+                        " \"max_bounces\": 6";
+    const char *on[] = {"glossy_regularization=0.6"};
+    for (int walls = 1; walls <= 2; walls++) {
+        char text[8192];
+        box_scene_text(text, sizeof text, 12, integ);
+        make_wall_glossy(text, sizeof text, "[0, 1, 1]");
+        if (walls == 2) make_wall_glossy(text, sizeof text, "[-1, 1, 0]");
+        tmp_scene t;
+        tmp_scene_write(&t, text);
+        load_scene(t.path, NULL, 0, &fx.scenes[0]);
+        load_scene(t.path, on, 1, &fx.scenes[1]);
+        tmp_scene_remove(&t);
+        render(&fx.scenes[0], 2, 5, 2, &fx.films[0]);
+        render(&fx.scenes[1], 2, 5, 2, &fx.films[1]);
+        size_t n = (size_t)12 * 12 * 3;
+        double total = 0;
+        for (size_t i = 0; i < n; i++) total += fx.films[0].sum[i];
+        assert_true(total > 0);
+        int same = memcmp(fx.films[0].sum, fx.films[1].sum, n * sizeof(double)) == 0;
+        if (walls == 1 && !same) fail_msg("one glossy wall: the regularization changed the image");
+        if (walls == 2 && same) fail_msg("two glossy walls: the regularization changed nothing");
+        for (int i = 0; i < 2; i++) {
+            scene_free(&fx.scenes[i]);
+            film_free(&fx.films[i]);
+        }
+    }
+}
+
 /* Frames k of width w over [start, start + F w) summed and divided by F equal the gate image of the union
  * window rendered with the same seed; each frame equals the gate image of its own window. */
 static void test_frames_sum_to_union_gate(void **state)
@@ -227,6 +281,7 @@ int main(void)
         cmocka_unit_test_teardown(test_pass_weights, teardown_fx),
         cmocka_unit_test_teardown(test_frames_sum_to_union_gate, teardown_fx),
         cmocka_unit_test_teardown(test_cli_outputs_finite, teardown_fx),
+        cmocka_unit_test_teardown(test_glossy_regularization_scope, teardown_fx),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

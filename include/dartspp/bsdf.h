@@ -66,6 +66,11 @@ typedef struct {
                                 * (1 − R_coat(μ)) / (1 − F(μ)), at most 1 (see rough_plastic.c) */
 } bsdf;
 
+/* b with its microfacet α raised to at least alpha_min, for the models whose lobes depend on nothing else
+ * derived from it (rough_conductor, pbrt_plastic); other models come back unchanged. The sensor pass's path
+ * regularization (docs/defaults.md §3.7). */
+bsdf bsdf_regularized(const bsdf *b, double alpha_min);
+
 /* A bsdf with the defaults of its type (the reference's defaults, documented in src/bsdf/README.md). */
 void bsdf_defaults(bsdf *b, bsdf_type type);
 /* Derives alpha and the cached terms from the parameters; checks ranges. 0, or -1 + err naming b->name. */

@@ -22,6 +22,8 @@ typedef struct {
                                      * query per segment */
     double r_vol;                   /* volume gather radius of this iteration */
     double r_surf;                  /* surface search radius R of this iteration */
+    double alpha_reg;               /* light connections at camera vertices after a glossy bounce evaluate
+                                     * microfacet lobes with α at least this (docs/defaults.md §3.7); 0: off */
     int k_surf;                     /* gather_photon_count */
     bounce_limits bounces;          /* which light + camera paths count */
     surface_shading shading;        /* BSDF frames and the gather/continue split (same as the photon pass) */

@@ -138,6 +138,9 @@ double plan_surface_slack(const render_plan *p, long iteration);
  * estimate has variance about ∝ 1/area (fresh photons, a 2-D kernel), so this is the inverse-variance
  * mean; it stays consistent (every weight > 0, and Σ_i w_i diverges for α > 0: w_i ~ i^{α−1}). */
 double plan_pass_weight(const render_plan *p, long iteration);
+/* Photon points: the microfacet α floor of light connections after a glossy camera bounce in iteration i,
+ * glossy_regularization · R_i/R_0 (0 when the key is 0): it shrinks with the surface radius. */
+double plan_glossy_regularization(const render_plan *p, long iteration);
 
 /* The plan as one line of JSON (for --verbose, the run summary and the EXR header); returns 0, or -1 when n
  * is too small. */

@@ -152,6 +152,7 @@ typedef struct {
     int two_sided_shading;          /* enable_two_sided_shading */
     int consistency_checks;         /* enable_consistency_checks */
     double glossy_gather_alpha;
+    double glossy_regularization;
 } integrator_settings;
 
 typedef struct {

@@ -74,6 +74,13 @@ static int is_microfacet(bsdf_type t)
            t == BSDF_ROUGH_DIELECTRIC;
 }
 
+bsdf bsdf_regularized(const bsdf *b, double alpha_min)
+{
+    bsdf r = *b;
+    if ((b->type == BSDF_ROUGH_CONDUCTOR || b->type == BSDF_PBRT_PLASTIC) && b->alpha < alpha_min) r.alpha = alpha_min;
+    return r;
+}
+
 static int has_ior(bsdf_type t)
 {
     return t == BSDF_PLASTIC || t == BSDF_ROUGH_PLASTIC || t == BSDF_PBRT_PLASTIC || t == BSDF_DIELECTRIC ||

@@ -108,12 +108,25 @@ static void gather_surface(pixel_ctx *c, const surface_site *ss, unsigned lobes,
 
 /* Direct light at a surface the camera path continues through on a non-delta lobe: the photons stored here
  * serve the gathered lobes only, so next-event estimation adds it (light → surface → camera) to every light
- * that allows it, with the continued lobes evaluated. Delta lobes see area lights by hits (hit_emission). */
-static void direct_light(pixel_ctx *c, const surface_site *ss, unsigned lobes, int med, vec3 thr, double t_cam,
-                         int b_cam)
+ * that allows it, with the continued lobes evaluated. Delta lobes see area lights by hits (hit_emission).
+ * At a vertex the camera path reached through a glossy bounce (after_glossy), the lobes are evaluated with
+ * α raised to g->alpha_reg: a point light seen in a second glossy reflection is otherwise a highlight that
+ * the first bounce's sampling finds by chance (the dragon's fireflies, docs/defaults.md §3.7). */
+static void direct_light(pixel_ctx *c, const surface_site *site, unsigned lobes, int med, vec3 thr, double t_cam,
+                         int b_cam, int after_glossy)
 {
     const scene *s = c->s;
     if (!bounces_count(&c->g->bounces, b_cam + 1)) return;
+    /* after a glossy bounce, the lobes are evaluated regularized (docs/defaults.md §3.7) */
+    bsdf smooth;
+    surface_site regularized;
+    const surface_site *ss = site;
+    if (after_glossy && c->g->alpha_reg > 0.0) {
+        smooth = bsdf_regularized(site->b, c->g->alpha_reg);
+        regularized = *site;
+        regularized.b = &smooth;
+        ss = &regularized;
+    }
     for (int i = 0; i < s->light_count; i++) {
         const emitter *L = &s->lights[i];
         if (!emitter_connectable(L)) continue;
@@ -153,7 +166,7 @@ static void trace_sensor_path(pixel_ctx *c, vec3 d)
 {
     const scene *s = c->s;
     vec3 o = s->cam.pos, thr = v3s(1.0);
-    int med = s->cam.medium, b_cam = 1, after_delta = 1;
+    int med = s->cam.medium, b_cam = 1, after_delta = 1, after_glossy = 0;
     double t_cam = 0.0;
     primary_line *line = c->line; /* set while the walk is still on the primary line */
     if (line) {
@@ -190,13 +203,14 @@ static void trace_sensor_path(pixel_ctx *c, vec3 d)
         photon_split split = surface_photon_split(bs, &c->g->shading);
         if (split.gather) gather_surface(c, &ss, split.gather, thr, t_cam, b_cam);
         if (!split.cont) return;
-        if (split.cont & ~BSDF_LOBE_SPECULAR) direct_light(c, &ss, split.cont, med, thr, t_cam, b_cam);
+        if (split.cont & ~BSDF_LOBE_SPECULAR) direct_light(c, &ss, split.cont, med, thr, t_cam, b_cam, after_glossy);
         double u[3] = {rng_uniform(c->rng), rng_uniform(c->rng), rng_uniform(c->rng)};
         surface_sample smp;
         if (!surface_sample_bsdf(&ss, u, split.cont, 0, &smp)) return;
         thr = v3_mul(thr, smp.weight);
         d = smp.w;
         after_delta = (smp.lobe & BSDF_LOBE_SPECULAR) != 0;
+        after_glossy |= !after_delta;
         med = surface_medium_toward(&ss, med, d);
         o = surface_spawn(s, &ss, d);
         b_cam++;

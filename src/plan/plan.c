@@ -138,6 +138,15 @@ double plan_surface_slack(const render_plan *p, long iteration)
     return p->darts.eta_ub * schedule_radius(&p->r_surf, iteration);
 }
 
+/* Path regularization (Kaplanyan and Dachsbacher 2013) of the camera's glossy chains: the floor on α shrinks
+ * with the surface radius, α_reg,i = α_reg,0 · R_i/R_0, so the estimate stays consistent (docs/defaults.md §3.7). */
+double plan_glossy_regularization(const render_plan *p, long iteration)
+{
+    double a0 = p->keys.glossy_regularization;
+    if (p->type != INTEGRATOR_PHOTON_POINTS || !(a0 > 0.0)) return 0.0;
+    return a0 * schedule_radius(&p->r_surf, iteration) / p->r_surf.r0;
+}
+
 double plan_pass_weight(const render_plan *p, long iteration)
 {
     if (p->type != INTEGRATOR_PHOTON_POINTS || p->keys.pass_weights_equal) return 1.0;

@@ -13,7 +13,8 @@ int photon_points_pass(const scene *s, const render_plan *p, const struct eda_se
                       .camera_leg_projected = p->keys.camera_leg_projected, .camera_unwarp = p->window.camera_unwarp,
                       .volume_splat = p->volume_splat,
                       .stop = stop, .r_vol = schedule_radius(&p->r_vol, iteration),
-                      .r_surf = schedule_radius(&p->r_surf, iteration)};
+                      .r_surf = schedule_radius(&p->r_surf, iteration),
+                      .alpha_reg = plan_glossy_regularization(p, iteration)};
     double t0 = dp_seconds();
     if (photon_pass(s, &pin, &ps, err)) return -1;
     if (ps.interrupted) { /* the iteration is dropped: no maps, no sensor pass */

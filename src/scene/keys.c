@@ -98,6 +98,9 @@ static const scene_key table[] = {
     {.name = "glossy_gather_alpha", IN(glossy_gather_alpha), .type = KEY_NUMBER, .read_by = PP, .changes_image = 1,
      .def = 0.5, AT_LEAST(0),
      .meaning = "Glossy lobes at least this rough (microfacet α) gather photons; smoother ones continue camera paths"},
+    {.name = "glossy_regularization", IN(glossy_regularization), .type = KEY_NUMBER, .read_by = PP, .changes_image = 1,
+     .def = 0.4, AT_LEAST(0),
+     .meaning = "Light connections after a glossy camera bounce see microfacet α raised to this, shrinking with the surface radius; 0: off"},
     /* ---- integrator: DARTS (photon points and the path tracer) ---- */
     {.name = "enable_guiding", IN(enable_guiding), .type = KEY_BOOL, .read_by = PT | PP, .changes_image = 1, .def = 0,
      .meaning = "DARTS DA distance sampling: light paths toward the camera, camera paths toward the light"},
