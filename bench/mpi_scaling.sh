@@ -11,7 +11,7 @@
 set -eu
 scene=${1:?scene file}; its=${2:-12}; configs=${3:-1x2 2x1 4x1}; rounds=${4:-2}
 mpirun="mpirun --allow-run-as-root --oversubscribe --mca plm_rsh_agent false --mca btl_vader_single_copy_mechanism none"
-[ -x build/dartspp-mpi ] && [ -x build/dartspp ] || make build/dartspp build/dartspp-mpi >&2
+make build/dartspp build/dartspp-mpi >&2 # a stale dartspp-mpi would time older code
 o=out/mpi_scaling/$(basename "$scene" .json)
 rm -rf "$o" && mkdir -p "$o"
 echo "date: $(date -u +%Y-%m-%dT%H:%MZ)  machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ *//')"

@@ -119,7 +119,7 @@ struct rng_replay {
     int oom;                 /* a record failed: the sample is not reproducible (the chain rejects it) */
     const double *src;       /* rng_replay_mutate: the sample moved (read as this one is consumed) */
     int src_n;               /* its length: values past it are fresh */
-    double s_max, log2_ratio; /* the step's largest size and log2(s_min/s_max), at least -1022 */
+    double s_max, log_ratio; /* the step's largest size and ln(s_min/s_max) */
     dp_rng fresh;            /* a plain stream (replay NULL): fresh values and the steps' draws */
 };
 void rng_replay_free(rng_replay *r);

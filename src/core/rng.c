@@ -48,27 +48,12 @@ static int replay_reserve(rng_replay *r, int need)
     return 0;
 }
 
-/* 2^x for x in [-1022, 0]: 2^k from the exponent bits times 2^f = √2·e^y, y = (f − 1/2)·ln 2 in
- * [−0.35, 0.35), by its Taylor polynomial of degree 7 (relative error below 1e-8). Written by hand: libm's exp
- * took 4 % of a render in the chains' steps, one call per random number, and the step's distribution only
- * has to be fixed and the same for both signs (the proposal stays symmetric). */
-static double exp2_nonpositive(double x)
-{
-    double k = floor(x), y = (x - k - 0.5) * M_LN2;
-    double e = 1.0 + y * (1.0 + y * (1.0 / 2 + y * (1.0 / 6 + y * (1.0 / 24 + y * (1.0 / 120 + y * (1.0 / 720 +
-               y * (1.0 / 5040)))))));
-    uint64_t bits = (uint64_t)((int64_t)k + 1023) << 52;
-    double two_k;
-    memcpy(&two_k, &bits, sizeof two_k);
-    return M_SQRT2 * e * two_k;
-}
-
 /* src's value i moved by ± s_max·(s_min/s_max)^ξ, wrapped into [0, 1): one 64-bit draw gives the sign
  * (its top bit) and ξ (52 more bits). */
 static double mutated(rng_replay *r, int i)
 {
     uint64_t x = rng_next_u64(&r->fresh);
-    double xi = (double)(x & ((1ULL << 52) - 1)) * 0x1.0p-52, step = r->s_max * exp2_nonpositive(r->log2_ratio * xi);
+    double xi = (double)(x & ((1ULL << 52) - 1)) * 0x1.0p-52, step = r->s_max * exp(r->log_ratio * xi);
     double v = r->src[i] + ((x >> 63) ? -step : step);
     v -= floor(v);
     return v < 1.0 ? v : 0.0; /* floor of a tiny negative v can leave exactly 1 */
@@ -112,5 +97,5 @@ void rng_replay_mutate(rng_replay *r, const rng_replay *src, double s_min, doubl
     r->src = src->u;
     r->src_n = src->used;
     r->s_max = s_max;
-    r->log2_ratio = s_max > 0.0 ? fmax(log2(s_min / s_max), -1022.0) : 0.0;
+    r->log_ratio = s_max > 0.0 ? log(s_min / s_max) : 0.0;
 }
