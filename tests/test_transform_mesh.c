@@ -561,6 +561,65 @@ static void test_intersect_quad(void **state)
     }
 }
 
+/* ---- winding of meshes that bind media (docs/scene-format.md §2.6) ---- */
+
+/* A closed tetrahedron, every face wound outward; FLIPPED turns its last face inward, so the 3 edges
+ * of that face are run in the same direction by both of their triangles (of the 6 shared edges). */
+static const char TETRA_CLOSED_OBJ[] = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n";
+static const char TETRA_FLIPPED_OBJ[] = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 4 3\n";
+/* The same faces with a vertex of their own each (as .wo3 files often store them): welded by position. */
+static const char TETRA_FLIPPED_SPLIT_OBJ[] = "v 0 0 0\nv 0 1 0\nv 1 0 0\n" "v 0 0 0\nv 1 0 0\nv 0 0 1\n"
+                                              "v 0 0 0\nv 0 0 1\nv 0 1 0\n" "v 1 0 0\nv 0 0 1\nv 0 1 0\n"
+                                              "f 1 2 3\nf 4 5 6\nf 7 8 9\nf 10 11 12\n";
+
+static scene *load_tetra_with_media(const char *obj, const char *media_keys)
+{
+    write_in_dir("tetra4.obj", obj, strlen(obj));
+    char text[1024];
+    snprintf(text, sizeof text,
+             "{\"media\": [{\"name\": \"fog\", \"type\": \"homogeneous\", \"sigma_s\": 0.1, \"sigma_a\": 0.0}],\n"
+             " \"bsdfs\": [{\"name\": \"w\", \"type\": \"lambert\", \"albedo\": 0.5}],\n"
+             " \"primitives\": [{\"type\": \"mesh\", \"file\": \"tetra4.obj\", \"bsdf\": \"w\"%s},\n"
+             "   {\"type\": \"point\", \"emission\": 1, \"ext_medium\": \"fog\", \"transform\": {\"position\": [0, 3, 0]}}],\n"
+             " \"camera\": {\"resolution\": [4, 4], \"fov\": 45, \"medium\": \"fog\",\n"
+             "   \"transform\": {\"position\": [0, 0, -20], \"look_at\": [0, 0, 0], \"up\": [0, 1, 0]}},\n"
+             " \"integrator\": {\"type\": \"path_tracer\"}, \"renderer\": {\"spp\": 1}}\n",
+             media_keys);
+    dp_error err;
+    scene *s = fx_load_text("winding.json", text, NULL, &err);
+    if (!s) fail_msg("the winding scene must load: %s", err.msg);
+    return s;
+}
+
+static int warns_winding(const scene *s) { return s->notes && strstr(s->notes, "wound in opposite directions"); }
+
+static void test_mixed_winding_warning(void **state)
+{
+    (void)state;
+    const char *media = ", \"ext_medium\": \"fog\"";
+    scene *s = load_tetra_with_media(TETRA_FLIPPED_OBJ, media);
+    if (!warns_winding(s)) fail_msg("a flipped face on a mesh binding fog outside and vacuum inside must warn:\n%s",
+                                    s->notes ? s->notes : "(no notes)");
+    ASSERT_CONTAINS(s->notes, "3 of the 6 edges");
+    ASSERT_CONTAINS(s->notes, "tetra4.obj");
+    ASSERT_CONTAINS(s->notes, "int_medium (vacuum) and ext_medium (fog)");
+    fx_drop(s);
+    s = load_tetra_with_media(TETRA_FLIPPED_SPLIT_OBJ, media);
+    if (!warns_winding(s)) fail_msg("unshared corners at the same positions must be welded:\n%s",
+                                    s->notes ? s->notes : "(no notes)");
+    ASSERT_CONTAINS(s->notes, "3 of the 6 edges");
+    /* no warning: consistent winding; the same media on both sides; no media bound at all */
+    fx_drop(s);
+    s = load_tetra_with_media(TETRA_CLOSED_OBJ, media);
+    if (warns_winding(s)) fail_msg("a consistently wound tetrahedron warned:\n%s", s->notes);
+    fx_drop(s);
+    s = load_tetra_with_media(TETRA_FLIPPED_OBJ, ", \"ext_medium\": \"fog\", \"int_medium\": \"fog\"");
+    if (warns_winding(s)) fail_msg("the same medium on both sides warned:\n%s", s->notes);
+    fx_drop(s);
+    s = load_tetra_with_media(TETRA_FLIPPED_OBJ, "");
+    if (warns_winding(s)) fail_msg("a mesh binding no media warned:\n%s", s->notes);
+}
+
 #define T(f) cmocka_unit_test_teardown(f, teardown_fx)
 
 int main(void)
@@ -577,6 +636,7 @@ int main(void)
         T(test_obj_bad),
         T(test_vertices_stay_finite_as_float),
         T(test_intersect_quad),
+        T(test_mixed_winding_warning),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

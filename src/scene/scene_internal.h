@@ -33,6 +33,9 @@ typedef struct {
 } tri_mesh;
 
 void tri_mesh_free(tri_mesh *m);
+/* Edges shared by exactly two triangles (vertices welded by position) and how many of them join triangles
+ * wound in opposite directions, so that the front side (ext_medium's) flips across them. -1: out of memory. */
+int tri_mesh_winding(const tri_mesh *m, uint32_t *shared, uint32_t *flipped);
 /* Appends a vertex with zero normal and UV (set m->nrm / m->uv of index m->nv - 1 afterwards). */
 int tri_mesh_add_vertex(tri_mesh *m, double x, double y, double z);
 int tri_mesh_add_tri(tri_mesh *m, uint32_t a, uint32_t b, uint32_t c);

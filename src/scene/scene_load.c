@@ -349,6 +349,27 @@ static xform shape_transform(const char *type, const xform *T)
     return r;
 }
 
+static const char *medium_label(const scene *s, int m) { return m == MEDIUM_VACUUM ? "vacuum" : s->media[m].name; }
+
+/* A mesh that binds two different media to its sides but whose triangles disagree on which side is the
+ * front: across the flipped faces the media swap, so a path reflected there continues in the other medium.
+ * Legal (Tungsten does the same), but light and camera paths then disagree about the medium of the same
+ * segment, and the path tracer and photon points converge to different images (the paper's dragon scene:
+ * its blockage, bench/results/references.md). */
+static void warn_mixed_winding(json_ctx *c, const scene *s, const cJSON *v, const tri_mesh *m, const surface *sf,
+                               const char *where)
+{
+    uint32_t shared, flipped;
+    if (tri_mesh_winding(m, &shared, &flipped) || flipped == 0) return;
+    const cJSON *file = jget_item(c, v, "file");
+    jwarn(c, "%s: '%s' binds int_medium (%s) and ext_medium (%s), but %u of the %u edges shared by two of its "
+             "triangles join triangles wound in opposite directions: the two media swap sides across them, light "
+             "reflected off the flipped faces continues in the other medium, and the path tracer and photon "
+             "points converge to different images; wind the mesh consistently, or give both sides the same "
+             "medium if its inside is never entered (docs/scene-format.md §2.6)",
+          where, cJSON_IsString(file) ? file->valuestring : sf->name, medium_label(s, sf->int_medium), medium_label(s, sf->ext_medium), flipped, shared);
+}
+
 static int parse_surface(json_ctx *c, scene *s, const cJSON *names, const cJSON *v, const char *where,
                          const char *type, const xform *T)
 {
@@ -366,6 +387,7 @@ static int parse_surface(json_ctx *c, scene *s, const cJSON *names, const cJSON 
     tri_mesh m = {0};
     unsigned flags;
     int rc = load_shape(c, s, v, where, type, &m, &flags);
+    if (!rc && sf.overrides_media && sf.int_medium != sf.ext_medium) warn_mixed_winding(c, s, v, &m, &sf, where);
     xform Ts = shape_transform(type, T);
     if (!rc) rc = append_surface_mesh(c, s, &m, &Ts, &sf, where, flags);
     tri_mesh_free(&m);
