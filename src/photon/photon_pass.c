@@ -370,8 +370,10 @@ static int independent_paths(const scene *s, const photon_pass_input *in, int nt
 #pragma omp for schedule(dynamic, 64) /* paths differ in length; any thread may trace any path */
             for (long i = 0; i < nb; i++) {
                 dp_rng rng = rng_stream(in->seed ^ 0x70686f746f6eULL, (uint64_t)in->iteration, (uint64_t)(next + i));
-                pc[i] = (path_count){.thread = omp_get_thread_num(), .off_vol = mine->vol.n, .off_surf = mine->surf.n};
-                trace_light_path(s, in, open, &rng, mine, &pc[i]);
+                /* counted in a local and stored once: neighbouring entries belong to other threads */
+                path_count c = {.thread = omp_get_thread_num(), .off_vol = mine->vol.n, .off_surf = mine->surf.n};
+                trace_light_path(s, in, open, &rng, mine, &c);
+                pc[i] = c;
             }
         }
         for (long i = 0; i < nb && !rc; i++) { /* merge in path order */
@@ -418,8 +420,9 @@ static int chain_paths(const scene *s, const photon_pass_input *in, int nt, thre
 #pragma omp for schedule(dynamic, 1)
             for (int i = 0; i < nb; i++) {
                 long c = c0 + i, steps = left - c * CHAIN_STEPS < CHAIN_STEPS ? left - c * CHAIN_STEPS : CHAIN_STEPS;
-                cc[i] = (chain_count){.thread = me};
-                surface_chain_run(s, in, c, (int)steps, cs[me], &tb[me], &cc[i]);
+                chain_count count = {.thread = me}; /* counted locally: cc[i ± 1] are other threads' */
+                surface_chain_run(s, in, c, (int)steps, cs[me], &tb[me], &count);
+                cc[i] = count;
             }
         }
         for (int i = 0; i < nb && !rc && !pt->bsf.full; i++) {
@@ -438,7 +441,7 @@ int photon_pass(const scene *s, const photon_pass_input *in, photon_set *out, dp
     if (s->light_count == 0) return 0;
     pass_totals pt = {.bv = {.budget = (size_t)in->volume_budget}, .bsf = {.budget = (size_t)in->surface_budget}};
     int nt = omp_get_max_threads();
-    thread_bufs *tb = calloc((size_t)nt, sizeof(thread_bufs));
+    thread_bufs *tb = cache_line_calloc((size_t)nt, sizeof(thread_bufs));
     path_count *pc = malloc(PHOTON_PASS_BATCH * sizeof(path_count));
     int chains = in->surface_chains && in->guide.active && in->include_surfaces;
     int rc = (!tb || !pc) ? -1 : independent_paths(s, in, nt, tb, pc, chains, &pt);

@@ -281,20 +281,24 @@ static void *alloc_array(size_t count, size_t size)
     return p;
 }
 
-/* Copies the positions into build items; fails on a non-finite one. Returns the largest |coordinate|. */
+/* Copies the positions into build items (in parallel: this is also the first touch of their pages); fails on
+ * a non-finite one, naming the first. Returns the largest |coordinate|. */
 static int gather_points(const photon *ph, size_t n, point_item *pts, double *max_abs, dp_error *err)
 {
     double m = 0.0;
+    size_t bad = n; /* the first photon with a non-finite coordinate, n if none */
+#pragma omp parallel for schedule(static) reduction(max : m) reduction(min : bad) default(none) shared(ph, n, pts)
     for (size_t i = 0; i < n; i++) {
         for (int a = 0; a < 3; a++) {
             float x = ph[i].pos[a];
-            if (!isfinite(x))
-                return dp_fail_kind(err, DP_ERROR_INTERNAL, "volume photon map: photon %zu has a non-finite position", i);
+            if (!isfinite(x) && i < bad) bad = i;
             pts[i].pos[a] = x;
             if (fabs((double)x) > m) m = fabs((double)x);
         }
         pts[i].src = (uint32_t)i;
     }
+    if (bad < n)
+        return dp_fail_kind(err, DP_ERROR_INTERNAL, "volume photon map: photon %zu has a non-finite position", bad);
     *max_abs = m;
     return 0;
 }
