@@ -1,4 +1,6 @@
 /* dartspp: entry point and sub-command dispatch. */
+#include <limits.h>
+#include <malloc.h>
 #include <signal.h>
 #include <stdio.h>
 #include <string.h>
@@ -23,12 +25,25 @@ static void usage(FILE *f)
             "See docs/ for the scene keys, outputs and units.\n");
 }
 
+/* The process keeps the memory it frees. Every pass allocates and frees photon buffers, maps and splat lists
+ * of tens to hundreds of MiB; handed back to the kernel each time (munmap, heap trims), they are paid again as
+ * page faults, and each unmapping stops the other threads for a TLB shootdown — within one process only, so
+ * two threads scaled worse than two processes (dragon 480², 10 passes, 2 threads ÷ 1: 1.77 before, 1.86 with
+ * this). The peak resident size is unchanged: the same blocks are reused. Set here, by the program that owns
+ * the process, not by the library. */
+static void keep_freed_memory(void)
+{
+    mallopt(M_MMAP_MAX, 0);
+    mallopt(M_TRIM_THRESHOLD, INT_MAX);
+}
+
 #ifdef DARTSPP_MPI
 /* dartspp-mpi: `mpirun -np N dartspp-mpi render SCENE.json [the options of dartspp render]`; the other
  * commands need no cluster and stay in dartspp. */
 int main(int argc, char **argv)
 {
     signal(SIGXFSZ, SIG_IGN); /* a file-size limit fails the write (EFBIG, reported) instead of killing */
+    keep_freed_memory();
     render_cluster c;
     if (cluster_mpi_start(&argc, &argv, &c)) {
         fprintf(stderr, "dartspp-mpi: MPI did not start\n");
@@ -50,6 +65,7 @@ int main(int argc, char **argv)
 int main(int argc, char **argv)
 {
     signal(SIGXFSZ, SIG_IGN); /* a file-size limit fails the write (EFBIG, reported) instead of killing */
+    keep_freed_memory();
     if (argc < 2 || !strcmp(argv[1], "-h") || !strcmp(argv[1], "--help")) {
         usage(argc < 2 ? stderr : stdout);
         return argc < 2 ? 2 : 0;
