@@ -49,6 +49,14 @@ int dp_exit_status(dp_error_kind kind);
 /* Monotonic wall-clock seconds (for budgets, progress and stage timings). */
 double dp_seconds(void);
 
+/* ---- memory written by several threads ----
+ * Data that threads write side by side goes on cache lines of its own: two threads writing one line make
+ * each other wait (false sharing), which cost two-thread passes up to 10 % (bench/results/peer.md). */
+#define DP_CACHE_LINE 64
+/* Zeroed storage for n objects of `size` bytes starting on a cache line (the total rounded up to whole
+ * lines); NULL when n or size is 0, on overflow, or out of memory. Freed with free(). */
+void *dp_calloc_cache_aligned(size_t n, size_t size);
+
 /* ---- interruption ----
  * A stop flag is set asynchronously (SIGINT/SIGTERM handler) and read by the long loops once per batch of
  * light paths or row of pixels; NULL means "never stops". */

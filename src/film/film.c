@@ -3,20 +3,8 @@
 #include "dartspp/film.h"
 
 #include <math.h>
-#include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
-
-/* Zeroed n × size bytes on a 64-byte cache line: the sensor pass's threads write neighbouring tiles of the
- * pass layers at once, and a layer on a 16-byte boundary made their edge pixels share lines (false sharing). */
-static void *zeroed_on_cache_lines(size_t n, size_t size)
-{
-    if (n == 0 || size > SIZE_MAX / n) return NULL;
-    size_t bytes = (n * size + 63) / 64 * 64;
-    void *p = aligned_alloc(64, bytes);
-    if (p) memset(p, 0, bytes);
-    return p;
-}
 
 int film_init(film *f, int width, int height, const time_window *tw, dp_error *err)
 {
@@ -26,10 +14,10 @@ int film_init(film *f, int width, int height, const time_window *tw, dp_error *e
     f->window = *tw;
     size_t n = (size_t)width * height * 3, nf = n * (size_t)tw->frame_count;
     f->sum = calloc(n, sizeof(double));
-    f->pass = zeroed_on_cache_lines(n, sizeof(double));
+    f->pass = dp_calloc_cache_aligned(n, sizeof(double)); /* threads splat neighbouring tiles */
     if (nf > 0) {
         f->frame_sum = calloc(nf, sizeof(float));
-        f->frame_pass = zeroed_on_cache_lines(nf, sizeof(float));
+        f->frame_pass = dp_calloc_cache_aligned(nf, sizeof(float));
     }
     if (!f->sum || !f->pass || (nf > 0 && (!f->frame_sum || !f->frame_pass))) {
         film_free(f);

@@ -5,7 +5,6 @@
 
 #include <stdint.h>
 #include <stdlib.h>
-#include <string.h>
 
 #include "dartspp/photon.h"
 #include "dartspp/scene.h"
@@ -28,23 +27,13 @@ static inline int buf_push(photon_buf *b, const photon *ph)
     return 0;
 }
 
-/* Written by one thread per photon stored: aligned to a cache line, so that two threads' records never share
- * one (false sharing cost the photon pass about 10 % with two threads). */
-#define CACHE_LINE 64
+/* Written by one thread per photon stored: on cache lines of its own (core.h, dp_calloc_cache_aligned). */
 typedef struct {
-    _Alignas(CACHE_LINE) photon_buf vol;
+    _Alignas(DP_CACHE_LINE) photon_buf vol;
     photon_buf surf;
     long nonfinite;
     int oom;
 } thread_bufs;
-
-/* Zeroed storage for n objects of `size` bytes (a multiple of CACHE_LINE) on a cache-line boundary. */
-static inline void *cache_line_calloc(size_t n, size_t size)
-{
-    void *p = n && size ? aligned_alloc(CACHE_LINE, n * size) : NULL;
-    if (p) memset(p, 0, n * size);
-    return p;
-}
 
 typedef struct {
     uint32_t n_vol, n_surf;    /* photons this path stored */

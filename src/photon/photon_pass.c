@@ -441,7 +441,7 @@ int photon_pass(const scene *s, const photon_pass_input *in, photon_set *out, dp
     if (s->light_count == 0) return 0;
     pass_totals pt = {.bv = {.budget = (size_t)in->volume_budget}, .bsf = {.budget = (size_t)in->surface_budget}};
     int nt = omp_get_max_threads();
-    thread_bufs *tb = cache_line_calloc((size_t)nt, sizeof(thread_bufs));
+    thread_bufs *tb = dp_calloc_cache_aligned((size_t)nt, sizeof(thread_bufs));
     path_count *pc = malloc(PHOTON_PASS_BATCH * sizeof(path_count));
     int chains = in->surface_chains && in->guide.active && in->include_surfaces;
     int rc = (!tb || !pc) ? -1 : independent_paths(s, in, nt, tb, pc, chains, &pt);

@@ -28,13 +28,13 @@
 #define CHAIN_STEP_MAX (1.0 / 64)
 static const uint64_t CHAIN_KEY = 0x636861696e73ULL; /* "chains": the chains' random streams */
 
-struct chain_scratch {        /* one per thread, on cache lines of its own (photon_internal.h) */
-    _Alignas(CACHE_LINE) rng_replay a;
+struct chain_scratch {        /* one per thread, on cache lines of its own (core.h) */
+    _Alignas(DP_CACHE_LINE) rng_replay a;
     rng_replay b;            /* a: the current state's random numbers, b: the proposal's */
     thread_bufs pa, pb;      /* the current state's and the proposal's photons */
 };
 
-chain_scratch *chain_scratch_new(void) { return cache_line_calloc(1, sizeof(chain_scratch)); }
+chain_scratch *chain_scratch_new(void) { return dp_calloc_cache_aligned(1, sizeof(chain_scratch)); }
 
 void chain_scratch_free(chain_scratch *cs)
 {
