@@ -296,4 +296,10 @@ static inline double medium_eta(const scene *s, int med)
     return med == MEDIUM_VACUUM ? s->integrator.vacuum_eta : s->media[med].eta;
 }
 
+/* A medium's name for messages, "vacuum" for none. */
+static inline const char *medium_name(const scene *s, int med)
+{
+    return med == MEDIUM_VACUUM ? "vacuum" : s->media[med].name;
+}
+
 #endif

@@ -215,19 +215,13 @@ static int cmp_load(const void *x, const void *y)
 /* The tiles by their photon entries, most first (longest processing time first): a tile's pixels are its
  * own, so the order changes nothing in the image, and heavy tiles near the light no longer end a pass with
  * one thread working and the other waiting. NULL when out of memory. */
-static int *heaviest_first(const tile_bins *b, int tiles)
+static tile_load *heaviest_first(const tile_bins *b, int tiles)
 {
     tile_load *l = malloc((size_t)(tiles ? tiles : 1) * sizeof *l);
-    int *order = malloc((size_t)(tiles ? tiles : 1) * sizeof *order);
-    if (!l || !order) {
-        free(l), free(order);
-        return NULL;
-    }
+    if (!l) return NULL;
     for (int t = 0; t < tiles; t++) l[t] = (tile_load){b->start[t + 1] - b->start[t], t};
     qsort(l, (size_t)tiles, sizeof *l, cmp_load);
-    for (int t = 0; t < tiles; t++) order[t] = l[t].tile;
-    free(l);
-    return order;
+    return l;
 }
 
 int volume_splat(const scene *s, const gather_input *g, film *f, const primary_line *lines)
@@ -238,7 +232,7 @@ int volume_splat(const scene *s, const gather_input *g, film *f, const primary_l
         return -1;
     }
     int tiles = b.tiles_x * b.tiles_y;
-    int *order = heaviest_first(&b, tiles);
+    tile_load *order = heaviest_first(&b, tiles);
     if (!order) {
         tile_bins_free(&b);
         return -1;
@@ -247,7 +241,7 @@ int volume_splat(const scene *s, const gather_input *g, film *f, const primary_l
 #pragma omp parallel for schedule(dynamic, 1) reduction(+ : bad) default(none) shared(s, g, f, lines, b, tiles, order)
     for (int k = 0; k < tiles; k++) {
         if (dp_stopped(g->stop)) continue;
-        int t = order[k];
+        int t = order[k].tile;
         splat_tile(s, g, f, lines, &b, t % b.tiles_x, t / b.tiles_x, &bad);
     }
     f->nonfinite += bad;

@@ -51,7 +51,7 @@ static void warn_mixed_eta(const scene *s, const render_plan *p)
         if (r == MEDIUM_VACUUM) vacuum = 1;
         else media++, medium = r;
         int n = snprintf(list + len, sizeof list - len, "%s%s%s%s η = %g", len ? ", " : "", r == MEDIUM_VACUUM ? "" : "'",
-                         r == MEDIUM_VACUUM ? "vacuum" : s->media[r].name, r == MEDIUM_VACUUM ? "" : "'", medium_eta(s, r));
+                         medium_name(s, r), r == MEDIUM_VACUUM ? "" : "'", medium_eta(s, r));
         if (n > 0 && (size_t)n < sizeof list - len) len += (size_t)n;
     }
     fprintf(stderr, "warning: %s: the refractive index differs between the regions of the scene (%s): elliptical "

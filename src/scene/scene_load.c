@@ -349,8 +349,6 @@ static xform shape_transform(const char *type, const xform *T)
     return r;
 }
 
-static const char *medium_label(const scene *s, int m) { return m == MEDIUM_VACUUM ? "vacuum" : s->media[m].name; }
-
 /* A mesh that binds two different media to its sides but whose triangles disagree on which side is the
  * front: across the flipped faces the media swap, so a path reflected there continues in the other medium.
  * Legal (Tungsten does the same), but light and camera paths then disagree about the medium of the same
@@ -367,7 +365,8 @@ static void warn_mixed_winding(json_ctx *c, const scene *s, const cJSON *v, cons
              "reflected off the flipped faces continues in the other medium, and the path tracer and photon "
              "points converge to different images; wind the mesh consistently, or give both sides the same "
              "medium if its inside is never entered (docs/scene-format.md §2.6)",
-          where, cJSON_IsString(file) ? file->valuestring : sf->name, medium_label(s, sf->int_medium), medium_label(s, sf->ext_medium), flipped, shared);
+          where, cJSON_IsString(file) ? file->valuestring : sf->name, medium_name(s, sf->int_medium),
+          medium_name(s, sf->ext_medium), flipped, shared);
 }
 
 static int parse_surface(json_ctx *c, scene *s, const cJSON *names, const cJSON *v, const char *where,
