@@ -1,8 +1,8 @@
 #!/bin/sh
-# The references of the paper's dragon and staircase at the resolutions the equal-time comparisons use, and
-# their checks:
-#   bench/references.sh make dragon|staircase     long renders of ours, merged (refs/, about 1 h each on 2 cores)
-#   bench/references.sh check dragon|staircase    the reference against estimators that share less of its code
+# The references of the paper's fog Cornell box, dragon and staircase at the resolutions the equal-time
+# comparisons use, and their checks:
+#   bench/references.sh make box|dragon|staircase     long renders of ours, merged (refs/, about 1 h each on 2 cores)
+#   bench/references.sh check box|dragon|staircase    the reference against estimators that share less of its code
 # `make`: DARTS photon points as the paper's file asks (consistent: the radii shrink without end), 4 chunks
 # of PASSES passes with seeds 7919.., merged by `dartspp merge`, whose chunk spread gives the reference's own
 # noise (refs/<name>.pfm.var, subtracted by bench/peer_equal_time.sh with REF_NOISE). The path tracer cannot
@@ -13,13 +13,14 @@
 # renders of our DARTS path tracer of CHECK_SECONDS (default 120) each (bench/tile_check.py). The path
 # tracer misses light through mirrors and glass from a point light (it warns): tiles that see them differ.
 set -eu
-what=${1:?usage: references.sh make|check dragon|staircase}; name=${2:?usage: references.sh make|check dragon|staircase}
+what=${1:?usage: references.sh make|check box|dragon|staircase}; name=${2:?usage: references.sh make|check box|dragon|staircase}
 bin=${DARTSPP:-build/dartspp}
 [ -x "$bin" ] || make build/dartspp >&2
 case $name in
+box) scene=../shared/scenes/cbox-trans/transient.json; res=512; passes=${PASSES:-2500} ;;
 dragon) scene=../shared/scenes/dragon/scene-points-darts-short.json; res=480; passes=${PASSES:-500} ;;
 staircase) scene=../shared/scenes/staircase/scene-points-darts-short.json; res=360; passes=${PASSES:-300} ;;
-*) echo "$0: no reference named $name (dragon, staircase)" >&2; exit 2 ;;
+*) echo "$0: no reference named $name (box, dragon, staircase)" >&2; exit 2 ;;
 esac
 [ -f "$scene" ] || { echo "$0: $scene not found (the paper's scenes live in ../shared)" >&2; exit 2; }
 ref=refs/$name-$res-pp.pfm
