@@ -42,7 +42,7 @@ TEST_BIN = $(TEST_SRC:tests/%.c=build/san/tests/%)
 # independent reference: the path tracer (test_single_scatter: every pixel against quadrature) and baseline and
 # DARTS photon points (test_photon_single_scatter: image totals against quadrature), with the path tracer's end to
 # end checks (test_render). `make test` runs every test program, these included. Its time: tests/README.md.
-QUICK_TESTS = test_bsdf test_bsdf_models test_darts test_time_angular test_eda test_free_flight test_replay test_radius_schedule test_emitters \
+QUICK_TESTS = test_bsdf test_bsdf_models test_sensor test_darts test_time_angular test_eda test_free_flight test_replay test_radius_schedule test_emitters \
               test_surface_map test_volume_map test_plan test_transform_mesh test_texture test_paper_scenes \
               test_scene_values test_scene_errors test_fuzz_readers test_exr test_image_files test_metrics \
               test_atomic_writes test_cube test_keys test_docs test_errors \

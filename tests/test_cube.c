@@ -138,6 +138,69 @@ static void test_header_by_hand(void **state)
     free(r.file);
 }
 
+/* A hand-made .npy file: a 1.0 header with the dict text padded to 64 bytes, then raw bytes. */
+static void write_npy_by_hand(const char *path, const char *dict, const void *data, size_t n)
+{
+    unsigned char h[128];
+    size_t len = strlen(dict);
+    assert_true(len + 11 <= sizeof h);
+    memcpy(h, "\x93NUMPY\x01\x00", 8);
+    size_t total = (10 + len + 1 + 63) / 64 * 64;
+    h[8] = (unsigned char)(total - 10), h[9] = 0;
+    memcpy(h + 10, dict, len);
+    memset(h + 10 + len, ' ', total - 10 - len - 1);
+    h[total - 1] = '\n';
+    FILE *f = fopen(path, "wb");
+    assert_non_null(f);
+    assert_int_equal(fwrite(h, 1, total, f), total);
+    if (n) assert_int_equal(fwrite(data, 1, n, f), n);
+    fclose(f);
+}
+
+/* npy_read_f32 (the reader of `dartspp counts`): our files back bit for bit, NumPy's float32 layout from a
+ * file made by hand (format 1.0, a 1-D shape), and every other file refused with the file and the reason. */
+static void test_reader(void **state)
+{
+    *state = tmp = test_tmpdir();
+    char path[512];
+    snprintf(path, sizeof path, "%s/r.npy", tmp);
+    float v[24], *got;
+    for (int i = 0; i < 24; i++) v[i] = 0.25f * i - 3.0f;
+    size_t shape[4] = {2, 3, 4, 1}, sh[NPY_MAX_DIMS];
+    int nd;
+    dp_error err;
+    assert_int_equal(npy_write_f32(path, shape, 4, v, &err), 0);
+    assert_int_equal(npy_read_f32(path, sh, &nd, &got, &err), 0);
+    assert_int_equal(nd, 4);
+    for (int i = 0; i < 4; i++) assert_int_equal(sh[i], shape[i]);
+    assert_memory_equal(got, v, sizeof v);
+    free(got);
+    write_npy_by_hand(path, "{'descr': '<f4', 'fortran_order': False, 'shape': (3,), }", v, 12);
+    assert_int_equal(npy_read_f32(path, sh, &nd, &got, &err), 0);
+    assert_int_equal(nd, 1);
+    assert_int_equal(sh[0], 3);
+    assert_true(got[2] == v[2]);
+    free(got);
+    const struct {
+        const char *dict;
+        size_t bytes;
+        const char *why;
+    } bad[] = {
+        {"{'descr': '<f8', 'fortran_order': False, 'shape': (3,), }", 24, "dtype"},
+        {"{'descr': '<f4', 'fortran_order': True, 'shape': (3,), }", 12, "Fortran"},
+        {"{'descr': '<f4', 'fortran_order': False, 'shape': (3,), }", 8, "fewer values"},
+        {"{'descr': '<f4', 'fortran_order': False, 'shape': (3,), }", 16, "more bytes"},
+        {"{'descr': '<f4', 'fortran_order': False, 'shape': (-3,), }", 12, "shape"},
+    };
+    for (int i = 0; i < 5; i++) {
+        write_npy_by_hand(path, bad[i].dict, v, bad[i].bytes);
+        got = (float *)1;
+        assert_int_equal(npy_read_f32(path, sh, &nd, &got, &err), -1);
+        assert_null(got);
+        if (!strstr(err.msg, bad[i].why) || !strstr(err.msg, path)) fail_msg("case %d: %s", i, err.msg);
+    }
+}
+
 /* Too few or too many values: an error naming the file, and no file left behind. */
 static void test_wrong_count_leaves_nothing(void **state)
 {
@@ -236,6 +299,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test_teardown(test_header_by_hand, test_teardown_tmpdir),
         cmocka_unit_test_teardown(test_wrong_count_leaves_nothing, test_teardown_tmpdir),
+        cmocka_unit_test_teardown(test_reader, test_teardown_tmpdir),
         cmocka_unit_test_teardown(test_cube_equals_frames, test_teardown_tmpdir),
         cmocka_unit_test_teardown(test_switches, test_teardown_tmpdir),
     };

@@ -26,6 +26,7 @@ static const char *const WORKS[] = {
     "pbrt-v3",
     "Numerical Recipes",
     "Jarabo et al. 2014", /* "A framework for transient rendering", TOG 33(6) */
+    "TAOCP vol. 2",     /* Knuth, The Art of Computer Programming, vol. 2, Seminumerical Algorithms */
 };
 
 static const char *const ROOTS[] = {"src", "include", "tests", "bench", "README.md"};

@@ -1,5 +1,5 @@
 /* dartspp command line: `dartspp render ...`, `dartspp compare ...`, `dartspp patch-mean ...`,
- * `dartspp merge ...`, `dartspp table ...`, `dartspp keys ...`. Each returns the process exit
+ * `dartspp merge ...`, `dartspp table ...`, `dartspp keys ...`, `dartspp counts ...`. Each returns the process exit
  * status: 0 success, 2 bad input (message on stderr), 1 other failures. */
 #ifndef DARTSPP_CLI_H
 #define DARTSPP_CLI_H
@@ -16,5 +16,8 @@ int cli_merge(int argc, char **argv);
 int cli_table(int argc, char **argv);
 /* `dartspp keys [--markdown]`: every integrator and renderer key with type, default, range and meaning. */
 int cli_keys(int argc, char **argv);
+/* `dartspp counts CUBE.npy --output COUNTS.npy --pulses N --scale S ...`: photon-counting histograms of a
+ * transient cube (include/dartspp/sensor.h). */
+int cli_counts(int argc, char **argv);
 
 #endif

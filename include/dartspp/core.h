@@ -140,6 +140,13 @@ void rng_replay_restart(rng_replay *r);
  * unchanged until r's sample is done. */
 void rng_replay_mutate(rng_replay *r, const rng_replay *src, double s_min, double s_max);
 
+/* ---- non-uniform variates (variates.c): exact at every parameter ---- */
+double rng_normal(dp_rng *r);                   /* standard normal */
+double rng_gamma(dp_rng *r, double shape);      /* Gamma(shape, 1); 0 for shape <= 0 */
+double rng_beta(dp_rng *r, double a, double b); /* Beta(a, b), a, b > 0 */
+long rng_binomial(dp_rng *r, long n, double p); /* Binomial(n, p); p is clamped to [0, 1] */
+long rng_poisson(dp_rng *r, double mean);       /* Poisson(mean); 0 for mean <= 0 */
+
 /* ---- sampling helpers (pdfs in solid angle) ---- */
 vec3 sample_uniform_sphere(double u1, double u2);
 vec3 sample_cosine_hemisphere(double u1, double u2); /* local frame, +z up */

@@ -132,6 +132,9 @@ int image_mean_of(const image_rgb *imgs, int k, image_rgb *mean, double *var_of_
 /* Frame sidecar: "index,start,end" header and one line per frame k: k, start + k*w, start + (k+1)*w,
  * written with %.17g so that the time axis is exact. Atomic. */
 int frames_csv_write(const char *path, int frame_count, double start, double width, dp_error *err);
+/* Reads one back: the frames' [start, end) intervals (up to max of them) and their count; a line out of
+ * order or with end <= start is an input error naming the file and the line. */
+int frames_csv_read(const char *path, double *start, double *end, int max, int *count, dp_error *err);
 
 /* NumPy .npy (format 1.0) of float32 (npy.c documents the layout): header "{'descr': '<f4', 'fortran_order':
  * False, 'shape': (d0, d1, ...), }" padded with spaces and '\n' so that the data starts at a multiple of 64
@@ -151,6 +154,13 @@ int npy_close(npy_file *w, dp_error *err);
 void npy_abort(npy_file *w);
 /* All of an array at once. */
 int npy_write_f32(const char *path, const size_t *shape, int ndim, const float *data, dp_error *err);
+/* An int32 array at once ('<i4': photon-count histograms), atomic like the rest. */
+int npy_write_i32(const char *path, const size_t *shape, int ndim, const int32_t *data, dp_error *err);
+/* Reads a whole float32 array ('<f4', C order, .npy format 1.0 to 3.0): its shape (1 to NPY_MAX_DIMS axes) and
+ * values (malloc'd, *data). Anything else (another dtype, Fortran order, a short or long file) is an input
+ * error naming the file and what is wrong. */
+#define NPY_MAX_DIMS 8
+int npy_read_f32(const char *path, size_t *shape, int *ndim, float **data, dp_error *err);
 /* The header bytes (magic to '\n') of an array into out; their count (a multiple of 64), 0 if it does not
  * fit in n or in the format. */
 size_t npy_header(unsigned char *out, size_t n, const size_t *shape, int ndim);

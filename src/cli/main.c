@@ -22,6 +22,8 @@ static void usage(FILE *f)
             "       dartspp table --sigma-s S --sigma-a A --g G [--shape R,S,C] [--s-max X] --output FILE\n"
             "                                                     (EDA direction-sampling table)\n"
             "       dartspp keys [--markdown]                     (the scene's integrator and renderer keys)\n"
+            "       dartspp counts CUBE.npy --output COUNTS.npy --pulses N --scale S [...]\n"
+            "                                                     (photon-counting histograms of a cube)\n"
             "See docs/ for the scene keys, outputs and units.\n");
 }
 
@@ -76,7 +78,8 @@ int main(int argc, char **argv)
     if (!strcmp(argv[1], "merge")) return cli_merge(argc - 2, argv + 2);
     if (!strcmp(argv[1], "table")) return cli_table(argc - 2, argv + 2);
     if (!strcmp(argv[1], "keys")) return cli_keys(argc - 2, argv + 2);
-    fprintf(stderr, "dartspp: unknown command '%s' (commands: render, compare, patch-mean, merge, table, keys)\n", argv[1]);
+    if (!strcmp(argv[1], "counts")) return cli_counts(argc - 2, argv + 2);
+    fprintf(stderr, "dartspp: unknown command '%s' (commands: render, compare, patch-mean, merge, table, keys, counts)\n", argv[1]);
     usage(stderr);
     return 2;
 }

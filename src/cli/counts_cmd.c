@@ -1,0 +1,358 @@
+/* `dartspp counts CUBE.npy --output COUNTS.npy --pulses N --scale S [options]`: what a single-photon
+ * detector with time-correlated counting (SPAD/TCSPC) records of a transient cube over N laser pulses — an
+ * int32 histogram per pixel, (frames, height, width), and a JSON sidecar of the parameters and the time axis;
+ * with --coates also the Coates-corrected estimate of the cube from those counts. The model and its units:
+ * include/dartspp/sensor.h and docs/sensor.md §1. The options are declared once, in OPTIONS below: parsing,
+ * checks and the usage text come from there. */
+#include <errno.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <limits.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <cjson/cJSON.h>
+
+#include "dartspp/cli.h"
+#include "dartspp/io.h"
+#include "dartspp/sensor.h"
+
+typedef struct {
+    const char *cube, *output, *frames;
+    spad_params sp;
+    double seed;
+    const char *channel;
+    int coates;
+} counts_args;
+
+/* One numeric option: its flag, where it goes, its range, its default (NAN: required) and its meaning. */
+typedef struct {
+    const char *flag;
+    size_t offset; /* of a double in counts_args */
+    double min, max, def;
+    const char *help;
+} counts_option;
+
+#define ARG(f) offsetof(counts_args, f)
+static const counts_option OPTIONS[] = {
+    {"--pulses", ARG(sp.pulses), 1, 1e15, NAN, "laser pulses N (acquisition cycles), an integer"},
+    {"--scale", ARG(sp.scale), 0, 1e30, NAN, "photons reaching the detector per pulse, per unit of pixel value and of time"},
+    {"--efficiency", ARG(sp.efficiency), 0, 1, 1, "photon detection efficiency η"},
+    {"--dark-rate", ARG(sp.dark_rate), 0, 1e30, 0, "dark counts per unit of time"},
+    {"--ambient-rate", ARG(sp.ambient_rate), 0, 1e30, 0, "ambient photons reaching the detector per unit of time (detected with η)"},
+    {"--dead-time", ARG(sp.dead_time), 0, 1e30, 0, "blind time after a detection within a pulse; 0: none"},
+    {"--seed", ARG(seed), 0, 9007199254740992.0, 1, "seed of the Poisson and binomial draws, an integer"},
+};
+#define OPTION_COUNT (int)(sizeof OPTIONS / sizeof OPTIONS[0])
+
+static void usage(FILE *f)
+{
+    fprintf(f, "usage: dartspp counts CUBE.npy --output COUNTS.npy --pulses N --scale S [options]\n"
+               "  (a transient cube of `dartspp render`, (frames, height, width, 3) float32, with its frames CSV)\n");
+    for (int i = 0; i < OPTION_COUNT; i++) {
+        const counts_option *o = &OPTIONS[i];
+        if (isnan(o->def)) fprintf(f, "  %-15s %s (required)\n", o->flag, o->help);
+        else fprintf(f, "  %-15s %s (default %g)\n", o->flag, o->help, o->def);
+    }
+    fprintf(f, "  %-15s the cube channel the detector sees: r, g, b or mean (default mean)\n"
+               "  %-15s the frames' time axis (default: the cube's <stem>_frames.csv)\n"
+               "  %-15s also write COUNTS_coates.npy: the cube estimated back from the counts (needs a dead time\n"
+               "  %-15s at least the frames' span: one detection per pulse)\n"
+               "Units: times and rates in the scene's time unit (docs/time.md); model: docs/sensor.md.\n",
+            "--channel", "--frames", "--coates", "");
+}
+
+static int parse_number(const char *s, double *v)
+{
+    char *end;
+    errno = 0;
+    *v = strtod(s, &end);
+    return end == s || *end || errno || !isfinite(*v) ? -1 : 0;
+}
+
+static int parse_args(int argc, char **argv, counts_args *a)
+{
+    memset(a, 0, sizeof *a);
+    a->channel = "mean";
+    for (int i = 0; i < OPTION_COUNT; i++) *(double *)((char *)a + OPTIONS[i].offset) = OPTIONS[i].def;
+    for (int i = 0; i < argc; i++) {
+        const char *f = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
+        if (!strcmp(f, "--help") || !strcmp(f, "-h")) return 1;
+        if (!strcmp(f, "--coates")) {
+            a->coates = 1;
+            continue;
+        }
+        if (f[0] != '-') {
+            if (a->cube) {
+                fprintf(stderr, "dartspp counts: two cubes given ('%s' and '%s')\n", a->cube, f);
+                return -1;
+            }
+            a->cube = f;
+            continue;
+        }
+        if (!v) {
+            fprintf(stderr, "dartspp counts: %s needs a value\n", f);
+            return -1;
+        }
+        i++;
+        if (!strcmp(f, "--output")) a->output = v;
+        else if (!strcmp(f, "--frames")) a->frames = v;
+        else if (!strcmp(f, "--channel")) a->channel = v;
+        else {
+            int k = 0;
+            while (k < OPTION_COUNT && strcmp(f, OPTIONS[k].flag)) k++;
+            if (k == OPTION_COUNT) {
+                fprintf(stderr, "dartspp counts: unknown option '%s'\n", f);
+                return -1;
+            }
+            const counts_option *o = &OPTIONS[k];
+            double x;
+            if (parse_number(v, &x) || x < o->min || x > o->max) {
+                fprintf(stderr, "dartspp counts: %s '%s': expected a number in [%g, %g] (%s)\n", f, v, o->min, o->max, o->help);
+                return -1;
+            }
+            *(double *)((char *)a + o->offset) = x;
+        }
+    }
+    for (int k = 0; k < OPTION_COUNT; k++)
+        if (isnan(*(double *)((char *)a + OPTIONS[k].offset))) {
+            fprintf(stderr, "dartspp counts: %s is required (%s)\n", OPTIONS[k].flag, OPTIONS[k].help);
+            return -1;
+        }
+    if (!a->cube || !a->output) {
+        fprintf(stderr, "dartspp counts: %s\n", !a->cube ? "no cube given" : "--output is required");
+        return -1;
+    }
+    if (a->sp.pulses != floor(a->sp.pulses) || a->seed != floor(a->seed)) {
+        fprintf(stderr, "dartspp counts: --pulses and --seed are integers\n");
+        return -1;
+    }
+    const char *names[] = {"r", "g", "b", "mean"};
+    a->sp.channel = -1;
+    for (int c = 0; c < 4; c++)
+        if (!strcmp(a->channel, names[c])) a->sp.channel = c;
+    if (a->sp.channel < 0) {
+        fprintf(stderr, "dartspp counts: --channel '%s': expected r, g, b or mean\n", a->channel);
+        return -1;
+    }
+    return 0;
+}
+
+/* COUNTS.npy → COUNTS<suffix> (the extension replaced). */
+static char *beside(const char *path, const char *suffix)
+{
+    size_t n = strlen(path);
+    const char *dot = strrchr(path, '.'), *slash = strrchr(path, '/');
+    if (dot && (!slash || dot > slash)) n = (size_t)(dot - path);
+    char *s = malloc(n + strlen(suffix) + 1);
+    if (s) {
+        memcpy(s, path, n);
+        strcpy(s + n, suffix);
+    }
+    return s;
+}
+
+/* The cube's frames CSV: <stem>_frames.csv for <stem>_cube.npy. */
+static char *frames_of(const char *cube)
+{
+    size_t n = strlen(cube);
+    const char *tail = "_cube.npy";
+    if (n > strlen(tail) && !strcmp(cube + n - strlen(tail), tail)) n -= strlen(tail);
+    char *s = malloc(n + 16);
+    if (s) snprintf(s, n + 16, "%.*s_frames.csv", (int)n, cube);
+    return s;
+}
+
+static const char *MODEL_NAMES[] = {"poisson (no dead time)", "one detection per pulse (dead time at least the span)",
+                                    "dead time simulated pulse by pulse"};
+
+static int write_sidecar(const char *path, const counts_args *a, const spad_bins *b, const size_t *shape, spad_model m,
+                         double total, const char *coates_path, dp_error *err)
+{
+    cJSON *root = cJSON_CreateObject();
+    cJSON_AddStringToObject(root, "cube", a->cube);
+    for (int i = 0; i < OPTION_COUNT; i++)
+        cJSON_AddNumberToObject(root, OPTIONS[i].flag + 2, *(const double *)((const char *)a + OPTIONS[i].offset));
+    cJSON_AddStringToObject(root, "channel", a->channel);
+    cJSON_AddStringToObject(root, "model", MODEL_NAMES[m]);
+    cJSON_AddStringToObject(root, "dtype", "int32");
+    cJSON *sh = cJSON_AddArrayToObject(root, "shape");
+    for (int i = 0; i < 3; i++) cJSON_AddItemToArray(sh, cJSON_CreateNumber((double)shape[i]));
+    cJSON_AddStringToObject(root, "axes", "frame, row (0 at the top), column");
+    cJSON *fr = cJSON_AddArrayToObject(root, "frames");
+    for (int k = 0; k < b->count; k++) {
+        cJSON *pair = cJSON_CreateArray();
+        cJSON_AddItemToArray(pair, cJSON_CreateNumber(b->start[k]));
+        cJSON_AddItemToArray(pair, cJSON_CreateNumber(b->end[k]));
+        cJSON_AddItemToArray(fr, pair);
+    }
+    cJSON_AddStringToObject(root, "time_unit", "the scene's (docs/time.md)");
+    cJSON_AddNumberToObject(root, "total_counts", total);
+    if (coates_path) cJSON_AddStringToObject(root, "coates", coates_path);
+    char *text = cJSON_Print(root);
+    cJSON_Delete(root);
+    if (!text) return dp_fail_kind(err, DP_ERROR_MEMORY, "%s: out of memory", path);
+    atomic_file af;
+    FILE *f = atomic_fopen(path, "w", &af, err);
+    int rc = f ? atomic_fclose(&af, fprintf(f, "%s\n", text) < 0, err) : -1;
+    free(text);
+    return rc;
+}
+
+/* Every pixel's histogram (one stream per pixel: the counts do not depend on the thread count). */
+static int count_pixels(const counts_args *a, const spad_bins *b, const float *cube, size_t pixels, int32_t *counts,
+                        float *coates, double *total, long *odd_bins)
+{
+    int F = b->count, failed = 0;
+    double sum = 0.0;
+    long odd = 0;
+#pragma omp parallel for schedule(dynamic, 256) reduction(+ : sum, odd) reduction(| : failed)
+    for (size_t p = 0; p < pixels; p++) {
+        double *mu = malloc(3 * (size_t)F * sizeof *mu), *h = mu ? mu + F : NULL, *mh = mu ? mu + 2 * F : NULL;
+        if (!mu) {
+            failed = 1;
+            continue;
+        }
+        spad_expected(&a->sp, b, cube + 3 * p, 3 * pixels, mu);
+        dp_rng rng = rng_stream((uint64_t)a->seed, 0x636f756e7473ULL, p);
+        failed |= spad_histogram(&a->sp, b, mu, &rng, h) != 0;
+        for (int k = 0; k < F; k++) {
+            counts[(size_t)k * pixels + p] = (int32_t)h[k];
+            sum += h[k];
+        }
+        if (coates) {
+            odd += spad_coates(h, F, a->sp.pulses, mh);
+            for (int k = 0; k < F; k++)
+                coates[(size_t)k * pixels + p] = (float)spad_value_of(&a->sp, mh[k], b->end[k] - b->start[k]);
+        }
+        free(mu);
+    }
+    *total = sum;
+    *odd_bins = odd;
+    return failed ? -1 : 0;
+}
+
+/* Checks before any work: the largest expected count fits int32; the cost of a simulated dead time. */
+static int check_plan(const counts_args *a, const spad_bins *b, const float *cube, size_t pixels, spad_model m)
+{
+    double *mu = malloc((size_t)b->count * sizeof *mu), worst = 0.0, per_pulse = 0.0, simulated = 0.0;
+    if (!mu) return -1;
+    for (size_t p = 0; p < pixels; p++) {
+        spad_expected(&a->sp, b, cube + 3 * p, 3 * pixels, mu);
+        double sum = 0.0;
+        for (int k = 0; k < b->count; k++) worst = fmax(worst, mu[k]), sum += mu[k];
+        per_pulse = fmax(per_pulse, sum);
+        simulated += spad_simulated_pulses(&a->sp, b, mu);
+    }
+    free(mu);
+    double expected = a->sp.pulses * worst;
+    if (expected + 10.0 * sqrt(expected) > INT32_MAX) {
+        fprintf(stderr, "dartspp counts: a bin expects %.3g counts, more than an int32 histogram holds: lower --pulses or --scale\n",
+                expected);
+        return -1;
+    }
+    if (simulated > 2e9) {
+        fprintf(stderr, "dartspp counts: a dead time shorter than the frames' span is simulated pulse by pulse, and "
+                        "%.3g pulses have a detection (more than 2e9): use fewer --pulses, or --dead-time 0 or at least the span\n",
+                simulated);
+        return -1;
+    }
+    if (m == SPAD_POISSON && per_pulse > 0.05)
+        fprintf(stderr, "dartspp counts: warning: a pixel expects %.3g detections per pulse without dead time; a real "
+                        "SPAD piles up above about 0.05 (set --dead-time)\n", per_pulse);
+    if (a->sp.efficiency == 0.0) fprintf(stderr, "dartspp counts: warning: --efficiency 0: only dark counts are recorded\n");
+    return 0;
+}
+
+int cli_counts(int argc, char **argv)
+{
+    counts_args a;
+    int pr = parse_args(argc, argv, &a);
+    if (pr) {
+        usage(pr > 0 ? stdout : stderr);
+        return pr > 0 ? 0 : 2;
+    }
+    dp_error err;
+    size_t shape[NPY_MAX_DIMS];
+    int ndim;
+    float *cube = NULL;
+    if (npy_read_f32(a.cube, shape, &ndim, &cube, &err)) {
+        fprintf(stderr, "dartspp counts: %s\n", err.msg);
+        return 2;
+    }
+    int rc = 2;
+    char *frames_path = a.frames ? NULL : frames_of(a.cube), *json = beside(a.output, ".json"),
+         *coates_path = a.coates ? beside(a.output, "_coates.npy") : NULL;
+    double *start = NULL, *end = NULL;
+    int32_t *counts = NULL;
+    float *coates = NULL;
+    if (ndim != 4 || shape[3] != 3 || shape[0] < 1 || shape[0] > 1000000) {
+        fprintf(stderr, "dartspp counts: %s: expected a transient cube of shape (frames, height, width, 3), got %d axes\n",
+                a.cube, ndim);
+        goto done;
+    }
+    int F = (int)shape[0], n;
+    size_t pixels = shape[1] * shape[2];
+    start = malloc((size_t)F * sizeof *start), end = malloc((size_t)F * sizeof *end);
+    if (!start || !end || !json || (!a.frames && !frames_path) || (a.coates && !coates_path)) goto oom;
+    const char *fp = a.frames ? a.frames : frames_path;
+    if (frames_csv_read(fp, start, end, F, &n, &err)) {
+        fprintf(stderr, "dartspp counts: %s\n", err.msg);
+        goto done;
+    }
+    if (n != F) {
+        fprintf(stderr, "dartspp counts: %s has %d frames, the cube %s %d\n", fp, n, a.cube, F);
+        goto done;
+    }
+    for (int k = 1; k < F; k++)
+        if (start[k] < end[k - 1]) {
+            fprintf(stderr, "dartspp counts: %s: frame %d starts before frame %d ends\n", fp, k, k - 1);
+            goto done;
+        }
+    spad_bins b = {start, end, F};
+    spad_model m = spad_model_of(&a.sp, &b);
+    if (a.coates && m != SPAD_FIRST_PHOTON) {
+        fprintf(stderr, "dartspp counts: --coates undoes the pile-up of one detection per pulse: it needs --dead-time "
+                        "at least the frames' span (%g)\n", end[F - 1] - start[0]);
+        goto done;
+    }
+    if (check_plan(&a, &b, cube, pixels, m)) goto done;
+    rc = 1;
+    counts = malloc((size_t)F * pixels * sizeof *counts);
+    if (a.coates) coates = malloc((size_t)F * pixels * sizeof *coates);
+    if (!counts || (a.coates && !coates)) goto oom;
+    double total;
+    long odd;
+    double t0 = dp_seconds();
+    if (count_pixels(&a, &b, cube, pixels, counts, coates, &total, &odd)) goto oom;
+    size_t out_shape[3] = {(size_t)F, shape[1], shape[2]};
+    if (npy_write_i32(a.output, out_shape, 3, counts, &err) ||
+        (coates && npy_write_f32(coates_path, out_shape, 3, coates, &err)) ||
+        write_sidecar(json, &a, &b, out_shape, m, total, coates_path, &err)) {
+        fprintf(stderr, "dartspp counts: %s\n", err.msg);
+        goto done;
+    }
+    fprintf(stderr, "dartspp counts: %d frames of %zux%zu pixels, %g pulses, %s: %.6g counts (%.4g per pixel) in %.2f s\n",
+            F, shape[2], shape[1], a.sp.pulses, MODEL_NAMES[m], total, total / (double)pixels, dp_seconds() - t0);
+    if (odd) fprintf(stderr, "dartspp counts: warning: %ld bins saturated or after every pulse had its detection: their "
+                             "Coates estimates are bounds\n", odd);
+    fprintf(stderr, "wrote %s\nwrote %s\n", a.output, json);
+    if (coates_path) fprintf(stderr, "wrote %s\n", coates_path);
+    rc = 0;
+    goto done;
+oom:
+    fprintf(stderr, "dartspp counts: out of memory\n");
+    rc = 1;
+done:
+    free(cube);
+    free(start);
+    free(end);
+    free(counts);
+    free(coates);
+    free(frames_path);
+    free(json);
+    free(coates_path);
+    return rc;
+}
