@@ -410,6 +410,156 @@ static void test_counts_options_documented(void **state)
     free(doc);
 }
 
+/* χ² of 200,000 offsets against the response's CDF over 40 cells between lo and hi (and the two tails). */
+static double response_chi2(const sensor_response *r, double lo, double hi, uint64_t seed)
+{
+    enum { CELLS = 42 };
+    chi_cell c[CELLS] = {{0}};
+    const long N = 200000;
+    double w = (hi - lo) / (CELLS - 2);
+    for (int i = 0; i < CELLS; i++) {
+        double a = i == 0 ? -INFINITY : lo + (i - 1) * w, b = i == CELLS - 1 ? INFINITY : lo + i * w;
+        double Fa = isinf(a) ? 0.0 : sensor_response_cdf(r, a), Fb = isinf(b) ? 1.0 : sensor_response_cdf(r, b);
+        c[i].exp = N * (Fb - Fa);
+    }
+    dp_rng rng = rng_stream(seed, 3, 4);
+    for (long k = 0; k < N; k++) {
+        double x = sensor_response_sample(r, &rng);
+        int i = x < lo ? 0 : x >= hi ? CELLS - 1 : 1 + (int)((x - lo) / w);
+        if (x < hi && i > CELLS - 2) i = CELLS - 2; /* rounding at hi */
+        c[i].obs += 1.0;
+    }
+    double chi2;
+    int dof;
+    double p = chi2_pooled(c, CELLS, &chi2, &dof, NULL);
+    print_message("  chi2 %.1f, %d dof, p = %.3g\n", chi2, dof, p);
+    return p;
+}
+
+/* The time response's offsets against its CDF (χ²): a Gaussian, an exponential tail alone, their sum (the
+ * exponentially modified Gaussian, whose CDF is the closed form of docs/sensor.md §2), and a tabulated
+ * density (a triangle with a flat shoulder, read from a file with a header line); the CDF itself against a
+ * numerical integral of the table's density; bad tables refused with the file, the line and the reason. */
+static void test_time_response_samples_its_cdf(void **state)
+{
+    (void)state;
+    sensor_response r;
+    dp_error err;
+    assert_int_equal(sensor_response_init(&r, 0.3, 0.0, NULL, &err), 0);
+    assert_true(fabs(sensor_response_cdf(&r, 0.15) - 0.5 * erfc(-0.15 / (0.3 / 2.3548200450309493) / M_SQRT2)) < 1e-12);
+    double worst = response_chi2(&r, -0.5, 0.5, 1);
+    assert_int_equal(sensor_response_init(&r, 0.0, 0.2, NULL, &err), 0);
+    worst = fmin(worst, response_chi2(&r, 0.0, 1.5, 2));
+    assert_int_equal(sensor_response_init(&r, 0.2, 0.15, NULL, &err), 0);
+    worst = fmin(worst, response_chi2(&r, -0.4, 1.2, 3));
+    /* the EMG's CDF against a direct numerical convolution of its two densities */
+    double x = 0.3, num = 0.0, s = 0.2 / 2.3548200450309493, h = 1e-4;
+    for (double e = 0.5 * h; e < 3.0; e += h) num += h * exp(-e / 0.15) / 0.15 * 0.5 * erfc(-(x - e) / (s * M_SQRT2));
+    print_message("  EMG CDF at 0.3: %.8f, numerical %.8f\n", sensor_response_cdf(&r, x), num);
+    assert_true(fabs(sensor_response_cdf(&r, x) - num) < 1e-6);
+    char *dir = test_tmpdir(), path[512];
+    assert_non_null(dir);
+    snprintf(path, sizeof path, "%s/irf.csv", dir);
+    test_write_file(path, "time,value\n-0.1,0\n0,2\n0.2,0.5\n0.5,0.5\n0.6,0\n");
+    assert_int_equal(sensor_response_init(&r, 0.0, 0.0, path, &err), 0);
+    assert_int_equal(r.n, 5);
+    double area = 0.0; /* the density (p normalized) integrated by the midpoint rule */
+    for (int i = 0; i < 4; i++)
+        for (int k = 0; k < 1000; k++) {
+            double t = r.t[i] + (k + 0.5) * (r.t[i + 1] - r.t[i]) / 1000, f = (t - r.t[i]) / (r.t[i + 1] - r.t[i]);
+            area += (r.p[i] + f * (r.p[i + 1] - r.p[i])) * (r.t[i + 1] - r.t[i]) / 1000;
+            double end = t + 0.5 * (r.t[i + 1] - r.t[i]) / 1000; /* the area so far is up to the cell's end */
+            if (i == 1 && k == 499) assert_true(fabs(sensor_response_cdf(&r, end) - area) < 1e-6);
+        }
+    assert_true(fabs(area - 1.0) < 1e-9);
+    worst = fmin(worst, response_chi2(&r, -0.1, 0.6, 4));
+    sensor_response_free(&r);
+    assert_true(worst > 1e-3 / 4);
+    const char *bad[][2] = {{"0,1\n0,2\n", "times must increase"}, {"0,1\n1,-2\n", "negative"},
+                            {"0,1\n", "fewer than two"}, {"0,1\nx\n", ":2:"}, {"0,0\n1,0\n", "area is 0"}};
+    for (int i = 0; i < 5; i++) {
+        test_write_file(path, bad[i][0]);
+        assert_int_equal(sensor_response_init(&r, 0.0, 0.0, path, &err), -1);
+        if (!strstr(err.msg, bad[i][1]) || !strstr(err.msg, path)) fail_msg("table %d: %s", i, err.msg);
+    }
+    assert_int_equal(sensor_response_init(&r, 0.1, 0.0, path, &err), -1);
+    test_rmtree(dir);
+}
+
+/* A point light in fog just above a glossy gold floor (gate [1.8, 2.6): the floor's light connections count),
+ * through which the photon methods' camera paths continue and connect to the light, and a diffuse ceiling
+ * for surface photons; its light's pulse and the sensor's response given by
+ * `pulse` and `response` (JSON members or ""). */
+static void write_response_scene(const char *path, const char *type, const char *pulse, const char *response)
+{
+    char text[4096];
+    snprintf(text, sizeof text,
+             "{ \"media\": [ { \"name\": \"fog\", \"type\": \"homogeneous\", \"sigma_s\": [0.5, 0.35, 0.6],"
+             "  \"sigma_a\": [0.1, 0.2, 0.05], \"phase_function\": {\"type\": \"isotropic\"} } ],"
+             "  \"bsdfs\": [ { \"name\": \"white\", \"type\": \"lambert\", \"albedo\": 0.7 },"
+             "    { \"name\": \"metal\", \"type\": \"rough_conductor\", \"material\": \"Au\", \"roughness\": 0.2 } ],"
+             "  \"primitives\": [ { \"type\": \"point\", \"emission\": [1, 2, 3], \"ext_medium\": \"fog\" %s,"
+             "    \"transform\": { \"position\": [0.5, -0.2, 1.5] } },"
+             "    { \"type\": \"quad\", \"bsdf\": \"metal\", \"transform\": { \"position\": [0, -0.5, 3], \"scale\": 10 } },"
+             "    { \"type\": \"quad\", \"bsdf\": \"white\", \"transform\": { \"position\": [0, 1.2, 3], \"scale\": 10,"
+             "      \"rotation\": [180, 0, 0] } } ],"
+             "  \"camera\": { \"type\": \"pinhole\", \"resolution\": [16, 12], \"fov\": 50, \"medium\": \"fog\","
+             "    \"transform\": { \"position\": [0, 0, 0], \"look_at\": [0, 0, 1], \"up\": [0, 1, 0] } },"
+             "  \"integrator\": { %s, \"max_bounces\": 4, \"transient_time_center\": 2.2, \"transient_time_width\": 0.8,"
+             "    \"photon_count\": 20000, \"volume_photon_count\": 5000, \"gather_radius\": 0.2, \"volume_gather_radius\": 0.2 %s },"
+             "  \"renderer\": { \"spp\": 1 } }",
+             pulse, type, response);
+    test_write_file(path, text);
+}
+
+/* The response acts where the light's pulse acts, in every integrator: a box pulse of width 0.4 and a
+ * tabulated response that is the same box draw the same offsets from the same random numbers (start + 0.4·u),
+ * so the two renders must agree pixel for pixel up to rounding — the path tracer, the DARTS and uniform-time
+ * path tracers, baseline and DARTS photon points (both the photon pass and the sensor pass's connections). */
+static void test_response_acts_like_a_pulse(void **state)
+{
+    char *dir = test_tmpdir(), a[512], b[512], table[512], cmd[2048], out[4096];
+    assert_non_null(dir);
+    *state = dir;
+    snprintf(table, sizeof table, "%s/box.csv", dir);
+    test_write_file(table, "time,value\n0,1\n0.4,1\n");
+    const char *types[] = {
+        "\"type\": \"path_tracer\"",
+        "\"type\": \"path_tracer\", \"enable_guiding\": true, \"enable_elliptical\": true",
+        "\"type\": \"path_tracer\", \"time_sampling\": \"uniform\"",
+        "\"type\": \"progressive_transient_photon_map\", \"enable_guiding\": false, \"enable_elliptical\": false, \"strict_time_width\": false",
+        "\"type\": \"progressive_transient_photon_map\", \"enable_guiding\": true, \"enable_elliptical\": true, \"strict_time_width\": true",
+    };
+    char resp[600];
+    snprintf(resp, sizeof resp, ", \"sensor_response_file\": \"box.csv\"");
+    for (int t = 0; t < 5; t++) {
+        snprintf(a, sizeof a, "%s/pulse.json", dir);
+        snprintf(b, sizeof b, "%s/response.json", dir);
+        write_response_scene(a, types[t], ", \"pulse_start\": 0, \"pulse_width\": 0.4, \"pulse_shape\": \"box\"", "");
+        write_response_scene(b, types[t], "", resp);
+        image_rgb img[2];
+        for (int k = 0; k < 2; k++) {
+            snprintf(cmd, sizeof cmd, "%s render %s --spp 6 --threads 2 --seed 9 --output %s/%d.pfm --no-cube --no-viewer --quiet",
+                     DARTSPP_BIN, k ? b : a, dir, k);
+            if (test_run(cmd, out, sizeof out) != 0) fail_msg("%s: %s", cmd, out);
+            snprintf(cmd, sizeof cmd, "%s/%d.pfm", dir, k);
+            dp_error err;
+            assert_int_equal(pfm_read(cmd, &img[k], &err), 0);
+        }
+        double worst = 0.0, total = 0.0;
+        size_t n = (size_t)img[0].width * img[0].height * 3;
+        for (size_t i = 0; i < n; i++) {
+            worst = fmax(worst, fabs(img[0].rgb[i] - img[1].rgb[i]) / fmax(1e-3, fabs(img[0].rgb[i])));
+            total += img[0].rgb[i];
+        }
+        print_message("  integrator %d: image total %.5g, largest relative difference %.2g\n", t, total, worst);
+        assert_true(total > 0.0);
+        assert_true(worst < 1e-4);
+        image_free(&img[0]);
+        image_free(&img[1]);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -423,6 +573,8 @@ int main(void)
         cmocka_unit_test(test_coates_recovers_the_expected_detections),
         cmocka_unit_test_teardown(test_counts_command, test_teardown_tmpdir),
         cmocka_unit_test(test_counts_options_documented),
+        cmocka_unit_test(test_time_response_samples_its_cdf),
+        cmocka_unit_test_teardown(test_response_acts_like_a_pulse, test_teardown_tmpdir),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

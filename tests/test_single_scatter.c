@@ -24,6 +24,7 @@ typedef struct {
     double g0, g1;
     int unwarp;        /* the camera leg takes no time */
     double p0, pw;     /* pulse: emission at p0 (pw = 0) or uniformly over [p0, p0 + pw) */
+    double rs, rt;     /* the sensor's response: Gaussian σ and exponential tail mean (0, 0: none) */
 } analytic_case;
 
 static double hg(double g, double mu)
@@ -74,8 +75,19 @@ static double light_time(const analytic_case *a, vec3 psi, double s)
     return a->eta * (a->unwarp ? R : s + R);
 }
 
+/* The exponentially modified Gaussian's CDF, written here from its closed form (the response's offset is a
+ * normal deviate of σ plus an exponential of mean τ): Φ(x/σ) − exp(σ²/(2τ²) − x/τ)·Φ(x/σ − σ/τ). */
+static double emg_cdf(double x, double s, double t)
+{
+    double phi = 0.5 * erfc(-x / (s * sqrt(2.0)));
+    if (t == 0) return phi;
+    return phi - exp(s * s / (2 * t * t) - x / t) * 0.5 * erfc(-(x / s - s / t) / sqrt(2.0));
+}
+
 static double pulse_weight(const analytic_case *a, double T)
 {
+    if (a->rs > 0) /* a delta pulse through the response: P(T + p0 + offset in the gate) */
+        return emg_cdf(a->g1 - T - a->p0, a->rs, a->rt) - emg_cdf(a->g0 - T - a->p0, a->rs, a->rt);
     if (a->pw == 0) return T + a->p0 >= a->g0 && T + a->p0 < a->g1;
     double lo = fmax(a->g0 - T, a->p0), hi = fmin(a->g1 - T, a->p0 + a->pw);
     return hi > lo ? (hi - lo) / a->pw : 0.0;
@@ -93,7 +105,7 @@ static int time_crossings(const analytic_case *a, vec3 psi, double c, double *ou
         double r = sqrt(disc);
         if (b - r >= 0) out[n++] = b - r;
         if (b + r >= 0) out[n++] = b + r;
-    } else if (tau * tau > D2) { /* s + |ψs − l| = τ */
+    } else if (tau > 0 && tau * tau > D2) { /* s + |ψs − l| = τ (τ > D >= b, so s > 0) */
         out[n++] = (tau * tau - D2) / (2 * (tau - b));
     }
     return n;
@@ -107,7 +119,11 @@ static int cmp_double(const void *x, const void *y)
 
 static double ray_radiance_pulse(const analytic_case *a, vec3 psi, int ch)
 {
-    const double cs[4] = {a->g0 - a->p0 - a->pw, a->g0 - a->p0, a->g1 - a->p0 - a->pw, a->g1 - a->p0};
+    double cs[4] = {a->g0 - a->p0 - a->pw, a->g0 - a->p0, a->g1 - a->p0 - a->pw, a->g1 - a->p0};
+    if (a->rs > 0) { /* the response's weight is below 1e-12 beyond these path times */
+        cs[0] = a->g0 - a->p0 - 30 * a->rt - 8 * a->rs;
+        cs[3] = a->g1 - a->p0 + 8 * a->rs;
+    }
     double bp[10] = {0};
     int n = 1;
     for (int k = 0; k < 4; k++) n += time_crossings(a, psi, cs[k], bp + n);
@@ -128,7 +144,7 @@ static double ray_radiance_pulse(const analytic_case *a, vec3 psi, int ch)
 
 static double ray_radiance(const analytic_case *a, vec3 psi, int ch)
 {
-    if (a->unwarp || a->p0 != 0 || a->pw != 0) return ray_radiance_pulse(a, psi, ch);
+    if (a->unwarp || a->p0 != 0 || a->pw != 0 || a->rs > 0) return ray_radiance_pulse(a, psi, ch);
     double s0 = 0, s1;
     if (a->gated) {
         s0 = solve_time(a, psi, a->g0);
@@ -173,6 +189,7 @@ static void write_scene(const char *path, const char *phase, double speed, const
 typedef struct {
     int unwarp;
     double p0, pw;
+    double rs, rt; /* the sensor's response (Gaussian σ, tail mean), written as the sensor_jitter_* keys */
 } time_mode;
 
 static void check_against_quadrature_seeds(const char *phase, double g, double speed, const char *window, int gated,
@@ -181,6 +198,9 @@ static void check_against_quadrature_seeds(const char *phase, double g, double s
     char *dir = test_tmpdir(), path[512], win[512];
     snprintf(path, sizeof path, "%s/single.json", dir);
     snprintf(win, sizeof win, "%s%s", window, tm.unwarp ? ", \"camera_unwarp\": true" : "");
+    if (tm.rs > 0)
+        snprintf(win + strlen(win), sizeof win - strlen(win), ", \"sensor_jitter_fwhm\": %.17g, \"sensor_jitter_tail\": %.17g",
+                 tm.rs * 2.3548200450309493, tm.rt);
     write_scene(path, phase, speed, win, tm.p0, tm.pw);
     scene s;
     dp_error err;
@@ -188,7 +208,9 @@ static void check_against_quadrature_seeds(const char *phase, double g, double s
     if (scene_load(path, &lo, &s, &err)) fail_msg("%s", err.msg);
     analytic_case a = {.cam = s.cam.pos, .light = s.lights[0].pos, .I = s.lights[0].value,
                        .ss = s.media[0].sigma_s, .st = s.media[0].sigma_t, .g = g, .eta = 1.0 / speed,
-                       .gated = gated, .g0 = g0, .g1 = g1, .unwarp = tm.unwarp, .p0 = tm.p0, .pw = tm.pw};
+                       .gated = gated, .g0 = g0, .g1 = g1, .unwarp = tm.unwarp, .p0 = tm.p0, .pw = tm.pw,
+                       .rs = tm.rs, .rt = tm.rt};
+    assert_int_equal(s.cam.response.on, tm.rs > 0);
     assert_int_equal(s.integrator.window.camera_unwarp, tm.unwarp);
     assert_true(s.lights[0].pulse.start == tm.p0 && s.lights[0].pulse.width == tm.pw);
     int n = s.cam.width * s.cam.height * 3;
@@ -245,7 +267,7 @@ static void check_against_quadrature_mode(const char *phase, double g, double sp
 static void check_against_quadrature(const char *phase, double g, double speed, const char *window, int gated,
                                      double g0, double g1, long passes)
 {
-    check_against_quadrature_mode(phase, g, speed, window, gated, g0, g1, passes, (time_mode){0, 0, 0});
+    check_against_quadrature_mode(phase, g, speed, window, gated, g0, g1, passes, (time_mode){0, 0, 0, 0, 0});
 }
 
 static void test_gate_isotropic(void **state)
@@ -281,10 +303,10 @@ static void test_box_pulse(void **state)
     (void)state;
     check_against_quadrature_mode("{\"type\": \"henyey_greenstein\", \"g\": 0.4}", 0.4, 0.75,
                                   "\"transient_time_center\": 4.3, \"transient_time_width\": 0.6", 1, 4.0, 4.6, 3000,
-                                  (time_mode){0, 0.4, 0.6});
+                                  (time_mode){0, 0.4, 0.6, 0, 0});
     check_against_quadrature_mode("{\"type\": \"isotropic\"}", 0.0, 1.0,
                                   "\"transient_time_center\": 3.65, \"transient_time_width\": 0.5", 1, 3.4, 3.9, 3000,
-                                  (time_mode){0, 0.4, 0});
+                                  (time_mode){0, 0.4, 0, 0, 0});
 }
 
 /* Camera-unwarped time: only the light leg counts, so the gate [0.8, 2.6) selects the shell 0.8 <= R < 2.6
@@ -315,7 +337,7 @@ static void test_unwarped_early_gate(void **state)
     }
     scene_free(&s);
     test_rmtree(dir);
-    check_against_quadrature_mode("{\"type\": \"isotropic\"}", 0.0, 1.0, window, 1, 0.8, 2.6, 3000, (time_mode){1, 0, 0});
+    check_against_quadrature_mode("{\"type\": \"isotropic\"}", 0.0, 1.0, window, 1, 0.8, 2.6, 3000, (time_mode){1, 0, 0, 0, 0});
 }
 
 /* The DARTS path tracer (DA distance sampling along the camera ray toward the light, the light connection by an
@@ -336,16 +358,34 @@ static void test_darts_and_uniform_time(void **state)
     char w[512];
     for (int m = 0; m < 2; m++) {
         snprintf(w, sizeof w, "\"transient_time_center\": 3.25, \"transient_time_width\": 0.5, %s", methods[m]);
-        check_against_quadrature_seeds("{\"type\": \"isotropic\"}", 0.0, 1.0, w, 1, 3.0, 3.5, 300, (time_mode){0, 0, 0}, 32);
+        check_against_quadrature_seeds("{\"type\": \"isotropic\"}", 0.0, 1.0, w, 1, 3.0, 3.5, 300, (time_mode){0, 0, 0, 0, 0}, 32);
         snprintf(w, sizeof w, "\"transient_time_center\": 4.3, \"transient_time_width\": 0.6, %s", methods[m]);
         check_against_quadrature_seeds("{\"type\": \"henyey_greenstein\", \"g\": 0.4}", 0.4, 0.75, w, 1, 4.0, 4.6, 300,
-                                       (time_mode){0, 0, 0}, 32);
+                                       (time_mode){0, 0, 0, 0, 0}, 32);
     }
     snprintf(w, sizeof w, "\"transient_time_center\": 4.3, \"transient_time_width\": 0.6, %s", DARTS_PT);
     check_against_quadrature_seeds("{\"type\": \"henyey_greenstein\", \"g\": 0.4}", 0.4, 0.75, w, 1, 4.0, 4.6, 300,
-                                   (time_mode){0, 0.4, 0.6}, 32);
+                                   (time_mode){0, 0.4, 0.6, 0, 0}, 32);
     snprintf(w, sizeof w, "\"transient_time_center\": 1.7, \"transient_time_width\": 1.8, %s", DARTS_PT);
-    check_against_quadrature_seeds("{\"type\": \"isotropic\"}", 0.0, 1.0, w, 1, 0.8, 2.6, 300, (time_mode){1, 0, 0}, 32);
+    check_against_quadrature_seeds("{\"type\": \"isotropic\"}", 0.0, 1.0, w, 1, 0.8, 2.6, 300, (time_mode){1, 0, 0, 0, 0}, 32);
+}
+
+/* The sensor's time response (docs/sensor.md §2): a Gaussian jitter of σ 0.15 with an exponential tail of
+ * mean 0.1, and a tail-dominated one (σ 0.05, mean 0.3, which reaches paths of every time down to the
+ * earliest, 2.625), on a 0.5-wide gate, against the quadrature of the path time's weight convolved with the
+ * response in closed form (emg_cdf), for the path tracer (the offset drawn at the light connection) and the
+ * DARTS path tracer (drawn at the aimed path's start). */
+static void test_sensor_response(void **state)
+{
+    (void)state;
+    char w[512];
+    time_mode tm = {0, 0, 0, 0.15, 0.1}, tail = {0, 0, 0, 0.05, 0.3};
+    check_against_quadrature_mode("{\"type\": \"isotropic\"}", 0.0, 1.0,
+                                  "\"transient_time_center\": 3.25, \"transient_time_width\": 0.5", 1, 3.0, 3.5, 3000, tm);
+    check_against_quadrature_mode("{\"type\": \"isotropic\"}", 0.0, 1.0,
+                                  "\"transient_time_center\": 3.25, \"transient_time_width\": 0.5", 1, 3.0, 3.5, 3000, tail);
+    snprintf(w, sizeof w, "\"transient_time_center\": 4.3, \"transient_time_width\": 0.6, %s", DARTS_PT);
+    check_against_quadrature_seeds("{\"type\": \"henyey_greenstein\", \"g\": 0.4}", 0.4, 0.75, w, 1, 4.0, 4.6, 300, tm, 32);
 }
 
 int main(void)
@@ -357,6 +397,7 @@ int main(void)
         cmocka_unit_test(test_steady_hg_backward),
         cmocka_unit_test(test_box_pulse),
         cmocka_unit_test(test_unwarped_early_gate),
+        cmocka_unit_test(test_sensor_response),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -7,6 +7,7 @@
 #include "dartspp/bsdf.h"
 #include "dartspp/core.h"
 #include "dartspp/emitter.h"
+#include "dartspp/sensor.h"
 
 /* ---- materials: include/dartspp/bsdf.h; albedo textures ---- */
 typedef struct {
@@ -83,6 +84,7 @@ typedef struct {
     vec3 right, up, forward; /* world axes of the image plane: +right = screen right, +up = screen up */
     double plane_dist;      /* 1 / tan(fov/2): image plane spans x in [-1,1] */
     int medium;
+    sensor_response response; /* its time response, from the integrator's sensor_* keys (sensor.h) */
 } camera;
 
 /* Direction of the camera ray through the image-plane point (px, py) in pixel units: pixel (x, y) covers
@@ -121,6 +123,8 @@ typedef struct {
     long frame_num;
     int delta_time_gate, camera_unwarp;
     time_window window;
+    double sensor_jitter_fwhm, sensor_jitter_tail; /* the sensor's time response (sensor.h) */
+    char sensor_response_file[512];
     double vacuum_speed;            /* vaccum_speed_of_light (the format's spelling) */
     double vacuum_eta;              /* 1 / vacuum_speed */
     int light_selection_uniform;    /* light_selection: 0 "power" (by flux), 1 "uniform" */
@@ -300,6 +304,15 @@ static inline double medium_eta(const scene *s, int med)
 static inline const char *medium_name(const scene *s, int med)
 {
     return med == MEDIUM_VACUUM ? "vacuum" : s->media[med].name;
+}
+
+/* The time a path starts with: the emission time drawn from light L's pulse (emitter.h) plus the sensor's
+ * response offset (sensor.h). Both shift a path's time as a whole, so they are drawn together, where the
+ * path starts (docs/sensor.md §2); a delta pulse and a perfect sensor draw nothing. */
+static inline double path_time_offset(const scene *s, const emitter *L, dp_rng *rng)
+{
+    double t = emitter_pulse_sample(&L->pulse, rng);
+    return t + sensor_response_sample(&s->cam.response, rng);
 }
 
 #endif

@@ -54,4 +54,27 @@ int spad_coates(const double *counts, int bins, double pulses, double *mu_hat);
 /* μ̂_k back in the cube's unit: (μ̂_k/Δt_k − dark_rate − η·ambient_rate)/(η·scale). */
 double spad_value_of(const spad_params *sp, double mu_hat, double width);
 
+/* ---- the sensor's time response (src/sensor/time_response.c; docs/sensor.md §2) ----
+ * The instrument response: a photon is recorded at its arrival time plus an offset drawn from the response
+ * (detector and laser jitter), so every gate image and frame records the transient convolved with it. The
+ * offset is drawn once per path, with the light's pulse (scene.h, path_time_offset), before DARTS aims at
+ * the gate. Either a Gaussian of full width at half maximum `fwhm` (centred on 0) plus an exponential delay
+ * of mean `tail` (the exponentially modified Gaussian of SPAD timing; each may be 0), or a tabulated density:
+ * knots t_i (increasing) with values p_i >= 0, linear in between, normalized. */
+typedef struct {
+    int on;        /* 0: a perfect sensor, no offset and no random numbers drawn */
+    double sigma;  /* the Gaussian's standard deviation, fwhm / (2·sqrt(2 ln 2)) */
+    double tail;   /* mean of the exponential delay; 0: none */
+    int n;         /* tabulated: n >= 2 knots (then sigma and tail are 0) */
+    double *t, *p, *cdf;
+} sensor_response;
+
+/* From the keys: fwhm and tail (>= 0), or a table file (CSV lines "time,value", an optional header line;
+ * path as given). Errors name the file, the line and the reason. */
+int sensor_response_init(sensor_response *r, double fwhm, double tail, const char *table_path, dp_error *err);
+double sensor_response_sample(const sensor_response *r, dp_rng *rng);
+/* Its cumulative distribution at x (for checks and tests). */
+double sensor_response_cdf(const sensor_response *r, double x);
+void sensor_response_free(sensor_response *r);
+
 #endif

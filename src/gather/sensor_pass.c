@@ -137,7 +137,7 @@ static void direct_light(pixel_ctx *c, const surface_site *site, unsigned lobes,
         vec3 f = surface_eval_cos(ss, ed.wi, lobes);
         if (v3_max(f) <= 0.0) continue;
         vec3 tr;
-        double t = t_cam + emitter_pulse_sample(&L->pulse, c->rng);
+        double t = t_cam + path_time_offset(s, L, c->rng);
         c->pix->rays += 1;
         vec3 target = v3_is_zero(ed.n) ? ed.y
                       : scene_offset_ray_origin(s, ed.y, v3_dot(ed.wi, ed.n) < 0.0 ? ed.n : v3_neg(ed.n));
@@ -157,7 +157,7 @@ static void hit_emission(pixel_ctx *c, const hit_record *h, vec3 d, vec3 thr, do
     const emitter *L = &s->lights[i];
     vec3 le = emitter_hit_radiance(L, d, h->ng);
     if (v3_is_zero(le)) return;
-    film_pixel_splat(c->pix, t_cam + emitter_pulse_sample(&L->pulse, c->rng), v3_mul(thr, le), -1);
+    film_pixel_splat(c->pix, t_cam + path_time_offset(s, L, c->rng), v3_mul(thr, le), -1);
 }
 
 /* The camera walk: volume gathers along every medium segment; at a surface, the gather over the lobes the

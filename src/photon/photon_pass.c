@@ -251,7 +251,7 @@ void trace_light_path(const scene *s, const photon_pass_input *in, int volume_op
     double sel_pdf = 1.0;
     int li = emitter_select(s, rng_uniform(rng), !s->integrator.light_selection_uniform, &sel_pdf);
     const emitter *L = &s->lights[li];
-    double tau0 = emitter_pulse_sample(&L->pulse, rng); /* the path's time starts at its emission */
+    double tau0 = path_time_offset(s, L, rng); /* the path's time starts at its emission */
     /* the start: a light with a position of its own draws it first, so that the bin is drawn from it; a
      * point draws only its direction, after the bin (the draws of a scene of point lights are unchanged) */
     emitter_ray er;

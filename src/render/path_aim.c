@@ -85,7 +85,7 @@ int pt_aim_start(pixel_ctx *c, path_state *ps)
     if (!(a->sel_pdf > 0.0)) return 0;
     const emitter *L = &s->lights[i];
     a->pre_r = -1.0;
-    ps->time = emitter_pulse_sample(&L->pulse, c->rng);
+    ps->time = path_time_offset(s, L, c->rng);
     /* the light's point for this path: the target of its samplers and of its connections */
     double up[2] = {0.0, 0.0};
     if (emitter_direct_draws(L)) up[0] = rng_uniform(c->rng), up[1] = rng_uniform(c->rng);

@@ -30,7 +30,7 @@ void pt_connect_sample(pixel_ctx *c, const path_state *ps, int i, const emitter_
     vec3 f = ss ? surface_eval_cos(ss, wl, BSDF_LOBES_ALL) : v3s(phase_eval(pf, ps->d, wl));
     if (v3_max(f) <= 0.0) return;
     vec3 tr;
-    double t = ps->time + (draw_emission ? emitter_pulse_sample(&L->pulse, c->rng) : 0.0);
+    double t = ps->time + (draw_emission ? path_time_offset(s, L, c->rng) : 0.0);
     c->pix->rays += 1;
     vec3 o = ss ? surface_spawn(s, ss, wl) : x;
     if (!scene_transmittance(s, o, ss ? surface_medium_toward(ss, ps->medium, wl) : ps->medium, shadow_target(s, ed),
@@ -114,7 +114,7 @@ static void hit_emission(pixel_ctx *c, const path_state *ps, const hit_record *h
                          c->aim.bin.frame);
         return;
     }
-    film_pixel_splat(c->pix, ps->time + emitter_pulse_sample(&L->pulse, c->rng), v3_mul(ps->beta, le), -1);
+    film_pixel_splat(c->pix, ps->time + path_time_offset(s, L, c->rng), v3_mul(ps->beta, le), -1);
 }
 
 /* Time of a segment of length len in a region of index eta: η·len, but nothing for the camera segment

@@ -125,6 +125,10 @@ static void print_lights(const scene *s, const render_plan *p)
                light_technique(e, p));
     }
     printf("\n");
+    const sensor_response *r = &s->cam.response;
+    if (r->n) printf("sensor time response: tabulated, %d knots from %g to %g\n", r->n, r->t[0], r->t[r->n - 1]);
+    else if (r->on) printf("sensor time response: Gaussian jitter FWHM %g, exponential tail of mean %g\n",
+                           s->integrator.sensor_jitter_fwhm, r->tail);
 }
 
 /* The scene, its integrator and size, and the gate or frames. */

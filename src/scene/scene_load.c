@@ -523,6 +523,7 @@ static void warn_dark_scene(json_ctx *c, const scene *s)
         const emitter *L = &s->lights[i];
         if (!(L->flux.x > 0 || L->flux.y > 0 || L->flux.z > 0)) continue;
         if (L->pulse.shape == PULSE_GAUSSIAN && L->pulse.width > 0.0) return; /* no earliest emission */
+        if (s->cam.response.on) return; /* the response can move a detection earlier */
         /* the nearest emitting point is at most `extent` nearer than the light's reference point */
         double d = tw->camera_unwarp ? 0.0 : dp_fmax(0.0, v3_len(v3_sub(L->pos, s->cam.pos)) - L->extent);
         double t = L->pulse.start + d * eta;
@@ -558,6 +559,23 @@ static void warn_light_outside_medium(json_ctx *c, const scene *s)
                   s->media[s->cam.medium].name, s->media[s->cam.medium].name);
 }
 
+/* The camera's time response from the integrator's sensor_* keys (docs/sensor.md §2); a table file is
+ * relative to the scene file. */
+static int load_sensor_response(json_ctx *c, scene *s)
+{
+    const integrator_settings *in = &s->integrator;
+    const char *file = in->sensor_response_file;
+    char path[2100] = "";
+    if (file[0]) snprintf(path, sizeof path, "%s%s%s", file[0] == '/' ? "" : s->dir, file[0] == '/' ? "" : "/", file);
+    if (file[0] && (in->sensor_jitter_fwhm > 0.0 || in->sensor_jitter_tail > 0.0))
+        return jfail(c, "integrator", "sensor_response_file",
+                     "a tabulated response replaces sensor_jitter_fwhm and sensor_jitter_tail: give one or the other");
+    dp_error e;
+    if (sensor_response_init(&s->cam.response, in->sensor_jitter_fwhm, in->sensor_jitter_tail, path, &e))
+        return jfail(c, "integrator", file[0] ? "sensor_response_file" : "sensor_jitter_fwhm", "%s", e.msg);
+    return 0;
+}
+
 static int parse_all(json_ctx *c, cJSON *root, scene *s, const scene_load_options *opt)
 {
     if (!cJSON_IsObject(root)) return jfail(c, "(top level)", NULL, "expected a JSON object");
@@ -568,6 +586,7 @@ static int parse_all(json_ctx *c, cJSON *root, scene *s, const scene_load_option
     if (!rc) rc = parse_primitives(c, root, s, names);
     if (!rc) rc = parse_camera(c, root, s);
     if (!rc) rc = settings_parse(c, root, s);
+    if (!rc) rc = load_sensor_response(c, s);
     if (!rc) jnote_unread_keys(c, root, "", 0);
     if (!rc) warn_dark_scene(c, s);
     if (!rc) warn_light_outside_medium(c, s);
@@ -612,6 +631,7 @@ void scene_free(scene *s)
     free(s->surfaces);
     for (int i = 0; i < s->light_count; i++) emitter_free(&s->lights[i]);
     free(s->lights);
+    sensor_response_free(&s->cam.response);
     free(s->verts);
     free(s->tris);
     free(s->notes);
