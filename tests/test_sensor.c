@@ -12,6 +12,7 @@
 
 #include "dartspp/core.h"
 #include "dartspp/io.h"
+#include "dartspp/scene.h"
 #include "dartspp/sensor.h"
 #include "fixtures.h"
 #include "test_util.h"
@@ -560,6 +561,80 @@ static void test_response_acts_like_a_pulse(void **state)
     }
 }
 
+/* Ground truth (renderer key ground_truth, docs/sensor.md §3) against values worked out by hand: a fog of
+ * speed 0.8 (η 1.25), a point light at (0.5, 0.5, 0.5) with pulse_start 0.3, a null sheet at z = 1 that the
+ * rays pass through, and a diffuse square (albedo 0.6) at z = 2, 2 wide, seen by a 90° camera of 8×8 pixels
+ * looking down +z from the origin: inside the square, depth 2/d_z, normal (0, 0, −1), albedo 0.6, arrival
+ * 0.3 + 1.25·(depth + |light − x|); outside it, 0 everywhere. Then with camera_unwarp, the arrival without
+ * the camera leg. */
+static void test_ground_truth(void **state)
+{
+    char *dir = test_tmpdir(), scene_path[512], cmd[2048], out[4096], path[600];
+    assert_non_null(dir);
+    *state = dir;
+    for (int unwarp = 0; unwarp < 2; unwarp++) {
+        char text[4096];
+        snprintf(text, sizeof text,
+                 "{ \"media\": [ { \"name\": \"fog\", \"type\": \"homogeneous\", \"sigma_s\": 0.05, \"sigma_a\": 0.01,"
+                 "  \"speed_of_light\": 0.8 } ],"
+                 "  \"bsdfs\": [ { \"name\": \"grey\", \"type\": \"lambert\", \"albedo\": 0.6 }, { \"name\": \"sheet\", \"type\": \"null\" } ],"
+                 "  \"primitives\": [ { \"type\": \"point\", \"emission\": 1, \"ext_medium\": \"fog\", \"pulse_start\": 0.3,"
+                 "    \"transform\": { \"position\": [0.5, 0.5, 0.5] } },"
+                 "    { \"type\": \"quad\", \"bsdf\": \"sheet\", \"transform\": { \"position\": [0, 0, 1], \"scale\": 8, \"rotation\": [-90, 0, 0] } },"
+                 "    { \"type\": \"quad\", \"bsdf\": \"grey\", \"transform\": { \"position\": [0, 0, 2], \"scale\": 2, \"rotation\": [-90, 0, 0] } } ],"
+                 "  \"camera\": { \"type\": \"pinhole\", \"resolution\": [8, 8], \"fov\": 90, \"medium\": \"fog\","
+                 "    \"transform\": { \"position\": [0, 0, 0], \"look_at\": [0, 0, 1], \"up\": [0, 1, 0] } },"
+                 "  \"integrator\": { \"type\": \"path_tracer\", \"transient_time_center\": 4, \"transient_time_width\": 1 %s },"
+                 "  \"renderer\": { \"spp\": 1, \"ground_truth\": true } }",
+                 unwarp ? ", \"camera_unwarp\": true" : "");
+        snprintf(scene_path, sizeof scene_path, "%s/gt.json", dir);
+        test_write_file(scene_path, text);
+        snprintf(cmd, sizeof cmd, "%s render %s --output %s/gt.exr --no-cube --no-viewer --overwrite", DARTSPP_BIN, scene_path, dir);
+        if (test_run(cmd, out, sizeof out) != 0) fail_msg("%s", out);
+        assert_non_null(strstr(out, "gt_depth.exr"));
+        image_rgb img[4];
+        const char *names[4] = {"depth", "arrival", "normal", "albedo"};
+        for (int k = 0; k < 4; k++) {
+            snprintf(path, sizeof path, "%s/gt_%s.exr", dir, names[k]);
+            dp_error err;
+            if (image_read(path, &img[k], &err)) fail_msg("%s", err.msg);
+            assert_int_equal(img[k].width, 8);
+        }
+        scene s;
+        dp_error err;
+        scene_load_options lo = {0};
+        assert_int_equal(scene_load(scene_path, &lo, &s, &err), 0);
+        int inside = 0, outside = 0;
+        double worst = 0.0;
+        for (int y = 0; y < 8; y++)
+            for (int x = 0; x < 8; x++) {
+                vec3 d = camera_ray_dir(&s.cam, x + 0.5, y + 0.5);
+                double t = 2.0 / d.z;
+                vec3 p = v3_scale(d, t), l = v3(0.5, 0.5, 0.5);
+                size_t i = 3 * ((size_t)y * 8 + x);
+                if (fabs(p.x) < 0.999 && fabs(p.y) < 0.999) {
+                    double arrival = 0.3 + 1.25 * ((unwarp ? 0.0 : t) + v3_len(v3_sub(l, p)));
+                    const double want[4][3] = {{t, t, t}, {arrival, arrival, arrival}, {0, 0, -1}, {0.6, 0.6, 0.6}};
+                    for (int k = 0; k < 4; k++)
+                        for (int c = 0; c < 3; c++) worst = fmax(worst, fabs(img[k].rgb[i + c] - want[k][c]));
+                    inside++;
+                } else if (fabs(p.x) > 1.001 || fabs(p.y) > 1.001) {
+                    for (int k = 0; k < 4; k++)
+                        for (int c = 0; c < 3; c++) worst = fmax(worst, fabs(img[k].rgb[i + c]));
+                    outside++;
+                }
+            }
+        print_message("  camera_unwarp %d: %d pixels on the square, %d beside it; largest error %.2g\n", unwarp, inside,
+                      outside, worst);
+        assert_true(inside >= 16 && outside >= 16);
+        /* the ray leaves the null sheet from an origin moved off it by up to 4/65536 (the scene's largest
+         * coordinate over 65536, scene_offset_ray_origin), so depth and arrival may be off by 1.25·2·6.1e-5 */
+        assert_true(worst < 1.6e-4);
+        for (int k = 0; k < 4; k++) image_free(&img[k]);
+        scene_free(&s);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -575,6 +650,7 @@ int main(void)
         cmocka_unit_test(test_counts_options_documented),
         cmocka_unit_test(test_time_response_samples_its_cdf),
         cmocka_unit_test_teardown(test_response_acts_like_a_pulse, test_teardown_tmpdir),
+        cmocka_unit_test_teardown(test_ground_truth, test_teardown_tmpdir),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

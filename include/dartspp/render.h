@@ -203,6 +203,20 @@ void memory_format_bytes(double bytes, char *out, size_t n);
  * atomically; `wrote` (may be NULL) is called with each path written. */
 #define RENDER_SKIP_CUBE 1    /* no <stem>_cube.npy (dartspp render --no-cube) */
 #define RENDER_SKIP_VIEWER 2  /* no <stem>_viewer.html (--no-viewer) */
+/* Ground truth beside the image (renderer key ground_truth; src/render/ground_truth.c, docs/sensor.md §3):
+ * per pixel, for the ray through its centre, the first surface's depth (distance from the camera), the time
+ * of first arrival through it, its normal (facing the camera) and albedo, as four images <stem>_depth,
+ * <stem>_arrival, <stem>_normal, <stem>_albedo (depth and arrival in all three channels). */
+#define GROUND_TRUTH_IMAGES 4
+extern const char *const GROUND_TRUTH_NAMES[GROUND_TRUTH_IMAGES];
+typedef struct {
+    image_rgb img[GROUND_TRUTH_IMAGES]; /* in the order of GROUND_TRUTH_NAMES */
+} ground_truth;
+int ground_truth_compute(const scene *s, const render_plan *p, ground_truth *gt, dp_error *err);
+/* Beside image_path (its stem and extension), atomically; wrote(path) after each. */
+int ground_truth_write(const ground_truth *gt, const char *image_path, void (*wrote)(const char *), dp_error *err);
+void ground_truth_free(ground_truth *gt);
+
 int render_write_outputs(const film *f, const char *path, const char *integrator, const char *plan, int skip,
                          void (*wrote)(const char *path), dp_error *err);
 

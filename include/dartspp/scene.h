@@ -166,6 +166,7 @@ typedef struct {
     double checkpoint_seconds;
     char output_file[1024];  /* LDR preview as written in the scene (not written by dartspp) */
     char hdr_output_file[1024];
+    int ground_truth;        /* also write depth, first arrival, normal and albedo images (docs/sensor.md §3) */
 } renderer_settings;
 
 /* One key of the table. */

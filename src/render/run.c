@@ -128,13 +128,24 @@ static void set_up_render(render_run_job *j)
         fprintf(stderr, "warning: no watchdog thread: if a rank is lost, the last reduction is only in %s\n", j->state);
 }
 
+/* The ground truth images beside the output (renderer key ground_truth). */
+static int write_ground_truth(const render_run_job *j, dp_error *err)
+{
+    ground_truth gt;
+    if (ground_truth_compute(&j->s, &j->p, &gt, err)) return -1;
+    int rc = ground_truth_write(&gt, j->out, print_written, err);
+    ground_truth_free(&gt);
+    return rc;
+}
+
 /* The completed passes to the output, or to a rescue folder when that fails: finished work is never thrown
  * away. 0, or -1 with err (the write that failed) when the images had to go elsewhere, or nowhere. */
 static int write_outputs(const render_run_job *j, const film *f, dp_error *err)
 {
     const char *integrator = j->p.type_name;
     int skip = j->rq->skip;
-    if (!render_write_outputs(f, j->out, integrator, j->plan_json, skip, print_written, err)) return 0;
+    if (!render_write_outputs(f, j->out, integrator, j->plan_json, skip, print_written, err))
+        return j->s.renderer.ground_truth ? write_ground_truth(j, err) : 0;
     say_error(err, "");
     char rescue[OUTPUT_PATH_MAX];
     dp_error rescue_err = *err;

@@ -153,6 +153,8 @@ static const scene_key table[] = {
      .def_text = "none", .meaning = "Interval of checkpoint writes (--checkpoint overrides)"},
     {.name = "hdr_output_file", RE(hdr_output_file), .type = KEY_STRING, .read_by = ALL, .def_text = "<scene>.exr",
      .meaning = "Output image when --output is not given; a relative path goes into a folder named after the scene"},
+    {.name = "ground_truth", RE(ground_truth), .type = KEY_BOOL, .read_by = ALL, .def = 0,
+     .meaning = "Also write the first surface's depth, the time of first arrival, normal and albedo per pixel (docs/sensor.md)"},
     {.name = "output_file", RE(output_file), .type = KEY_STRING, .def_text = "",
      .meaning = "The authors' LDR preview; dartspp writes none"},
     NOT_READ("spp_step", KEY_SECTION_RENDERER, "Tungsten's passes per step; not read"),
