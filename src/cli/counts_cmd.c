@@ -276,7 +276,7 @@ int cli_counts(int argc, char **argv)
     }
     dp_error err;
     size_t shape[NPY_MAX_DIMS];
-    int ndim;
+    int ndim = 0;
     float *cube = NULL;
     if (npy_read_f32(a.cube, shape, &ndim, &cube, &err)) {
         fprintf(stderr, "dartspp counts: %s\n", err.msg);
@@ -293,7 +293,7 @@ int cli_counts(int argc, char **argv)
                 a.cube, ndim);
         goto done;
     }
-    int F = (int)shape[0], n;
+    int F = (int)shape[0], n = 0;
     size_t pixels = shape[1] * shape[2];
     start = malloc((size_t)F * sizeof *start), end = malloc((size_t)F * sizeof *end);
     if (!start || !end || !json || (!a.frames && !frames_path) || (a.coates && !coates_path)) goto oom;
