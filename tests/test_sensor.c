@@ -487,7 +487,8 @@ static void test_time_response_samples_its_cdf(void **state)
     test_rmtree(dir);
 }
 
-/* A point light in fog just above a glossy gold floor (gate [1.8, 2.6): the floor's light connections count),
+/* A point light and a small area light facing the camera (seen directly: its emission is hit) in fog just
+ * above a glossy gold floor (gate [1.8, 2.6): the floor's light connections count),
  * through which the photon methods' camera paths continue and connect to the light, and a diffuse ceiling
  * for surface photons; its light's pulse and the sensor's response given by
  * `pulse` and `response` (JSON members or ""). */
@@ -503,13 +504,15 @@ static void write_response_scene(const char *path, const char *type, const char 
              "    \"transform\": { \"position\": [0.5, -0.2, 1.5] } },"
              "    { \"type\": \"quad\", \"bsdf\": \"metal\", \"transform\": { \"position\": [0, -0.5, 3], \"scale\": 10 } },"
              "    { \"type\": \"quad\", \"bsdf\": \"white\", \"transform\": { \"position\": [0, 1.2, 3], \"scale\": 10,"
-             "      \"rotation\": [180, 0, 0] } } ],"
+             "      \"rotation\": [180, 0, 0] } },"
+             "    { \"type\": \"quad\", \"bsdf\": \"white\", \"emission\": 0.5, \"ext_medium\": \"fog\" %s,"
+             "      \"transform\": { \"position\": [-0.3, 0.1, 1.4], \"scale\": 0.3, \"rotation\": [-90, 0, 0] } } ],"
              "  \"camera\": { \"type\": \"pinhole\", \"resolution\": [16, 12], \"fov\": 50, \"medium\": \"fog\","
              "    \"transform\": { \"position\": [0, 0, 0], \"look_at\": [0, 0, 1], \"up\": [0, 1, 0] } },"
              "  \"integrator\": { %s, \"max_bounces\": 4, \"transient_time_center\": 2.2, \"transient_time_width\": 0.8,"
              "    \"photon_count\": 20000, \"volume_photon_count\": 5000, \"gather_radius\": 0.2, \"volume_gather_radius\": 0.2 %s },"
              "  \"renderer\": { \"spp\": 1 } }",
-             pulse, type, response);
+             pulse, pulse, type, response);
     test_write_file(path, text);
 }
 
