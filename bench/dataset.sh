@@ -38,7 +38,8 @@ i = s["integrator"]
 for k in ("transient_time_center",):
     i.pop(k, None)
 i.update({"start_time": 40.0, "transient_time_width": 1.0, "frame_num": 30,    # 30 frames of 1 m: [40, 70)
-          "sensor_jitter_fwhm": 0.3, "sensor_jitter_tail": 0.45})               # 1 ns FWHM, 1.5 ns tail
+          "sensor_jitter_fwhm": 0.3, "sensor_jitter_tail": 0.45,                # 1 ns FWHM, 1.5 ns tail
+          "bounce_orders": 2})                                                   # direct, single, multiple
 s["renderer"].update({"ground_truth": True, "timeout": 0, "spp": 0})
 json.dump(s, open(dst, "w"), indent=1)
 EOF
@@ -62,6 +63,7 @@ files = {
     "render_cube.npy": "the transient: float32 (30, H, W, 3), radiance averaged over each 1 m frame, through the sensor's response",
     "render_frames.csv": "each frame's [start, end) in metres of light path",
     "render_NNNN.exr": "the same frames as EXR images",
+    "render_orders.npy": "float32 (3, 30, H, W, 3): the frames of the paths of 0, 1, and 2 or more scattering events (they sum to the cube)",
     "render_depth.exr": "metres from the camera to the first surface per pixel (0: none)",
     "render_arrival.exr": "metres of light path of the first return through that surface (flash to surface to camera; 0: none)",
     "render_normal.exr": "the surface's normal in world coordinates, facing the camera",

@@ -1107,8 +1107,8 @@ static void test_found_huge_contribution(void **state)
     film g;
     time_window tw = {0};
     if (film_init(&g, 2, 1, &tw, &err)) fail_msg("%s", err.msg);
-    assert_int_equal(film_splat(&g, 0, 0.0, v3(1e30, 0, 0), -1), 1);
-    assert_int_equal(film_splat(&g, 1, 0.0, v3(0, -1.1e30, 0), -1), 0);
+    assert_int_equal(film_splat(&g, 0, 0.0, v3(1e30, 0, 0), -1, 0), 1);
+    assert_int_equal(film_splat(&g, 1, 0.0, v3(0, -1.1e30, 0), -1, 0), 0);
     film_free(&g);
 }
 

@@ -171,9 +171,9 @@ static void test_film_weighted_mean(void **state)
     if (film_init(f, 2, 1, &tw, &err)) fail_msg("%s", err.msg);
     /* gate image weight 1/(width·frames) = 1/2, frame weight 1/width = 1: splat 2·value into frame 0's
      * window for the gate, and value into frame 1's window */
-    assert_true(film_splat(f, 0, 0.5, v3s(4.0), -1));
+    assert_true(film_splat(f, 0, 0.5, v3s(4.0), -1, 0));
     film_commit_pass(f, 1.0);
-    assert_true(film_splat(f, 0, 1.5, v3s(10.0), -1));
+    assert_true(film_splat(f, 0, 1.5, v3s(10.0), -1, 0));
     film_commit_pass(f, 3.0);
     assert_int_equal(f->passes, 2);
     image_rgb *gate = &fx.images[0], *fr1 = &fx.images[1];

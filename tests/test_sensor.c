@@ -487,8 +487,9 @@ static void test_time_response_samples_its_cdf(void **state)
     test_rmtree(dir);
 }
 
-/* A point light and a small area light facing the camera (seen directly: its emission is hit) in fog just
- * above a glossy gold floor (gate [1.8, 2.6): the floor's light connections count),
+/* A point light, a small area light facing the camera (seen directly: its emission is hit) and a small diffuse
+ * square beside the light (its surface photons count) in fog just above a glossy gold floor (gate [1.8, 2.6):
+ * the floor's light connections count),
  * through which the photon methods' camera paths continue and connect to the light, and a diffuse ceiling
  * for surface photons; its light's pulse and the sensor's response given by
  * `pulse` and `response` (JSON members or ""). */
@@ -505,6 +506,8 @@ static void write_response_scene(const char *path, const char *type, const char 
              "    { \"type\": \"quad\", \"bsdf\": \"metal\", \"transform\": { \"position\": [0, -0.5, 3], \"scale\": 10 } },"
              "    { \"type\": \"quad\", \"bsdf\": \"white\", \"transform\": { \"position\": [0, 1.2, 3], \"scale\": 10,"
              "      \"rotation\": [180, 0, 0] } },"
+             "    { \"type\": \"quad\", \"bsdf\": \"white\", \"transform\": { \"position\": [0.45, 0.15, 1.7], \"scale\": 0.5,"
+             "      \"rotation\": [-90, 0, 0] } },"
              "    { \"type\": \"quad\", \"bsdf\": \"white\", \"emission\": 0.5, \"ext_medium\": \"fog\" %s,"
              "      \"transform\": { \"position\": [-0.3, 0.1, 1.4], \"scale\": 0.3, \"rotation\": [-90, 0, 0] } } ],"
              "  \"camera\": { \"type\": \"pinhole\", \"resolution\": [16, 12], \"fov\": 50, \"medium\": \"fog\","
@@ -638,6 +641,116 @@ static void test_ground_truth(void **state)
     }
 }
 
+/* Scattering-order layers (integrator key bounce_orders, docs/time.md §7): for the path tracer, the DARTS path
+ * tracer and DARTS photon points, on the scene above with 5 frames, bounce_orders 3 (orders 0, 1, 2 and 3 or
+ * more): the orders of each frame sum to the frame (float sums in another order: within 1e-5 of the pixel's
+ * largest channel, plus 1e-7 of the frame's largest value), and the image, frames and cube are bit for bit
+ * those of a render without the key; and for the gate image alone (no frames) the orders sum to it. With
+ * max_bounces 2 (single scattering only) every contribution is in layer 1 and the others are exactly 0. */
+static void test_bounce_orders_sum_to_frames(void **state)
+{
+    char *dir = test_tmpdir(), a[512], cmd[2048], out[4096], path[600];
+    assert_non_null(dir);
+    *state = dir;
+    const char *types[] = {
+        "\"type\": \"path_tracer\"",
+        "\"type\": \"path_tracer\", \"enable_guiding\": true, \"enable_elliptical\": true",
+        "\"type\": \"progressive_transient_photon_map\", \"enable_guiding\": true, \"enable_elliptical\": true, \"strict_time_width\": true",
+    };
+    for (int t = 0; t < 3; t++)
+        for (int framed = 0; framed < 2; framed++) {
+            snprintf(a, sizeof a, "%s/orders.json", dir);
+            write_response_scene(a, types[t], "", "");
+            for (int with = 0; with < 2; with++) {
+                snprintf(cmd, sizeof cmd, "%s render %s --spp 4 --threads 2 --seed 3 --output %s/o%d.pfm --no-viewer --quiet %s %s",
+                         DARTSPP_BIN, a, dir, with, with ? "--set bounce_orders=3" : "",
+                         framed ? "--set frame_num=5 --set start_time=1.8 --set transient_time_width=0.16" : "");
+                if (test_run(cmd, out, sizeof out) != 0) fail_msg("%s: %s", cmd, out);
+            }
+            /* the image (and the cube) bit for bit, with and without the layers */
+            for (int k = 0; k < 1 + framed; k++) {
+                char p0[600], p1[600];
+                snprintf(p0, sizeof p0, "%s/o0%s", dir, k ? "_cube.npy" : ".pfm");
+                snprintf(p1, sizeof p1, "%s/o1%s", dir, k ? "_cube.npy" : ".pfm");
+                size_t n0, n1;
+                char *b0 = read_all(p0, &n0), *b1 = read_all(p1, &n1);
+                assert_true(b0 && b1 && n0 == n1 && memcmp(b0, b1, n0) == 0);
+                free(b0);
+                free(b1);
+            }
+            size_t so[NPY_MAX_DIMS];
+            int nd;
+            float *orders, *whole;
+            dp_error err;
+            snprintf(path, sizeof path, "%s/o1_orders.npy", dir);
+            if (npy_read_f32(path, so, &nd, &orders, &err)) fail_msg("%s", err.msg);
+            assert_int_equal(nd, 5);
+            assert_int_equal(so[0], 4);
+            assert_int_equal(so[1], framed ? 5 : 1);
+            size_t layer = so[2] * so[3] * 3, F = so[1];
+            if (framed) {
+                size_t sc[NPY_MAX_DIMS];
+                snprintf(path, sizeof path, "%s/o1_cube.npy", dir);
+                if (npy_read_f32(path, sc, &nd, &whole, &err)) fail_msg("%s", err.msg);
+            } else {
+                image_rgb img;
+                snprintf(path, sizeof path, "%s/o1.pfm", dir);
+                assert_int_equal(pfm_read(path, &img, &err), 0);
+                whole = img.rgb;
+            }
+            double peak = 0.0, worst = 0.0, orders_total[4] = {0};
+            for (size_t i = 0; i < F * layer; i++) peak = fmax(peak, fabs(whole[i]));
+            for (size_t k = 0; k < F; k++)
+                for (size_t i = 0; i < layer; i++) {
+                    double sum = 0.0, big = 0.0;
+                    for (int o = 0; o < 4; o++) {
+                        double v = orders[(o * F + k) * layer + i];
+                        sum += v;
+                        big = fmax(big, fabs(v));
+                        orders_total[o] += v;
+                    }
+                    double w = whole[k * layer + i], tol = 1e-5 * fmax(big, fabs(w)) + 1e-7 * peak;
+                    worst = fmax(worst, fabs(sum - w) / (tol > 0 ? tol : 1.0));
+                }
+            print_message("  integrator %d, %s: order totals %.4g %.4g %.4g %.4g; worst |sum − whole| / tolerance %.2g\n", t,
+                          framed ? "5 frames" : "gate image", orders_total[0], orders_total[1], orders_total[2],
+                          orders_total[3], worst);
+            assert_true(worst <= 1.0);
+            assert_true(orders_total[1] > 0.0 && orders_total[2] > 0.0 && orders_total[3] > 0.0);
+            free(orders);
+            free(whole);
+        }
+    /* max_bounces 2 admits single scattering only: every contribution in layer 1, the others exactly 0 */
+    for (int t = 0; t < 3; t++) {
+        snprintf(a, sizeof a, "%s/orders.json", dir);
+        write_response_scene(a, types[t], "", "");
+        snprintf(cmd, sizeof cmd, "%s render %s --spp 4 --threads 2 --seed 3 --output %s/s.pfm --no-viewer --quiet "
+                 "--set bounce_orders=3 --set max_bounces=2", DARTSPP_BIN, a, dir);
+        if (test_run(cmd, out, sizeof out) != 0) fail_msg("%s: %s", cmd, out);
+        size_t so[NPY_MAX_DIMS];
+        int nd;
+        float *orders;
+        dp_error err;
+        image_rgb img;
+        snprintf(path, sizeof path, "%s/s_orders.npy", dir);
+        if (npy_read_f32(path, so, &nd, &orders, &err)) fail_msg("%s", err.msg);
+        snprintf(path, sizeof path, "%s/s.pfm", dir);
+        assert_int_equal(pfm_read(path, &img, &err), 0);
+        size_t layer = so[2] * so[3] * 3;
+        double other = 0.0, diff = 0.0, total = 0.0;
+        for (size_t i = 0; i < layer; i++) {
+            other += fabs(orders[i]) + fabs(orders[2 * layer + i]) + fabs(orders[3 * layer + i]);
+            diff = fmax(diff, fabs(orders[layer + i] - img.rgb[i]) / fmax(1e-30, fabs(img.rgb[i])));
+            total += img.rgb[i];
+        }
+        print_message("  integrator %d, max_bounces 2: image total %.4g, outside layer 1 %.3g, layer 1 vs image %.2g\n",
+                      t, total, other, diff);
+        assert_true(total > 0.0 && other == 0.0 && diff < 1e-6);
+        free(orders);
+        image_free(&img);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -654,6 +767,7 @@ int main(void)
         cmocka_unit_test(test_time_response_samples_its_cdf),
         cmocka_unit_test_teardown(test_response_acts_like_a_pulse, test_teardown_tmpdir),
         cmocka_unit_test_teardown(test_ground_truth, test_teardown_tmpdir),
+        cmocka_unit_test_teardown(test_bounce_orders_sum_to_frames, test_teardown_tmpdir),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -168,7 +168,8 @@ static double pixel_value(const analytic_case *a, const camera *cam, int x, int 
     return sum;
 }
 
-static void write_scene(const char *path, const char *phase, double speed, const char *window, double p0, double pw)
+static void write_scene(const char *path, const char *phase, double speed, const char *window, double p0, double pw,
+                        int max_bounces)
 {
     char text[4096];
     snprintf(text, sizeof text,
@@ -178,9 +179,9 @@ static void write_scene(const char *path, const char *phase, double speed, const
              "    \"pulse_start\": %.17g, \"pulse_width\": %.17g, \"transform\": { \"position\": [1.5, 0.8, 2.0] } } ],"
              "  \"camera\": { \"type\": \"pinhole\", \"resolution\": [12, 8], \"fov\": 50, \"medium\": \"fog\","
              "    \"transform\": { \"position\": [0, 0, 0], \"look_at\": [0, 0, 1], \"up\": [0, 1, 0] } },"
-             "  \"integrator\": { \"type\": \"path_tracer\", \"max_bounces\": 2, %s },"
+             "  \"integrator\": { \"type\": \"path_tracer\", \"max_bounces\": %d, %s },"
              "  \"renderer\": { \"spp\": 1 } }",
-             speed, phase, p0, pw, window);
+             speed, phase, p0, pw, max_bounces, window);
     test_write_file(path, text);
 }
 
@@ -190,6 +191,7 @@ typedef struct {
     int unwarp;
     double p0, pw;
     double rs, rt; /* the sensor's response (Gaussian σ, tail mean), written as the sensor_jitter_* keys */
+    int orders;    /* > 0: max_bounces 8 and bounce_orders 2; the order-1 layer (one scattering event) is checked */
 } time_mode;
 
 static void check_against_quadrature_seeds(const char *phase, double g, double speed, const char *window, int gated,
@@ -201,7 +203,8 @@ static void check_against_quadrature_seeds(const char *phase, double g, double s
     if (tm.rs > 0)
         snprintf(win + strlen(win), sizeof win - strlen(win), ", \"sensor_jitter_fwhm\": %.17g, \"sensor_jitter_tail\": %.17g",
                  tm.rs * 2.3548200450309493, tm.rt);
-    write_scene(path, phase, speed, win, tm.p0, tm.pw);
+    if (tm.orders) snprintf(win + strlen(win), sizeof win - strlen(win), ", \"bounce_orders\": 2");
+    write_scene(path, phase, speed, win, tm.p0, tm.pw, tm.orders ? 8 : 2);
     scene s;
     dp_error err;
     scene_load_options lo = {0};
@@ -221,8 +224,9 @@ static void check_against_quadrature_seeds(const char *phase, double g, double s
         render_stats st;
         assert_int_equal(render_scene(&s, &ro, &f, &st, &err), 0);
         assert_int_equal(st.nonfinite, 0);
+        const float *layer = tm.orders ? &f.frame_sum[(size_t)n * film_order_layer(&f.window, 1, -1)] : NULL;
         for (int i = 0; i < n; i++) {
-            double v = f.sum[i] / f.weight_sum;
+            double v = (layer ? (double)layer[i] : f.sum[i]) / f.weight_sum;
             sum[i] += v;
             sq[i] += v * v;
         }
@@ -267,7 +271,7 @@ static void check_against_quadrature_mode(const char *phase, double g, double sp
 static void check_against_quadrature(const char *phase, double g, double speed, const char *window, int gated,
                                      double g0, double g1, long passes)
 {
-    check_against_quadrature_mode(phase, g, speed, window, gated, g0, g1, passes, (time_mode){0, 0, 0, 0, 0});
+    check_against_quadrature_mode(phase, g, speed, window, gated, g0, g1, passes, (time_mode){0, 0, 0, 0, 0, 0});
 }
 
 static void test_gate_isotropic(void **state)
@@ -303,10 +307,10 @@ static void test_box_pulse(void **state)
     (void)state;
     check_against_quadrature_mode("{\"type\": \"henyey_greenstein\", \"g\": 0.4}", 0.4, 0.75,
                                   "\"transient_time_center\": 4.3, \"transient_time_width\": 0.6", 1, 4.0, 4.6, 3000,
-                                  (time_mode){0, 0.4, 0.6, 0, 0});
+                                  (time_mode){0, 0.4, 0.6, 0, 0, 0});
     check_against_quadrature_mode("{\"type\": \"isotropic\"}", 0.0, 1.0,
                                   "\"transient_time_center\": 3.65, \"transient_time_width\": 0.5", 1, 3.4, 3.9, 3000,
-                                  (time_mode){0, 0.4, 0, 0, 0});
+                                  (time_mode){0, 0.4, 0, 0, 0, 0});
 }
 
 /* Camera-unwarped time: only the light leg counts, so the gate [0.8, 2.6) selects the shell 0.8 <= R < 2.6
@@ -321,7 +325,7 @@ static void test_unwarped_early_gate(void **state)
     const char *window = "\"transient_time_center\": 1.7, \"transient_time_width\": 1.8";
     char *dir = test_tmpdir(), path[512];
     snprintf(path, sizeof path, "%s/warped.json", dir);
-    write_scene(path, "{\"type\": \"isotropic\"}", 1.0, window, 0, 0);
+    write_scene(path, "{\"type\": \"isotropic\"}", 1.0, window, 0, 0, 2);
     scene s;
     dp_error err;
     scene_load_options lo = {0};
@@ -337,7 +341,7 @@ static void test_unwarped_early_gate(void **state)
     }
     scene_free(&s);
     test_rmtree(dir);
-    check_against_quadrature_mode("{\"type\": \"isotropic\"}", 0.0, 1.0, window, 1, 0.8, 2.6, 3000, (time_mode){1, 0, 0, 0, 0});
+    check_against_quadrature_mode("{\"type\": \"isotropic\"}", 0.0, 1.0, window, 1, 0.8, 2.6, 3000, (time_mode){1, 0, 0, 0, 0, 0});
 }
 
 /* The DARTS path tracer (DA distance sampling along the camera ray toward the light, the light connection by an
@@ -358,16 +362,31 @@ static void test_darts_and_uniform_time(void **state)
     char w[512];
     for (int m = 0; m < 2; m++) {
         snprintf(w, sizeof w, "\"transient_time_center\": 3.25, \"transient_time_width\": 0.5, %s", methods[m]);
-        check_against_quadrature_seeds("{\"type\": \"isotropic\"}", 0.0, 1.0, w, 1, 3.0, 3.5, 300, (time_mode){0, 0, 0, 0, 0}, 32);
+        check_against_quadrature_seeds("{\"type\": \"isotropic\"}", 0.0, 1.0, w, 1, 3.0, 3.5, 300, (time_mode){0, 0, 0, 0, 0, 0}, 32);
         snprintf(w, sizeof w, "\"transient_time_center\": 4.3, \"transient_time_width\": 0.6, %s", methods[m]);
         check_against_quadrature_seeds("{\"type\": \"henyey_greenstein\", \"g\": 0.4}", 0.4, 0.75, w, 1, 4.0, 4.6, 300,
-                                       (time_mode){0, 0, 0, 0, 0}, 32);
+                                       (time_mode){0, 0, 0, 0, 0, 0}, 32);
     }
     snprintf(w, sizeof w, "\"transient_time_center\": 4.3, \"transient_time_width\": 0.6, %s", DARTS_PT);
     check_against_quadrature_seeds("{\"type\": \"henyey_greenstein\", \"g\": 0.4}", 0.4, 0.75, w, 1, 4.0, 4.6, 300,
-                                   (time_mode){0, 0.4, 0.6, 0, 0}, 32);
+                                   (time_mode){0, 0.4, 0.6, 0, 0, 0}, 32);
     snprintf(w, sizeof w, "\"transient_time_center\": 1.7, \"transient_time_width\": 1.8, %s", DARTS_PT);
-    check_against_quadrature_seeds("{\"type\": \"isotropic\"}", 0.0, 1.0, w, 1, 0.8, 2.6, 300, (time_mode){1, 0, 0, 0, 0}, 32);
+    check_against_quadrature_seeds("{\"type\": \"isotropic\"}", 0.0, 1.0, w, 1, 0.8, 2.6, 300, (time_mode){1, 0, 0, 0, 0, 0}, 32);
+}
+
+/* Scattering orders (integrator key bounce_orders, docs/time.md §7): with max_bounces 8 the paths of one
+ * scattering event, the order-1 layer, are exactly what the quadrature integrates; the gate image holds
+ * every order (the layers' sum: test_sensor.c). Gated isotropic, and HG with η 4/3 under the DARTS path
+ * tracer. Broken variant: the order taken as the camera path's depth + 1 fails both. */
+static void test_order_one_layer(void **state)
+{
+    (void)state;
+    char w[512];
+    time_mode tm = {0, 0, 0, 0, 0, 1};
+    check_against_quadrature_mode("{\"type\": \"isotropic\"}", 0.0, 1.0,
+                                  "\"transient_time_center\": 3.25, \"transient_time_width\": 0.5", 1, 3.0, 3.5, 3000, tm);
+    snprintf(w, sizeof w, "\"transient_time_center\": 4.3, \"transient_time_width\": 0.6, %s", DARTS_PT);
+    check_against_quadrature_seeds("{\"type\": \"henyey_greenstein\", \"g\": 0.4}", 0.4, 0.75, w, 1, 4.0, 4.6, 300, tm, 32);
 }
 
 /* The sensor's time response (docs/sensor.md §2): a Gaussian jitter of σ 0.15 with an exponential tail of
@@ -379,7 +398,7 @@ static void test_sensor_response(void **state)
 {
     (void)state;
     char w[512];
-    time_mode tm = {0, 0, 0, 0.15, 0.1}, tail = {0, 0, 0, 0.05, 0.3};
+    time_mode tm = {0, 0, 0, 0.15, 0.1, 0}, tail = {0, 0, 0, 0.05, 0.3, 0};
     check_against_quadrature_mode("{\"type\": \"isotropic\"}", 0.0, 1.0,
                                   "\"transient_time_center\": 3.25, \"transient_time_width\": 0.5", 1, 3.0, 3.5, 3000, tm);
     check_against_quadrature_mode("{\"type\": \"isotropic\"}", 0.0, 1.0,
@@ -398,6 +417,7 @@ int main(void)
         cmocka_unit_test(test_box_pulse),
         cmocka_unit_test(test_unwarped_early_gate),
         cmocka_unit_test(test_sensor_response),
+        cmocka_unit_test(test_order_one_layer),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -17,7 +17,8 @@ typedef struct {
     int width, height;
     time_window window;
     double *sum;       /* 3 per pixel: completed passes */
-    float *frame_sum;  /* frame_count × 3 per pixel: completed passes */
+    float *frame_sum;  /* time_window_layers(&window) × 3 per pixel, completed passes: the frames, then with
+                        * window.orders the order layers (film_order_layer) */
     double *pass;      /* the pass in progress, same layout as sum */
     float *frame_pass; /* the pass in progress, same layout as frame_sum */
     long passes;       /* completed passes */
@@ -37,12 +38,24 @@ typedef struct {
     double wg;         /* gate image weight 1/(width · frames) */
     double wf;         /* frame weight 1/width */
     long k;            /* frame index, or -1 without frames */
+    long order_layer;  /* with window.orders: the layer of its scattering order (and frame); else -1 */
 } film_slot;
 
-static inline film_slot film_time_slot(const film *f, double t, int frame)
+/* The layer of scattering order o (the last one: o and more) for frame k (-1: the gate image, without
+ * frames): after the frames, orders × max(frames, 1) layers. */
+static inline long film_order_layer(const time_window *tw, int o, long k)
+{
+    int frames = tw->frame_count > 0 ? tw->frame_count : 1;
+    if (o >= tw->orders) o = tw->orders - 1;
+    return tw->frame_count + (long)o * frames + (k > 0 ? k : 0);
+}
+
+/* order: the path's scattering events (surface and medium vertices, its segments − 1). */
+static inline film_slot film_time_slot(const film *f, double t, int frame, int order)
 {
     const time_window *tw = &f->window;
-    film_slot s = {.counts = 1, .gated = tw->gated, .k = -1};
+    film_slot s = {.counts = 1, .gated = tw->gated, .k = -1, .order_layer = -1};
+    if (tw->orders > 0) s.order_layer = film_order_layer(tw, order, -1);
     if (!tw->gated) return s;
     double rel = (t - tw->start) / tw->width;
     int frames = tw->frame_count > 0 ? tw->frame_count : 1;
@@ -54,6 +67,7 @@ static inline film_slot film_time_slot(const film *f, double t, int frame)
         size_t k = (size_t)rel;
         s.k = k >= (size_t)tw->frame_count ? tw->frame_count - 1 : (long)k;
     }
+    if (tw->orders > 0) s.order_layer = film_order_layer(tw, order, s.k);
     return s;
 }
 
@@ -75,6 +89,13 @@ static inline int film_slot_fits(const film_slot *s, vec3 c)
 static inline void film_slot_add(film *f, size_t px, const film_slot *s, vec3 c)
 {
     double *p = &f->pass[3 * px];
+    if (s->order_layer >= 0) { /* weighted as its frame, or as the gate image without frames */
+        double w = !s->gated ? 1.0 : s->k >= 0 ? s->wf : s->wg;
+        float *o = &f->frame_pass[3 * ((size_t)f->width * f->height * (size_t)s->order_layer + px)];
+        o[0] += (float)(c.x * w);
+        o[1] += (float)(c.y * w);
+        o[2] += (float)(c.z * w);
+    }
     if (!s->gated) {
         p[0] += c.x;
         p[1] += c.y;
@@ -96,10 +117,12 @@ static inline void film_slot_add(film *f, size_t px, const film_slot *s, vec3 c)
  * frame >= 0 (DARTS frame mode): c counts only if t falls in that frame, in the frames and the gate image.
  * Returns 0 when c was non-finite or too large for the film (FILM_VALUE_MAX) and was dropped (the caller
  * counts it). */
-int film_splat(film *f, size_t px, double t, vec3 c, int frame);
+int film_splat(film *f, size_t px, double t, vec3 c, int frame, int order);
 /* The pass layer joins the sums with weight w > 0 (passes + 1), or is cleared. */
 void film_commit_pass(film *f, double w);
 void film_drop_pass(film *f);
+/* Layer k of frame_sum (a frame, or an order layer: film_order_layer) as the weighted mean over passes. */
+int film_layer_image(const film *f, long layer, image_rgb *img, dp_error *err);
 /* Gate image (k < 0) or frame k, as the weighted mean over passes in float32. A pixel with a channel that is
  * not finite there (NaN, or beyond the float range) is written as 0: no NaN or Inf leaves the film. */
 int film_image(const film *f, int k, image_rgb *img, dp_error *err);
@@ -119,13 +142,13 @@ typedef struct {
 
 /* Whether a contribution at path time t (tagged with frame, as film_splat) would be counted: estimators test
  * this first and skip the work of one that falls outside the window. */
-static inline int film_counts_time(const film *f, double t, int frame) { return film_time_slot(f, t, frame).counts; }
+static inline int film_counts_time(const film *f, double t, int frame) { return film_time_slot(f, t, frame, 0).counts; }
 
 /* Adds a contribution arriving at path time t to the pixel (frame: as film_splat), counting a non-finite one. */
-static inline void film_pixel_splat(film_pixel *p, double t, vec3 c, int frame)
+static inline void film_pixel_splat(film_pixel *p, double t, vec3 c, int frame, int order)
 {
     if (v3_is_zero(c)) return;
-    if (!film_splat(p->f, p->px, t, c, frame)) p->nonfinite++;
+    if (!film_splat(p->f, p->px, t, c, frame, order)) p->nonfinite++;
 }
 
 /* One camera sample: dir is the jittered primary ray, rng the pixel's stream after the jitter. */

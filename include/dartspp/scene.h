@@ -99,7 +99,15 @@ typedef struct {
     double width;     /* gate width, or frame width */
     int camera_unwarp; /* integrator key camera_unwarp: a path's time leaves out the camera segment adjacent to the
                         * sensor (docs/time.md §2.2); 0: camera-warped (the default) */
+    int orders;        /* integrator key bounce_orders K: K + 1 more layers of the gate image or of every frame, the
+                        * paths of 0, 1, ..., K − 1 and of K or more scattering events (docs/time.md §7); 0: none */
 } time_window;
+
+/* The film's float layers: the frames, then per order the frames (the gate image when there are none). */
+static inline int time_window_layers(const time_window *tw)
+{
+    return tw->frame_count + tw->orders * (tw->frame_count > 0 ? tw->frame_count : 1);
+}
 
 static inline double time_window_end(const time_window *tw)
 {
@@ -120,7 +128,7 @@ typedef struct {
     long min_bounces, max_bounces;  /* path segments incl. the light connection (docs/design.md §5.1) */
     /* the time keys as written, and the window they resolve to */
     double transient_time_center, transient_time_width, start_time;
-    long frame_num;
+    long frame_num, bounce_orders;
     int delta_time_gate, camera_unwarp;
     time_window window;
     double sensor_jitter_fwhm, sensor_jitter_tail; /* the sensor's time response (sensor.h) */

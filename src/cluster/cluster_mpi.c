@@ -35,7 +35,7 @@ static int reduce_chunks(const void *mine, void *total, size_t n, MPI_Datatype t
 static int mpi_reduce(const render_cluster *c, const film *mine, film *total, const render_stats *st_mine,
                       render_stats *st_total, dp_error *err)
 {
-    size_t n = (size_t)mine->width * mine->height * 3, nf = n * (size_t)mine->window.frame_count;
+    size_t n = (size_t)mine->width * mine->height * 3, nf = n * (size_t)time_window_layers(&mine->window);
     if (reduce_chunks(mine->sum, total->sum, n, MPI_DOUBLE, sizeof(double), c->rank) ||
         (nf > 0 && reduce_chunks(mine->frame_sum, total->frame_sum, nf, MPI_FLOAT, sizeof(float), c->rank)))
         return dp_fail_kind(err, DP_ERROR_INTERNAL, "MPI: the reduction of the films failed");

@@ -12,7 +12,7 @@ int film_init(film *f, int width, int height, const time_window *tw, dp_error *e
     f->width = width;
     f->height = height;
     f->window = *tw;
-    size_t n = (size_t)width * height * 3, nf = n * (size_t)tw->frame_count;
+    size_t n = (size_t)width * height * 3, nf = n * (size_t)time_window_layers(tw);
     f->sum = calloc(n, sizeof(double));
     f->pass = dp_calloc_cache_aligned(n, sizeof(double)); /* threads splat neighbouring tiles */
     if (nf > 0) {
@@ -36,10 +36,10 @@ void film_free(film *f)
     memset(f, 0, sizeof *f);
 }
 
-int film_splat(film *f, size_t px, double t, vec3 c, int frame)
+int film_splat(film *f, size_t px, double t, vec3 c, int frame, int order)
 {
     if (!v3_is_finite(c)) return 0;
-    film_slot s = film_time_slot(f, t, frame);
+    film_slot s = film_time_slot(f, t, frame, order);
     if (!s.counts) return 1;
     if (!film_slot_fits(&s, c)) return 0;
     film_slot_add(f, px, &s, c);
@@ -49,7 +49,7 @@ int film_splat(film *f, size_t px, double t, vec3 c, int frame)
 /* Adds the pass layer to the sums with weight w (and clears it): the pass counts. */
 void film_commit_pass(film *f, double w)
 {
-    size_t n = (size_t)f->width * f->height * 3, nf = n * (size_t)f->window.frame_count;
+    size_t n = (size_t)f->width * f->height * 3, nf = n * (size_t)time_window_layers(&f->window);
 #pragma omp parallel for schedule(static)
     for (size_t i = 0; i < n; i++) {
         f->sum[i] += w * f->pass[i];
@@ -69,14 +69,14 @@ void film_commit_pass(film *f, double w)
 /* Clears the pass layer: an unfinished pass leaves no trace. */
 void film_drop_pass(film *f)
 {
-    size_t n = (size_t)f->width * f->height * 3, nf = n * (size_t)f->window.frame_count;
+    size_t n = (size_t)f->width * f->height * 3, nf = n * (size_t)time_window_layers(&f->window);
     memset(f->pass, 0, n * sizeof(double));
     if (nf > 0) memset(f->frame_pass, 0, nf * sizeof(float));
 }
 
-/* Image k (k < 0: the gate image) as float32 into out (NULL: only counted), a pixel with a non-finite channel
+/* Image k (k < 0: the gate image; else layer k of frame_sum) as float32 into out (NULL: only counted), a pixel with a non-finite channel
  * as 0 (the last line of defence: a NaN pass weight, a value beyond the float range). Returns those pixels. */
-static long image_values_of(const film *f, int k, float *out)
+static long image_values_of(const film *f, long k, float *out)
 {
     size_t n = (size_t)f->width * f->height;
     double inv = f->weight_sum > 0.0 ? 1.0 / f->weight_sum : 0.0;
@@ -101,10 +101,12 @@ int film_image(const film *f, int k, image_rgb *img, dp_error *err)
     return 0;
 }
 
+int film_layer_image(const film *f, long layer, image_rgb *img, dp_error *err) { return film_image(f, (int)layer, img, err); }
+
 long film_nonfinite_pixels(const film *f)
 {
     long bad = 0;
-    for (int k = -1; k < f->window.frame_count; k++) bad += image_values_of(f, k, NULL);
+    for (long k = -1; k < time_window_layers(&f->window); k++) bad += image_values_of(f, k, NULL);
     return bad;
 }
 

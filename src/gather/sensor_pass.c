@@ -32,7 +32,7 @@ void volume_photon_splat(const gather_input *g, film_pixel *pix, const medium *m
     if (!bounces_count(&g->bounces, p->bounce + b_cam)) return;
     double leg = g->camera_leg_projected ? t : v3_len(v3_sub(photon_vec(p->pos), o));
     if (g->camera_unwarp && b_cam == 1) leg = 0.0; /* the sensor's own segment takes no time */
-    film_slot slot = film_time_slot(pix->f, t_cam + p->time + m->eta * leg, p->frame);
+    film_slot slot = film_time_slot(pix->f, t_cam + p->time + m->eta * leg, p->frame, p->bounce + b_cam - 1);
     if (slot.counts) volume_photon_splat_slot(g, pix, m, d, thr, p, t, d2, &slot); /* before the kernel and exp */
 }
 
@@ -102,7 +102,8 @@ static void gather_surface(pixel_ctx *c, const surface_site *ss, unsigned lobes,
         if (!bounces_count(&g->bounces, p->bounce + b_cam)) continue;
         vec3 f = surface_eval(ss, v3_neg(photon_vec(p->dir)), lobes);
         if (v3_is_zero(f)) continue; /* e.g. arrived on the other side of an opaque surface */
-        film_pixel_splat(c->pix, t_cam + p->time, v3_mul(v3_mul(w, f), photon_vec(p->power)), p->frame);
+        film_pixel_splat(c->pix, t_cam + p->time, v3_mul(v3_mul(w, f), photon_vec(p->power)), p->frame,
+                         p->bounce + b_cam - 1); /* scattering events: the path's segments − 1 */
     }
 }
 
@@ -143,7 +144,7 @@ static void direct_light(pixel_ctx *c, const surface_site *site, unsigned lobes,
                       : scene_offset_ray_origin(s, ed.y, v3_dot(ed.wi, ed.n) < 0.0 ? ed.n : v3_neg(ed.n));
         if (!scene_transmittance(s, surface_spawn(s, ss, ed.wi), surface_medium_toward(ss, med, ed.wi), target, &tr, &t))
             continue;
-        film_pixel_splat(c->pix, t, v3_scale(v3_mul(v3_mul(v3_mul(thr, tr), ed.value), f), 1.0 / ed.denom), -1);
+        film_pixel_splat(c->pix, t, v3_scale(v3_mul(v3_mul(v3_mul(thr, tr), ed.value), f), 1.0 / ed.denom), -1, b_cam);
     }
 }
 
@@ -157,7 +158,7 @@ static void hit_emission(pixel_ctx *c, const hit_record *h, vec3 d, vec3 thr, do
     const emitter *L = &s->lights[i];
     vec3 le = emitter_hit_radiance(L, d, h->ng);
     if (v3_is_zero(le)) return;
-    film_pixel_splat(c->pix, t_cam + path_time_offset(s, L, c->rng), v3_mul(thr, le), -1);
+    film_pixel_splat(c->pix, t_cam + path_time_offset(s, L, c->rng), v3_mul(thr, le), -1, b_cam - 1);
 }
 
 /* The camera walk: volume gathers along every medium segment; at a surface, the gather over the lobes the

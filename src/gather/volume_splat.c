@@ -145,7 +145,7 @@ static camera_leg_time photon_camera_time(const scene *s, const gather_input *g,
     double leg = v3_len(v3_sub(x, s->cam.pos));
     c.valid = 1;
     if (g->camera_unwarp) leg = 0.0; /* as volume_photon_splat: the sensor's own segment takes no time */
-    c.slot = film_time_slot(f, 0.0 + p->time + s->media[s->cam.medium].eta * leg, p->frame);
+    c.slot = film_time_slot(f, 0.0 + p->time + s->media[s->cam.medium].eta * leg, p->frame, p->bounce); /* b_cam 1 */
     c.slot.counts = c.slot.counts && bounces_count(&g->bounces, p->bounce + 1);
     return c;
 }

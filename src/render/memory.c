@@ -54,9 +54,10 @@ void render_memory_estimate(const scene *s, const render_plan *p, int have_refer
     for (int i = 0; i < s->texture_count; i++) texels += (double)s->textures[i].width * s->textures[i].height;
     add(m, "albedo textures", NULL, texels * 3 * sizeof(float));
     /* film_bytes in double: frames × pixels can be large */
-    int frames = p->window.frame_count;
-    double film = 2 * px * 3 * sizeof(double) + 2 * px * 3 * (double)frames * sizeof(float);
-    add(m, "film (sums and the pass in progress)", frames > 0 ? "integrator.frame_num" : "camera.resolution", film);
+    int frames = p->window.frame_count, layers = time_window_layers(&p->window);
+    double film = 2 * px * 3 * sizeof(double) + 2 * px * 3 * (double)layers * sizeof(float);
+    add(m, "film (sums and the pass in progress)",
+        p->window.orders > 0 ? "integrator.bounce_orders" : frames > 0 ? "integrator.frame_num" : "camera.resolution", film);
     add(m, "output and reference images", "camera.resolution", image * (have_reference ? 3 : 2));
     if (frames > 0) { /* written at the end: the viewer's embedded frames and histogram (io.h) */
         viewer_layout l;

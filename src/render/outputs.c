@@ -147,6 +147,33 @@ static int write_frames(const film *f, const char *stem, const char *ext, image_
 }
 
 /* The gate image, its PNG and (frame mode) the frame set under `stem`. */
+/* integrator.bounce_orders: <stem>_orders.npy, float32 (orders, frames or 1, height, width, 3), the frames (or
+ * the gate image) of the paths of each scattering order (docs/time.md §7). */
+static int write_orders(const film *f, const char *stem, void (*wrote)(const char *path), dp_error *err)
+{
+    const time_window *tw = &f->window;
+    int frames = tw->frame_count > 0 ? tw->frame_count : 1;
+    char path[STAGED_PATH_MAX];
+    snprintf(path, sizeof path, "%s_orders.npy", stem);
+    size_t shape[5] = {(size_t)tw->orders, (size_t)frames, (size_t)f->height, (size_t)f->width, 3};
+    npy_file w;
+    if (npy_open(&w, path, shape, 5, err)) return -1;
+    for (int o = 0; o < tw->orders; o++)
+        for (int k = 0; k < frames; k++) {
+            image_rgb img = {0};
+            if (film_layer_image(f, film_order_layer(tw, o, tw->frame_count > 0 ? k : -1), &img, err)) {
+                npy_abort(&w);
+                return -1;
+            }
+            int rc = npy_append(&w, img.rgb, (size_t)f->width * f->height * 3, err);
+            image_free(&img);
+            if (rc) return -1;
+        }
+    if (npy_close(&w, err)) return -1;
+    if (wrote) wrote(path);
+    return 0;
+}
+
 static int write_all(const film *f, const char *stem, const char *dot, const char *integrator, const char *plan,
                      int skip, void (*wrote)(const char *path), dp_error *err)
 {
@@ -165,6 +192,7 @@ static int write_all(const film *f, const char *stem, const char *dot, const cha
     if (!rc && wrote) wrote(png);
     image_free(&img);
     if (!rc && tw->frame_count > 0) rc = write_frames(f, stem, dot, meta, skip, wrote, err);
+    if (!rc && tw->orders > 0) rc = write_orders(f, stem, wrote, err);
     return rc;
 }
 

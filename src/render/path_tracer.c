@@ -36,7 +36,8 @@ void pt_connect_sample(pixel_ctx *c, const path_state *ps, int i, const emitter_
     if (!scene_transmittance(s, o, ss ? surface_medium_toward(ss, ps->medium, wl) : ps->medium, shadow_target(s, ed),
                              &tr, &t))
         return;
-    film_pixel_splat(c->pix, t, v3_scale(v3_mul(v3_mul(v3_mul(ps->beta, tr), ed->value), f), w / ed->denom), frame);
+    film_pixel_splat(c->pix, t, v3_scale(v3_mul(v3_mul(v3_mul(ps->beta, tr), ed->value), f), w / ed->denom), frame,
+                     ps->depth); /* the vertices so far, this one included */
 }
 
 /* The light connection of light i from x, by its direct-light sample. A medium vertex does not connect to a
@@ -111,10 +112,10 @@ static void hit_emission(pixel_ctx *c, const path_state *ps, const hit_record *h
     if (v3_is_zero(le)) return;
     if (c->aim.on) {
         film_pixel_splat(c->pix, ps->time, v3_scale(v3_mul(ps->beta, le), 1.0 / (c->aim.sel_pdf * c->aim.bin.pdf)),
-                         c->aim.bin.frame);
+                         c->aim.bin.frame, ps->depth);
         return;
     }
-    film_pixel_splat(c->pix, ps->time + path_time_offset(s, L, c->rng), v3_mul(ps->beta, le), -1);
+    film_pixel_splat(c->pix, ps->time + path_time_offset(s, L, c->rng), v3_mul(ps->beta, le), -1, ps->depth);
 }
 
 /* Time of a segment of length len in a region of index eta: η·len, but nothing for the camera segment

@@ -215,10 +215,11 @@ static int render_rounds(const scene *s, const render_plan *p, const eda_set *ed
 /* A resumed render: the checkpoint's sums, weights and counts into the fresh film f. 0, or -1 with err. */
 static int film_resume(film *f, const film *from, dp_error *err)
 {
-    if (from->width != f->width || from->height != f->height || from->window.frame_count != f->window.frame_count)
+    if (from->width != f->width || from->height != f->height || from->window.frame_count != f->window.frame_count ||
+        from->window.orders != f->window.orders)
         return dp_fail(err, "the film to resume is %dx%d with %d frames, the render %dx%d with %d", from->width,
                        from->height, from->window.frame_count, f->width, f->height, f->window.frame_count);
-    size_t n = (size_t)f->width * f->height * 3, nf = n * (size_t)f->window.frame_count;
+    size_t n = (size_t)f->width * f->height * 3, nf = n * (size_t)time_window_layers(&f->window);
     memcpy(f->sum, from->sum, n * sizeof(double));
     if (nf > 0) memcpy(f->frame_sum, from->frame_sum, nf * sizeof(float));
     f->passes = from->passes;

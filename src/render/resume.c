@@ -29,7 +29,7 @@
 
 #include "run_internal.h"
 
-#define STATE_VERSION 1
+#define STATE_VERSION 2 /* 2: the line "orders N" and the order layers after the frames */
 
 static uint64_t fnv1a(uint64_t h, const void *p, size_t n)
 {
@@ -60,12 +60,12 @@ int resume_state_write(const char *path, const film *f, const char *plan_json, u
     atomic_file af;
     FILE *o = atomic_fopen(path, "wb", &af, err);
     if (!o) return -1;
-    size_t n = gate_count(f->width, f->height), nf = n * (size_t)f->window.frame_count;
+    size_t n = gate_count(f->width, f->height), nf = n * (size_t)time_window_layers(&f->window);
     size_t data = n * sizeof(double) + nf * sizeof(float);
     uint64_t sum = fnv1a(0xcbf29ce484222325ULL, f->sum, n * sizeof(double));
     if (nf) sum = fnv1a(sum, f->frame_sum, nf * sizeof(float));
-    fprintf(o, "dartspp-state %d\nbyte-order 0x%016" PRIx64 "\nseed %" PRIu64 "\nresolution %d %d\nframes %d\n",
-            STATE_VERSION, byte_order_mark(), seed, f->width, f->height, f->window.frame_count);
+    fprintf(o, "dartspp-state %d\nbyte-order 0x%016" PRIx64 "\nseed %" PRIu64 "\nresolution %d %d\nframes %d\norders %d\n",
+            STATE_VERSION, byte_order_mark(), seed, f->width, f->height, f->window.frame_count, f->window.orders);
     fprintf(o, "passes %ld\nweight_sum %a\nlast_weight %a\nnonfinite %ld\nchecksum 0x%016" PRIx64 "\n", f->passes,
             f->weight_sum, f->last_weight, f->nonfinite, sum);
     fprintf(o, "plan_bytes %zu\n%s\ndata_bytes %zu\n", strlen(plan_json), plan_json, data);
@@ -95,6 +95,7 @@ int resume_state_read(const char *path, int with_data, resume_state *s, dp_error
              fscanf(in, " seed %" SCNu64, &s->seed) == 1 &&
              fscanf(in, " resolution %d %d", &s->width, &s->height) == 2 && s->width > 0 && s->height > 0 &&
              fscanf(in, " frames %d", &s->frames) == 1 && s->frames >= 0 &&
+             fscanf(in, " orders %d", &s->orders) == 1 && s->orders >= 0 && s->orders <= 64 &&
              fscanf(in, " passes %ld", &s->passes) == 1 && s->passes >= 0 &&
              fscanf(in, " weight_sum %la", &s->weight_sum) == 1 &&
              fscanf(in, " last_weight %la", &s->last_weight) == 1 &&
@@ -105,7 +106,8 @@ int resume_state_read(const char *path, int with_data, resume_state *s, dp_error
         ok = fread(s->plan, 1, plan_bytes, in) == plan_bytes && fgetc(in) == '\n';
         s->plan[plan_bytes] = '\0';
     } else ok = 0;
-    size_t n = ok ? gate_count(s->width, s->height) : 0, nf = n * (size_t)s->frames;
+    time_window layers = {.frame_count = s->frames, .orders = s->orders};
+    size_t n = ok ? gate_count(s->width, s->height) : 0, nf = n * (size_t)time_window_layers(&layers);
     ok = ok && fscanf(in, "data_bytes %zu", &data_bytes) == 1 && fgetc(in) == '\n' &&
          data_bytes == n * sizeof(double) + nf * sizeof(float);
     if (ok && with_data) {
@@ -155,6 +157,9 @@ int resume_check(const resume_state *s, const char *path, const render_run_job *
     if (s->frames != j->p.window.frame_count)
         return dp_fail(err, "%s: the checkpoint has %d frames, this run %d (integrator.frame_num): cannot resume",
                        path, s->frames, j->p.window.frame_count);
+    if (s->orders != j->p.window.orders)
+        return dp_fail(err, "%s: the checkpoint has %d scattering-order layers, this run %d (integrator.bounce_orders): "
+                       "cannot resume", path, s->orders, j->p.window.orders);
     if (strcmp(s->plan, j->plan_json)) {
         char diff[256];
         plan_difference(s->plan, j->plan_json, diff, sizeof diff);

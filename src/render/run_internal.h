@@ -67,12 +67,12 @@ typedef struct {
 /* ---- the checkpoint state (resume.c): "<stem>.state", the film's exact sums for --resume ---- */
 typedef struct {
     uint64_t seed;
-    int width, height, frames;
+    int width, height, frames, orders; /* orders: bounce_orders' layers (time_window.orders) */
     long passes, nonfinite;
     double weight_sum, last_weight;
     char *plan;          /* the plan's JSON */
     double *sum;         /* width·height·3 (read with data only) */
-    float *frame_sum;    /* frames·width·height·3 (read with data only) */
+    float *frame_sum;    /* layers·width·height·3, layers as time_window_layers (read with data only) */
 } resume_state;
 
 /* "<stem>.state" of the output path <stem>.exr|.pfm. */

@@ -118,7 +118,8 @@ static int set_up_state(render_run_job *j, dp_error *err)
     if (!rc) {
         size_t n = (size_t)st.width * st.height * 3;
         memcpy(j->resumed.sum, st.sum, n * sizeof(double));
-        if (st.frames > 0) memcpy(j->resumed.frame_sum, st.frame_sum, n * (size_t)st.frames * sizeof(float));
+        size_t layers = (size_t)time_window_layers(&j->p.window);
+        if (layers > 0) memcpy(j->resumed.frame_sum, st.frame_sum, n * layers * sizeof(float));
         j->resumed.passes = st.passes;
         j->resumed.weight_sum = st.weight_sum;
         j->resumed.last_weight = st.last_weight;

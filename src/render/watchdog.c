@@ -43,7 +43,7 @@ static int film_copy(film *to, const film *f)
 {
     dp_error err;
     if (film_init(to, f->width, f->height, &f->window, &err)) return -1;
-    size_t n = (size_t)f->width * f->height * 3, nf = n * (size_t)f->window.frame_count;
+    size_t n = (size_t)f->width * f->height * 3, nf = n * (size_t)time_window_layers(&f->window);
     memcpy(to->sum, f->sum, n * sizeof(double));
     if (nf > 0) memcpy(to->frame_sum, f->frame_sum, nf * sizeof(float));
     to->passes = f->passes;

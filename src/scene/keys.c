@@ -42,6 +42,8 @@ static const scene_key table[] = {
      .meaning = "Start of the first frame (with frame_num)"},
     {.name = "frame_num", IN(frame_num), .type = KEY_INT, .read_by = ALL, .changes_image = 1, .def = 0,
      IN_RANGE(0, 100000), .meaning = "Frames of width transient_time_width from start_time; 0: one gate image"},
+    {.name = "bounce_orders", IN(bounce_orders), .type = KEY_INT, .read_by = ALL, .changes_image = 1, .def = 0,
+     IN_RANGE(0, 32), .meaning = "K > 0: also the gate image or frames split by scattering events: 0, 1, ..., K − 1 and K or more (<stem>_orders.npy)"},
     {.name = "delta_time_gate", IN(delta_time_gate), .type = KEY_BOOL, .read_by = ALL, .def = 0, .meaning = "A delta gate; only false (a box gate) is supported"},
     {.name = "camera_unwarp", IN(camera_unwarp), .type = KEY_BOOL, .read_by = ALL, .changes_image = 1, .def = 0,
      .meaning = "Time leaves out the camera segment next to the sensor (camera-unwarped, docs/time.md)"},

@@ -238,6 +238,7 @@ static int resolve_window(json_ctx *c, const cJSON *v, integrator_settings *in)
     time_window *tw = &in->window;
     tw->camera_unwarp = in->camera_unwarp;
     tw->frame_count = (int)in->frame_num;
+    tw->orders = in->bounce_orders > 0 ? (int)in->bounce_orders + 1 : 0;
     tw->width = width;
     if (tw->frame_count > 0) {
         if (width <= 0) return jfail(c, "integrator", "transient_time_width", "empty time window: frames need a width > 0");
