@@ -55,8 +55,10 @@ static inline film_slot film_time_slot(const film *f, double t, int frame, int o
 {
     const time_window *tw = &f->window;
     film_slot s = {.counts = 1, .gated = tw->gated, .k = -1, .order_layer = -1};
-    if (tw->orders > 0) s.order_layer = film_order_layer(tw, order, -1);
-    if (!tw->gated) return s;
+    if (!tw->gated) {
+        if (tw->orders > 0) s.order_layer = film_order_layer(tw, order, -1);
+        return s;
+    }
     double rel = (t - tw->start) / tw->width;
     int frames = tw->frame_count > 0 ? tw->frame_count : 1;
     s.counts = rel >= 0.0 && rel < frames && (frame < 0 || (int)rel == frame); /* frame: docs/darts.md §2.2 */

@@ -6,7 +6,6 @@
  * the ray meets no surface (and the arrival 0 where no light sees the surface). One ray per pixel and one
  * connection per light: nothing next to a render's cost. */
 #include <math.h>
-#include <stdio.h>
 #include <string.h>
 
 #include "dartspp/render.h"
@@ -81,20 +80,6 @@ int ground_truth_compute(const scene *s, const render_plan *p, ground_truth *gt,
 }
 
 const char *const GROUND_TRUTH_NAMES[GROUND_TRUTH_IMAGES] = {"depth", "arrival", "normal", "albedo"};
-
-int ground_truth_write(const ground_truth *gt, const char *image_path, void (*wrote)(const char *), dp_error *err)
-{
-    const char *dot = strrchr(image_path, '.'), *slash = strrchr(image_path, '/');
-    size_t stem = dot && (!slash || dot > slash) ? (size_t)(dot - image_path) : strlen(image_path);
-    for (int k = 0; k < GROUND_TRUTH_IMAGES; k++) {
-        char path[4096];
-        snprintf(path, sizeof path, "%.*s_%s%s", (int)stem, image_path, GROUND_TRUTH_NAMES[k], dot ? dot : ".exr");
-        image_meta meta = {.time_unit = "optical path length in scene units", .frame_index = -1};
-        if (image_write(path, &gt->img[k], &meta, err)) return -1;
-        if (wrote) wrote(path);
-    }
-    return 0;
-}
 
 void ground_truth_free(ground_truth *gt)
 {

@@ -196,6 +196,20 @@ static int write_all(const film *f, const char *stem, const char *dot, const cha
     return rc;
 }
 
+int ground_truth_write(const ground_truth *gt, const char *image_path, void (*wrote)(const char *), dp_error *err)
+{
+    char stem[OUTPUT_PATH_MAX];
+    const char *dot;
+    if (split_output_path(image_path, stem, sizeof stem, &dot, err)) return -1;
+    for (int k = 0; k < GROUND_TRUTH_IMAGES; k++) {
+        char path[STAGED_PATH_MAX];
+        snprintf(path, sizeof path, "%s_%s%s", stem, GROUND_TRUTH_NAMES[k], dot);
+        image_meta meta = {.time_unit = TIME_UNIT, .frame_index = -1};
+        if (write_one(path, &gt->img[k], &meta, wrote, err)) return -1;
+    }
+    return 0;
+}
+
 static void say_note(const char *msg) { fprintf(stderr, "dartspp render: %s\n", msg); }
 
 /* One image: written in place, atomically. Frame mode: every file into a staging folder, then moved into
