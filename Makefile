@@ -13,7 +13,7 @@ CFLAGS   += -std=c11 -D_GNU_SOURCE $(OPT) $(if $(ARCH),-march=$(ARCH)) -g -Wall 
 LDLIBS   += -lembree3 -lOpenEXRCore-3_1 -lcjson -lpng -lstb -lflann -lm -fopenmp
 
 DEB_PACKAGES = libembree-dev libopenexr-dev libflann-dev libcjson-dev libcmocka-dev libpng-dev libstb-dev pkg-config \
-               libopenmpi-dev openmpi-bin chromium
+               libopenmpi-dev openmpi-bin chromium python3-dev python3-numpy python3-setuptools python3-pytest
 DEPS_STAMP   = build/.deps-ok
 
 LIB_SRC  = $(filter-out src/cli/main.c src/cluster/%,$(wildcard src/*/*.c))
@@ -49,7 +49,7 @@ QUICK_TESTS = test_bsdf test_bsdf_models test_sensor test_darts test_time_angula
               test_render test_single_scatter test_photon_single_scatter
 QUICK_BIN   = $(QUICK_TESTS:%=build/san/tests/%)
 
-.PHONY: all deps test check run clean stress reference bench-quick docs-keys
+.PHONY: all deps test check run clean stress reference bench-quick docs-keys python python-build
 all: build/dartspp build/dartspp-mpi
 
 deps: $(DEPS_STAMP)
@@ -104,13 +104,50 @@ build/san/tests/%: build/san/test-obj/%.o $(FIX_OBJ) build/san/libdartspp.a
 
 .SECONDARY: $(TEST_OBJ) $(FIX_OBJ)
 
-# The README's test command. Unit, estimator and end-to-end tests, all under ASan + UBSan.
-test: build/dartspp build/dartspp-mpi build/san/dartspp $(TEST_BIN)
-	@tests/run_tests.sh $(TEST_BIN)
+# The Python package (python/, docs/python.md): the library compiled once more as position-independent code
+# (the release objects are not) into the extension module build/python/dartspp/_dartspp.so, beside the
+# package's Python files. Debian's Python (PYTHON), whose python3-numpy the extension is compiled against.
+# Without LTO: a render through Python equals the CLI's float for float all the same (tests/python checks it).
+PYTHON  ?= /usr/bin/python3
+PIC_OBJ  = $(LIB_SRC:src/%.c=build/pic/obj/%.o)
+PY_SRC   = $(wildcard python/dartspp/*.py)
+PY_BUILD = build/python/dartspp/_dartspp.so $(PY_SRC:python/%=build/python/%)
 
-# The quick tier (QUICK_TESTS above), with the same closing line as `make test`.
-check: build/san/dartspp $(QUICK_BIN)
-	@tests/run_tests.sh $(QUICK_BIN)
+build/pic/obj/%.o: src/%.c build/pic/obj/%.d | $(DEPS_STAMP)
+	@mkdir -p $(dir $@)
+	$(CC) $(CFLAGS) -fPIC $(DEPFLAGS) -c $< -o $@
+	@touch $@
+
+build/pic/libdartspp.a: $(PIC_OBJ)
+	$(AR) rcs $@ $^
+
+build/python/dartspp/_dartspp.so: python/dartspp/_dartspp.c build/pic/libdartspp.a
+	@mkdir -p $(dir $@)
+	$(CC) $(CFLAGS) -fPIC -shared $(DEPFLAGS) -I$$($(PYTHON) -c 'import sysconfig; print(sysconfig.get_paths()["include"])') \
+	  -I$$($(PYTHON) -c 'import numpy; print(numpy.get_include())') $< build/pic/libdartspp.a $(LDLIBS) -o $@
+
+build/python/dartspp/%.py: python/dartspp/%.py
+	@mkdir -p $(dir $@)
+	cp $< $@
+
+python-build: $(PY_BUILD)
+
+# The README's install command: the package into Python's site folder (root: the first of
+# site.getsitepackages(), /usr/local/lib/python3.X/dist-packages on Debian; others: their user site folder),
+# or into PY_SITE when given.
+python: python-build
+	@site="$${PY_SITE:-$$($(PYTHON) -c 'import os, site; print(site.getsitepackages()[0] if os.geteuid() == 0 else site.getusersitepackages())')}"; \
+	  mkdir -p "$$site/dartspp" && rm -rf "$$site/dartspp.tmp" && cp -r build/python/dartspp "$$site/dartspp.tmp" && \
+	  rm -rf "$$site/dartspp" && mv "$$site/dartspp.tmp" "$$site/dartspp" && echo "installed dartspp for $(PYTHON) in $$site/dartspp"
+
+# The README's test command. Unit, estimator and end-to-end tests, all under ASan + UBSan, and the Python
+# package's tests (pytest, tests/python).
+test: build/dartspp build/dartspp-mpi build/san/dartspp $(TEST_BIN) $(PY_BUILD)
+	@PYTHON=$(PYTHON) tests/run_tests.sh $(TEST_BIN) tests/python
+
+# The quick tier (QUICK_TESTS above, and the Python package's tests), with the same closing line as `make test`.
+check: build/dartspp build/san/dartspp $(QUICK_BIN) $(PY_BUILD)
+	@PYTHON=$(PYTHON) tests/run_tests.sh $(QUICK_BIN) tests/python
 
 # The whole stress matrix (extreme media, anisotropy, gates, scales, geometry): the estimator-level cases of
 # tests/test_darts.c and tests/test_eda.c, the renders of tests/test_stress.c and all 18 material cases of
@@ -144,8 +181,8 @@ clean:
 # An object whose .d file is missing (a build folder from before dependencies were tracked, or a deleted
 # .d) is rebuilt: the .d files are prerequisites with an empty rule (GNU make manual, "Automatic
 # Prerequisites"; the object is touched after the compile so that it stays newer than its .d).
-DEP_FILES = $(OBJ:.o=.d) $(SAN_OBJ:.o=.d) $(TEST_OBJ:.o=.d) $(FIX_OBJ:.o=.d)
+DEP_FILES = $(OBJ:.o=.d) $(SAN_OBJ:.o=.d) $(PIC_OBJ:.o=.d) $(TEST_OBJ:.o=.d) $(FIX_OBJ:.o=.d)
 $(DEP_FILES): ;
 .PRECIOUS: $(DEP_FILES)
--include $(OBJ:.o=.d) $(SAN_OBJ:.o=.d) $(TEST_OBJ:.o=.d) $(FIX_OBJ:.o=.d) build/dartspp.d build/dartspp-mpi.d \
-         build/san/dartspp.d
+-include $(OBJ:.o=.d) $(SAN_OBJ:.o=.d) $(PIC_OBJ:.o=.d) $(TEST_OBJ:.o=.d) $(FIX_OBJ:.o=.d) build/dartspp.d \
+         build/dartspp-mpi.d build/san/dartspp.d build/python/dartspp/_dartspp.d

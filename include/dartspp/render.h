@@ -4,6 +4,7 @@
 #define DARTSPP_RENDER_H
 
 #include <signal.h>
+#include <stdio.h>
 #include <stdatomic.h>
 
 #include "dartspp/film.h"
@@ -155,6 +156,12 @@ int path_tracer_pass(const scene *s, const render_plan *p, const struct eda_set 
 int photon_points_pass(const scene *s, const render_plan *p, const struct eda_set *eda, film *f, uint64_t seed,
                        long iteration, const dp_stop_flag *stop, render_stats *st, dp_error *err);
 
+/* ---- warnings before the render ----
+ * Parts of the scene the chosen integrator or the DARTS samplers render with a known bias or not at all, and
+ * how to avoid it (warnings.c): one line "warning: <scene>: ..." each, to `out` (the CLI: stderr; the Python
+ * API: a buffer turned into Python warnings). */
+void render_warn(FILE *out, const scene *s, const render_plan *p);
+
 /* ---- error log: error against run time ----
  * CSV rows "seconds,iterations,photon_paths,stored_photons,r_vol,r_surf,mse,rel_mse,mse_q99,nonfinite_pixels"
  * of the running image against a reference image (EXR/PFM, same size), at most one every `every` seconds
@@ -201,6 +208,7 @@ void memory_format_bytes(double bytes, char *out, size_t n);
  * value) and the viewer page `<stem>_viewer.html` (io.h), the last two unless `skip` leaves them out.
  * integrator and plan (JSON, plan_json) go into the EXR headers (either may be NULL). Every file is written
  * atomically; `wrote` (may be NULL) is called with each path written. */
+#define RENDER_TIME_UNIT "optical path length in scene units (c = 1)" /* the images' time axis (docs/time.md §6) */
 #define RENDER_SKIP_CUBE 1    /* no <stem>_cube.npy (dartspp render --no-cube) */
 #define RENDER_SKIP_VIEWER 2  /* no <stem>_viewer.html (--no-viewer) */
 /* Ground truth beside the image (renderer key ground_truth; src/render/ground_truth.c, docs/sensor.md §3):

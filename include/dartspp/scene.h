@@ -265,6 +265,10 @@ typedef struct {
 } scene_load_options;
 
 int scene_load(const char *path, const scene_load_options *opt, scene *s, dp_error *err);
+/* The same from the scene's JSON text (the Python API's dict scenes): `name` stands for the file in messages
+ * (e.g. "<dict>"), and relative mesh, texture and table paths resolve against base_dir (NULL: "."). */
+int scene_load_text(const char *text, const char *name, const char *base_dir, const scene_load_options *opt, scene *s,
+                    dp_error *err);
 void scene_free(scene *s);
 
 /* ---- ray queries ---- */

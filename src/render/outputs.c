@@ -12,7 +12,6 @@
 #include <sys/statvfs.h>
 #include <unistd.h>
 
-#define TIME_UNIT "optical path length in scene units (c = 1)"
 /* a path under the staging folder of a frame set: its folder name repeats the stem's base name */
 #define STAGED_PATH_MAX (2 * OUTPUT_PATH_MAX + 128)
 
@@ -103,7 +102,7 @@ static int extras_close(frame_extras *x, const film *f, const char *stem, void (
     }
     if (!rc && x->view.data) {
         const char *base = strrchr(stem, '/');
-        viewer_time vt = {.title = base ? base + 1 : stem, .time_unit = TIME_UNIT,
+        viewer_time vt = {.title = base ? base + 1 : stem, .time_unit = RENDER_TIME_UNIT,
                           .camera_warped = !f->window.camera_unwarp, .start = f->window.start,
                           .width = f->window.width};
         rc = viewer_html_write(x->html_path, &x->view, &vt, err);
@@ -180,7 +179,7 @@ static int write_all(const film *f, const char *stem, const char *dot, const cha
     char path[STAGED_PATH_MAX];
     snprintf(path, sizeof path, "%s%s", stem, dot);
     const time_window *tw = &f->window;
-    image_meta meta = {.time_unit = TIME_UNIT, .gated = tw->gated, .gate_start = tw->start,
+    image_meta meta = {.time_unit = RENDER_TIME_UNIT, .gated = tw->gated, .gate_start = tw->start,
                        .gate_end = time_window_end(tw), .camera_warped = !tw->camera_unwarp, .frame_index = -1,
                        .integrator = integrator, .plan = plan, .passes = f->passes};
     image_rgb img = {0};
@@ -204,7 +203,7 @@ int ground_truth_write(const ground_truth *gt, const char *image_path, void (*wr
     for (int k = 0; k < GROUND_TRUTH_IMAGES; k++) {
         char path[STAGED_PATH_MAX];
         snprintf(path, sizeof path, "%s_%s%s", stem, GROUND_TRUTH_NAMES[k], dot);
-        image_meta meta = {.time_unit = TIME_UNIT, .frame_index = -1};
+        image_meta meta = {.time_unit = RENDER_TIME_UNIT, .frame_index = -1};
         if (write_one(path, &gt->img[k], &meta, wrote, err)) return -1;
     }
     return 0;

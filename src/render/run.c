@@ -92,7 +92,7 @@ static void announce(const render_run_job *j)
     if (j->rank != 0) return;
     if (j->s.notes) fputs(j->s.notes, stderr);
     if (j->rq->verbose) fprintf(stderr, "plan: %s\n", j->plan_json);
-    run_warn(&j->s, &j->p);
+    render_warn(stderr, &j->s, &j->p);
     warn_unbounded(j);
     if (j->cl && !j->quiet)
         fprintf(stderr, "cluster: %d ranks (%d on this machine, %d threads each); iteration i runs on rank i mod %d\n",

@@ -114,10 +114,6 @@ void watchdog_stop(survivors *k);
 void survivors_report(survivors *k);
 void survivors_free(survivors *k);
 
-/* Warnings about the scene before the render: parts of it the chosen integrator or DARTS samplers render
- * with a known bias or not at all (warnings.c). */
-void run_warn(const scene *s, const render_plan *p);
-
 /* The run summary on stdout: scene, gate, passes and rates, the photon-pass samplers, statistics, memory
  * and the error log's overhead (summary.c). */
 void run_print_summary(const render_run_job *j, const render_stats *st);

@@ -11,7 +11,7 @@
  * smooth metal or glass, a plastic's coat), so light that takes one before any diffuse, glossy or medium
  * vertex is missing; DARTS's time bounds and control vertices assume a straight camera leg, so what the
  * camera sees through a surface it continues through (surface_photon_split) is biased. */
-static void warn_mirrors(const scene *s, const render_plan *p)
+static void warn_mirrors(FILE *out, const scene *s, const render_plan *p)
 {
     const char *delta = NULL, *continued = NULL;
     for (int i = 0; i < s->surface_count; i++) {
@@ -24,14 +24,14 @@ static void warn_mirrors(const scene *s, const render_plan *p)
     for (int i = 0; i < s->light_count && !point_like; i++)
         if (!emitter_hittable(&s->lights[i])) point_like = s->lights[i].name;
     if (delta && p->type == INTEGRATOR_PATH_TRACER && point_like)
-        fprintf(stderr, "warning: %s: surface '%s' is specular: the path tracer cannot connect through it to lights "
+        fprintf(out, "warning: %s: surface '%s' is specular: the path tracer cannot connect through it to lights "
                 "without area (point, spot, collimated; here '%s'), so their light reflected or refracted by it before "
                 "any diffuse or medium vertex (caustics) is missing from the image; photon points render it\n", s->path,
                 delta, point_like);
     const darts_plan *d = &p->darts;
     if (continued && p->type == INTEGRATOR_PHOTON_POINTS && d->active && d->mirrors == DARTS_MIRRORS_STRAIGHT &&
         d->side.seen)
-        fprintf(stderr, "warning: %s: the camera sees surface '%s', which is specular or near-specular: camera paths "
+        fprintf(out, "warning: %s: the camera sees surface '%s', which is specular or near-specular: camera paths "
                 "continue through it, but with darts_mirrors \"straight\" the DARTS time bounds and control vertices "
                 "assume a straight camera leg, so what the camera sees through it is too dark; darts_mirrors \"full\" "
                 "(the default) renders it without that bias\n", s->path, d->side.first);
@@ -40,7 +40,7 @@ static void warn_mirrors(const scene *s, const render_plan *p)
 /* Elliptical control vertices assume one refractive index along the camera leg; when the media and vacuum
  * present in the scene differ in η, the photon pass turns them off (darts_guide.control_vertices) and the
  * user should hear why and how to get them back. */
-static void warn_mixed_eta(const scene *s, const render_plan *p)
+static void warn_mixed_eta(FILE *out, const scene *s, const render_plan *p)
 {
     if (!p->darts.active || !p->darts.elliptical_asked || p->darts.control_vertices) return;
     char list[1024] = "";
@@ -54,23 +54,23 @@ static void warn_mixed_eta(const scene *s, const render_plan *p)
                          medium_name(s, r), r == MEDIUM_VACUUM ? "" : "'", medium_eta(s, r));
         if (n > 0 && (size_t)n < sizeof list - len) len += (size_t)n;
     }
-    fprintf(stderr, "warning: %s: the refractive index differs between the regions of the scene (%s): elliptical "
+    fprintf(out, "warning: %s: the refractive index differs between the regions of the scene (%s): elliptical "
             "control vertices are off, since they need one η along the whole camera leg (DA distance sampling and "
             "the other DARTS samplers stay on)", s->path, list);
     if (vacuum && media == 1)
-        fprintf(stderr, "; if the camera, the lights and every light path stay inside '%s', "
+        fprintf(out, "; if the camera, the lights and every light path stay inside '%s', "
                 "vaccum_speed_of_light = %g (its speed_of_light) restores them", s->media[medium].name,
                 1.0 / s->media[medium].eta);
-    fprintf(stderr, "\n");
+    fprintf(out, "\n");
 }
 
 /* A light the path tracer cannot reach at all (docs/emitters.md §7): its light is missing from the image. */
-static void warn_unreachable_lights(const scene *s, const render_plan *p)
+static void warn_unreachable_lights(FILE *out, const scene *s, const render_plan *p)
 {
     if (p->type != INTEGRATOR_PATH_TRACER) return;
     for (int i = 0; i < s->light_count; i++)
         if (!emitter_connectable(&s->lights[i]) && v3_max(s->lights[i].flux) > 0.0)
-            fprintf(stderr, "warning: %s: light '%s' (%s) is a parallel beam of radius 0: the path tracer can neither "
+            fprintf(out, "warning: %s: light '%s' (%s) is a parallel beam of radius 0: the path tracer can neither "
                     "connect to it nor hit it, so its light is missing from the image; give it a radius or a "
                     "divergence, or render with photon points\n", s->path, s->lights[i].name, s->lights[i].type_name);
 }
@@ -81,7 +81,7 @@ static void warn_unreachable_lights(const scene *s, const render_plan *p)
  * (the authors' collimated slab scenes put the camera in the slab's medium 1 mm outside the slab) gets that
  * medium along its first leg, where light paths, which follow the surfaces, never see it: the path tracer and
  * photon points then render different scenes. Legal; warned about with both media named. */
-static void warn_camera_medium(const scene *s)
+static void warn_camera_medium(FILE *out, const scene *s)
 {
     static const double at[5][2] = {{0.5, 0.5}, {0.25, 0.25}, {0.75, 0.25}, {0.25, 0.75}, {0.75, 0.75}};
     for (int k = 0; k < 5; k++) {
@@ -93,7 +93,7 @@ static void warn_camera_medium(const scene *s)
             if (sf->overrides_media) {
                 int here = v3_dot(d, h.ng) < 0.0 ? sf->ext_medium : sf->int_medium;
                 if (here != med) {
-                    fprintf(stderr, "warning: %s: the camera is declared in %s%s%s, but surface '%s' in front of it has "
+                    fprintf(out, "warning: %s: the camera is declared in %s%s%s, but surface '%s' in front of it has "
                             "%s%s%s on the camera's side: camera paths take the declared medium up to that surface, "
                             "light paths the surface's, so the path tracer and photon points render different "
                             "scenes; set the camera's medium to the surface's side\n", s->path,
@@ -110,10 +110,10 @@ static void warn_camera_medium(const scene *s)
     }
 }
 
-void run_warn(const scene *s, const render_plan *p)
+void render_warn(FILE *out, const scene *s, const render_plan *p)
 {
-    warn_camera_medium(s);
-    warn_unreachable_lights(s, p);
-    warn_mirrors(s, p);
-    warn_mixed_eta(s, p);
+    warn_camera_medium(out, s);
+    warn_unreachable_lights(out, s, p);
+    warn_mirrors(out, s, p);
+    warn_mixed_eta(out, s, p);
 }

@@ -594,14 +594,11 @@ static int parse_all(json_ctx *c, cJSON *root, scene *s, const scene_load_option
     return rc;
 }
 
-int scene_load(const char *path, const scene_load_options *opt, scene *s, dp_error *err)
+/* The scene's text, parsed and checked, and its Embree scene built; s->path and s->dir are set. */
+static int load_text(const char *text, const scene_load_options *opt, scene *s, dp_error *err)
 {
-    memset(s, 0, sizeof *s);
-    set_dir(s, path);
-    char *text = read_text_file(path, err);
-    if (!text) return -1;
     strbuf notes = {0};
-    json_ctx c = {.file = path, .err = err, .verbose = opt ? opt->verbose : 0, .notes = &notes};
+    json_ctx c = {.file = s->path, .err = err, .verbose = opt ? opt->verbose : 0, .notes = &notes};
     const char *end = NULL;
     cJSON *root = cJSON_ParseWithOpts(text, &end, 1);
     int rc;
@@ -609,17 +606,38 @@ int scene_load(const char *path, const scene_load_options *opt, scene *s, dp_err
         int line, col;
         const char *at = cJSON_GetErrorPtr();
         line_col(text, at ? at : text, &line, &col);
-        rc = dp_fail(err, "%s:%d:%d: malformed JSON", path, line, col);
+        rc = dp_fail(err, "%s:%d:%d: malformed JSON", s->path, line, col);
     } else {
         rc = parse_all(&c, root, s, opt);
     }
     cJSON_Delete(root);
     json_ctx_free(&c);
-    free(text);
     s->notes = notes.text;
     if (!rc) rc = scene_build_embree(s, err);
     if (rc) scene_free(s);
     return rc;
+}
+
+int scene_load(const char *path, const scene_load_options *opt, scene *s, dp_error *err)
+{
+    memset(s, 0, sizeof *s);
+    set_dir(s, path);
+    char *text = read_text_file(path, err);
+    if (!text) return -1;
+    int rc = load_text(text, opt, s, err);
+    free(text);
+    return rc;
+}
+
+int scene_load_text(const char *text, const char *name, const char *base_dir, const scene_load_options *opt, scene *s,
+                    dp_error *err)
+{
+    memset(s, 0, sizeof *s);
+    if (snprintf(s->path, sizeof s->path, "%s", name) >= (int)sizeof s->path ||
+        snprintf(s->dir, sizeof s->dir, "%s", base_dir && base_dir[0] ? base_dir : ".") >= (int)sizeof s->dir)
+        return dp_fail(err, "%s: the scene's name or its base folder is longer than %zu characters", name,
+                       sizeof s->dir - 1);
+    return load_text(text, opt, s, err);
 }
 
 void scene_free(scene *s)

@@ -1,0 +1,217 @@
+"""dartspp from Python: render in-process and get NumPy arrays back.
+
+    import dartspp
+    r = dartspp.render("scene.json", spp=64, seed=1)
+    r.image          # (height, width, 3) float32, the gate image
+    r.frames         # (frames, height, width, 3) float32, or None
+    r.write_exr("out.exr")
+
+The contract (arguments, errors, interrupts, threads) is docs/python.md; the scene format and its keys are
+docs/scene-format.md and docs/keys.md, the same as for the command line.
+"""
+
+import json
+import os
+import signal
+import threading
+import warnings
+
+import numpy as np
+
+from . import _dartspp
+
+__all__ = ["render", "Result", "compare", "keys", "read_image", "Error", "SceneError", "SceneWarning",
+           "Interrupted"]
+
+Error = _dartspp.Error
+SceneError = _dartspp.SceneError
+
+
+class SceneWarning(UserWarning):
+    """Legal but suspicious input: the scene's warnings, as `dartspp render` prints them."""
+
+
+class Interrupted(KeyboardInterrupt):
+    """Ctrl-C (SIGINT) stopped a render; `.result` holds its completed passes (None when none had completed)."""
+
+    def __init__(self, result):
+        super().__init__("render interrupted after %d completed passes" % (result.passes if result else 0))
+        self.result = result
+
+
+class Result:
+    """A finished render: the images, the plan it ran and its figures.
+
+    image        (height, width, 3) float32: the gate image, as `dartspp render` writes it
+    frames       (frames, height, width, 3) float32, or None without frames
+    frame_times  (frames, 2) float64: each frame's [start, end), in optical path length
+    plan         the resolved plan (dict), as the EXR headers and `--verbose` give it
+    integrator   the plan's integrator name
+    passes       completed passes (iterations)
+    seconds      render time (s), loading and checks excluded
+    stats        dict of the run summary's figures: camera_rays, rays, photon_paths, stored_photons, r_vol,
+                 r_surf, t_photon, t_maps, t_gather, nonfinite_pixels
+    log          error log rows against the reference (list of dicts, the CSV columns of `--log`); [] without one
+    warnings     the scene's warnings (list of str)
+    interrupted  True when stopped early (the progress callback asked, or Ctrl-C)
+    """
+
+    _STATS = ("camera_rays", "rays", "photon_paths", "stored_photons", "r_vol", "r_surf", "t_photon", "t_maps",
+              "t_gather", "nonfinite_pixels")
+
+    def __init__(self, d):
+        self.image = d["image"]
+        self.frames = d["frames"]
+        self.frame_times = d["frame_times"]
+        self.plan = json.loads(d["plan_json"])
+        self.integrator = d["integrator"]
+        self.passes = d["passes"]
+        self.seconds = d["seconds"]
+        self.interrupted = d["interrupted"]
+        self.stats = {k: d[k] for k in self._STATS}
+        self.log = [dict(zip(d["log_columns"], row.tolist())) for row in d["log"]]
+        self.warnings = [w for w in d["warnings"].splitlines() if w]
+        self._window = (d["gated"], d["camera_warped"], d["gate_start"], d["gate_end"])
+        self._plan_json = d["plan_json"]
+
+    def __repr__(self):
+        h, w, _ = self.image.shape
+        frames = "" if self.frames is None else ", %d frames" % len(self.frames)
+        return "<dartspp.Result %s %dx%d%s, %d passes in %.2f s>" % (self.integrator, w, h, frames, self.passes,
+                                                                     self.seconds)
+
+    def write_exr(self, path, frames=True):
+        """Writes the gate image to `path` (.exr, float32, or .pfm) with the header `dartspp render` gives it
+        (time window, integrator, plan, passes), atomically; with frames=True and frames present, also
+        "<stem>_NNNN<ext>" per frame, each with its own window. Returns the paths written."""
+        path = os.fspath(path)
+        written = [path]
+        self._write(path, self.image, -1)
+        if frames and self.frames is not None:
+            stem, ext = os.path.splitext(path)
+            digits = max(4, len(str(len(self.frames) - 1)))
+            for k, img in enumerate(self.frames):
+                p = "%s_%0*d%s" % (stem, digits, k, ext)
+                self._write(p, img, k)
+                written.append(p)
+        return written
+
+    def _write(self, path, img, frame):
+        gated, warped, start, end = self._window
+        _dartspp.write_image(path, img, frame, gated, warped, start, end, self.frame_times, self.integrator,
+                             self._plan_json, self.passes)
+
+
+def _sets(set):
+    if set is None:
+        return None
+    if isinstance(set, dict):
+        out = []
+        for k, v in set.items():
+            v = json.dumps(v) if isinstance(v, (bool, list, dict)) or v is None else str(v)
+            out.append("%s=%s" % (k, v))
+        return out
+    if isinstance(set, str):
+        set = [set]
+    out = [str(s) for s in set]
+    for s in out:
+        if "=" not in s:
+            raise SceneError("set: '%s' is not key=value" % s)
+    return out
+
+
+def _budget(value, name, integer):
+    if value is None:
+        return -1
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or (integer and not isinstance(value, int)):
+        raise SceneError("%s: expected %s, not %r" % (name, "a whole number" if integer else "seconds", value))
+    if value < 0 or value != value:
+        raise SceneError("%s: expected a number >= 0, not %r" % (name, value))
+    return value
+
+
+def render(scene, *, time=None, spp=None, seed=1, threads=None, set=None, reference=None, progress=None,
+           base_dir=None, log_every=1.0, max_memory=None):
+    """Renders a scene and returns a Result.
+
+    scene      a scene file's path, or a dict in the scene format (its relative paths resolve against
+               base_dir, default the working folder)
+    time       seconds; spp: passes. One alone is the only limit, both: whichever comes first, neither: as
+               the scene says (its timeout and spp), exactly as `dartspp render --time --spp`
+    seed       the random seed (the same seed and passes give the CLI's image, float for float)
+    threads    None: all cores
+    set        overrides of integrator and renderer keys, as `--set`: {"photon_count": 1e5} or
+               ["photon_count=1e5"]
+    reference  an image (path, or (height, width, 3) array) to log the error against, every log_every
+               seconds and at the end (Result.log)
+    progress   called after every pass as progress(passes, seconds, (r_vol, r_surf)); a true return value
+               stops the render after that pass (Result.interrupted), an exception stops it and propagates
+    max_memory bytes the render may plan for (None: what the machine has available)
+
+    Raises SceneError (bad input, before any work; names the file or key), Error (a failure while rendering),
+    Interrupted (Ctrl-C, a KeyboardInterrupt carrying the completed passes as .result). Nothing is printed:
+    the scene's warnings are issued as SceneWarning (and kept in Result.warnings). The GIL is released while
+    rendering.
+    """
+    text = name = None
+    path = None
+    if isinstance(scene, dict):
+        text = json.dumps(scene)
+        name = "<dict scene>"
+        base_dir = os.path.abspath(os.fspath(base_dir)) if base_dir is not None else os.getcwd()
+    elif isinstance(scene, (str, os.PathLike)):
+        path = os.fspath(scene)
+        if base_dir is not None:
+            raise SceneError("base_dir: only for a dict scene (a scene file's paths resolve against its folder)")
+    else:
+        raise SceneError("scene: expected a path or a dict in the scene format, not %s" % type(scene).__name__)
+    if threads is None:
+        threads = 0
+    elif isinstance(threads, bool) or not isinstance(threads, int) or threads < 1:
+        raise SceneError("threads: expected a whole number >= 1 (None: all cores), not %r" % (threads,))
+    if isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed < 2 ** 64:
+        raise SceneError("seed: expected an integer from 0 to 2^64 - 1, not %r" % (seed,))
+    ref_path = ref_array = None
+    if reference is not None:
+        if isinstance(reference, (str, os.PathLike)):
+            ref_path = os.fspath(reference)
+        else:
+            ref_array = reference
+    if progress is not None and not callable(progress):
+        raise SceneError("progress: expected a callable, not %s" % type(progress).__name__)
+    catch = threading.current_thread() is threading.main_thread() and \
+        signal.getsignal(signal.SIGINT) is signal.default_int_handler
+    d = _dartspp.render(path, text, name, base_dir, _sets(set), seed, _budget(spp, "spp", True),
+                        float(_budget(time, "time", False)), threads, float(max_memory or 0), ref_path, ref_array,
+                        float(log_every), progress, catch)
+    result = Result(d)
+    for w in result.warnings:
+        warnings.warn(w, SceneWarning, stacklevel=2)
+    if d["sigint"]:
+        raise Interrupted(result if result.passes > 0 else None)
+    return result
+
+
+def compare(image, reference):
+    """The metrics of `dartspp compare` of an image against a reference (arrays of shape (height, width, 3),
+    or paths): dict with mse, rmse, rel_mse (mean of (x-r)^2/(r^2+0.01)), mse_q99 (both divided by the
+    reference's 0.99 quantile q99), q99, nonfinite and pixels. A NaN or Inf pixel raises SceneError."""
+    if isinstance(image, (str, os.PathLike)):
+        image = read_image(image)
+    if isinstance(reference, (str, os.PathLike)):
+        reference = read_image(reference)
+    a, b = np.asarray(image), np.asarray(reference)
+    if a.shape != b.shape:
+        raise SceneError("compare: the image is %s but the reference is %s" % (a.shape, b.shape))
+    return _dartspp.compare(a, b)
+
+
+def read_image(path):
+    """An EXR or PFM image as a (height, width, 3) float32 array, row 0 at the top."""
+    return _dartspp.read_image(os.fspath(path))
+
+
+def keys():
+    """The key table (docs/keys.md), one dict per key: section, name, type, default, range, read_by,
+    changes_image, meaning."""
+    return _dartspp.keys()

@@ -1,0 +1,244 @@
+/* dp_render: the render command's path (scene, plan, memory guard, reference, warnings, progressive render)
+ * without a command line, files or printing, for the Python package. The images are the film's, as the CLI
+ * writes them: the same seed and passes give the same floats (tests/python/test_render.py checks it). */
+#include "dartspp/api.h"
+
+#include <omp.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "dartspp/render.h"
+
+const char *const DP_LOG_COLUMN_NAMES[DP_LOG_COLUMNS] = {
+    "seconds", "iterations", "photon_paths", "stored_photons", "r_vol", "r_surf", "mse", "rel_mse", "mse_q99",
+    "nonfinite_pixels"};
+
+typedef struct {
+    const dp_render_request *rq;
+    dp_render_result *res;
+    dp_stop_flag *stop;
+    image_rgb ref;               /* the error log's reference, or rgb NULL */
+    double last_row;             /* render time of the last log row */
+    int log_capacity;
+} api_run;
+
+/* The budget as the CLI reads --spp and --time (docs/cli.md §2.1): one alone is the only limit, neither is the
+ * scene's. A budget that nothing ends is refused: a caller in a notebook has no Ctrl-C to count on. */
+static int resolve_budget(const dp_render_request *rq, const scene *s, const render_plan *p, long *spp, double *limit,
+                          dp_error *err)
+{
+    *spp = rq->spp;
+    *limit = rq->time_limit;
+    if (*limit >= 0 && *spp < 0) *spp = 0;
+    if (*spp >= 0 && *limit < 0) *limit = 0;
+    if (*spp == 0 && *limit == 0)
+        return dp_fail(err, "spp 0 and time 0: nothing would end the render (give spp > 0 or time > 0)");
+    if (*spp < 0 && !(p->spp > 0) && !(p->timeout_seconds > 0))
+        return dp_fail(err, "%s: the scene's renderer.spp and renderer.timeout set no limit, and neither spp nor time "
+                            "was given: nothing would end the render", s->path);
+    return 0;
+}
+
+static int load(const dp_render_request *rq, scene *s, dp_error *err)
+{
+    scene_load_options lo = {.sets = rq->sets, .set_count = rq->set_count};
+    if (rq->scene_path) return scene_load(rq->scene_path, &lo, s, err);
+    if (!rq->scene_text) return dp_fail(err, "no scene: give a scene file or the scene's JSON text");
+    return scene_load_text(rq->scene_text, rq->scene_name ? rq->scene_name : "<scene>", rq->base_dir, &lo, s, err);
+}
+
+/* The memory guard of `dartspp render` (run_prepare.c): the plan's estimate against the limit, naming the key
+ * that drives it. */
+static int check_memory(const scene *s, const render_plan *p, const dp_render_request *rq, dp_error *err)
+{
+    memory_estimate m;
+    render_memory_estimate(s, p, rq->reference_path || rq->reference_rgb, &m);
+    double limit = rq->max_memory > 0 ? rq->max_memory : memory_available();
+    if (!(limit > 0) || m.total <= limit) return 0;
+    const memory_item *big = memory_largest(&m);
+    char need[32], have[32];
+    memory_format_bytes(m.total, need, sizeof need);
+    memory_format_bytes(limit, have, sizeof have);
+    return dp_fail(err, "%s: the render needs about %s of memory, more than the %s available%s%s", s->path, need,
+                   have, big ? "; driven by " : "", big ? big->key : "");
+}
+
+static int read_reference(api_run *r, const scene *s, dp_error *err)
+{
+    const dp_render_request *rq = r->rq;
+    const char *name = rq->reference_path ? rq->reference_path : "reference";
+    if (rq->reference_path && image_read(rq->reference_path, &r->ref, err)) return -1;
+    if (rq->reference_rgb) {
+        if (rq->ref_width <= 0 || rq->ref_height <= 0) return dp_fail(err, "the reference has no pixels");
+        if (image_alloc(&r->ref, rq->ref_width, rq->ref_height, err)) return -1;
+        memcpy(r->ref.rgb, rq->reference_rgb, (size_t)rq->ref_width * rq->ref_height * 3 * sizeof(float));
+    }
+    if (!r->ref.rgb) return 0;
+    if (r->ref.width != s->cam.width || r->ref.height != s->cam.height)
+        return dp_fail(err, "%s: the reference %s %dx%d but the render is %dx%d (width x height)", name,
+                       rq->reference_path ? "is" : "array is", r->ref.width, r->ref.height, s->cam.width,
+                       s->cam.height);
+    int x, y;
+    long bad = image_nonfinite_pixels(&r->ref, &x, &y);
+    if (bad) return dp_fail(err, "%s: %ld pixels have a NaN or Inf channel (the first at x %d, y %d)", name, bad, x, y);
+    return 0;
+}
+
+/* The scene's notes and the pre-render warnings, as the CLI prints them, into res->warnings. */
+static int collect_warnings(const scene *s, const render_plan *p, dp_render_result *res, dp_error *err)
+{
+    size_t n = 0;
+    FILE *out = open_memstream(&res->warnings, &n);
+    if (!out) return dp_fail_kind(err, DP_ERROR_MEMORY, "out of memory");
+    if (s->notes) fputs(s->notes, out);
+    render_warn(out, s, p);
+    return fclose(out) ? dp_fail_kind(err, DP_ERROR_MEMORY, "out of memory") : 0;
+}
+
+/* One error-log row (the columns of DP_LOG_COLUMN_NAMES) if one is due, as error_log_pass decides. */
+static int log_row(api_run *r, const film *f, const render_stats *st, int force, dp_error *err)
+{
+    dp_render_result *res = r->res;
+    if (!r->ref.rgb || (!force && st->seconds - r->last_row < r->rq->log_every)) return 0;
+    if (res->log_rows > 0 && (long)res->log[(size_t)(res->log_rows - 1) * DP_LOG_COLUMNS + 1] == st->passes) return 0;
+    if (res->log_rows == r->log_capacity) {
+        int cap = r->log_capacity ? 2 * r->log_capacity : 64;
+        double *grown = realloc(res->log, (size_t)cap * DP_LOG_COLUMNS * sizeof(double));
+        if (!grown) return dp_fail_kind(err, DP_ERROR_MEMORY, "out of memory");
+        res->log = grown;
+        r->log_capacity = cap;
+    }
+    image_rgb img = {0};
+    image_error e;
+    if (film_image(f, -1, &img, err)) return -1;
+    int rc = image_compare(&img, &r->ref, &e, err);
+    image_free(&img);
+    if (rc) return -1;
+    double row[DP_LOG_COLUMNS] = {st->seconds, (double)st->passes, st->photon_paths, st->stored_photons, st->r_vol,
+                                  st->r_surf, e.mse, e.rel_mse, e.mse_q99, (double)e.nonfinite};
+    memcpy(&res->log[(size_t)res->log_rows++ * DP_LOG_COLUMNS], row, sizeof row);
+    r->last_row = st->seconds;
+    return 0;
+}
+
+static int after_pass(void *ctx, const film *f, const render_stats *st, dp_error *err)
+{
+    api_run *r = ctx;
+    if (log_row(r, f, st, 0, err)) return -1;
+    if (r->rq->progress && r->rq->progress(r->rq->progress_ctx, st->passes, st->seconds, st->r_vol, st->r_surf))
+        *r->stop = 1;
+    return 0;
+}
+
+/* The film's images, the time window and the figures of the run into res. */
+static int fill_result(const film *f, const render_stats *st, const render_plan *p, dp_render_result *res,
+                       dp_error *err)
+{
+    const time_window *tw = &p->window;
+    size_t px = (size_t)f->width * f->height * 3;
+    res->width = f->width;
+    res->height = f->height;
+    res->frame_count = tw->frame_count;
+    res->gated = tw->gated;
+    res->camera_warped = !tw->camera_unwarp;
+    res->gate_start = tw->start;
+    res->gate_end = time_window_end(tw);
+    res->image = malloc(px * sizeof(float));
+    res->frames = tw->frame_count > 0 ? malloc(px * tw->frame_count * sizeof(float)) : NULL;
+    res->frame_times = tw->frame_count > 0 ? malloc(2 * (size_t)tw->frame_count * sizeof(double)) : NULL;
+    if (!res->image || (tw->frame_count > 0 && (!res->frames || !res->frame_times)))
+        return dp_fail_kind(err, DP_ERROR_MEMORY, "out of memory");
+    for (int k = -1; k < tw->frame_count; k++) {
+        image_rgb img = {0};
+        if (film_image(f, k, &img, err)) return -1;
+        memcpy(k < 0 ? res->image : res->frames + px * k, img.rgb, px * sizeof(float));
+        image_free(&img);
+        if (k >= 0) {
+            res->frame_times[2 * k] = tw->start + k * tw->width;
+            res->frame_times[2 * k + 1] = tw->start + (k + 1) * tw->width;
+        }
+    }
+    res->passes = st->passes;
+    res->nonfinite_pixels = film_nonfinite_pixels(f);
+    res->interrupted = st->interrupted;
+    res->seconds = st->seconds;
+    res->camera_rays = st->camera_rays;
+    res->rays = st->rays;
+    res->photon_paths = st->photon_paths;
+    res->stored_photons = st->stored_photons;
+    res->r_vol = st->r_vol;
+    res->r_surf = st->r_surf;
+    res->t_photon = st->t_photon;
+    res->t_maps = st->t_maps;
+    res->t_gather = st->t_gather;
+    return 0;
+}
+
+static int plan_text(const scene *s, const render_plan *p, dp_render_result *res, dp_error *err)
+{
+    size_t cap = 1 << 16;
+    res->plan_json = malloc(cap);
+    res->integrator = strdup(p->type_name);
+    if (!res->plan_json || !res->integrator) return dp_fail_kind(err, DP_ERROR_MEMORY, "out of memory");
+    if (plan_json(p, s, res->plan_json, cap)) return dp_fail_kind(err, DP_ERROR_INTERNAL, "%s: plan too long", s->path);
+    return 0;
+}
+
+/* Everything that can refuse the render, before any work; then the render. */
+static int run(api_run *r, scene *s, render_plan *p, dp_error *err)
+{
+    const dp_render_request *rq = r->rq;
+    render_options ro = {.plan = p, .seed = rq->seed, .stop = r->stop, .after_pass = after_pass, .after_pass_ctx = r};
+    if (resolve_budget(rq, s, p, &ro.spp, &ro.time_limit, err)) return -1;
+    if (plan_text(s, p, r->res, err) || check_memory(s, p, rq, err) || read_reference(r, s, err) ||
+        collect_warnings(s, p, r->res, err)) {
+        if (err->kind == DP_ERROR_INTERNAL) return -1;
+        err->kind = DP_ERROR_INPUT;
+        return -1;
+    }
+    /* the thread count is the process's OpenMP setting: "all cores" is said explicitly, so that a render after
+     * one with threads=1 does not inherit it */
+    ro.threads = rq->threads > 0 ? rq->threads : omp_get_num_procs();
+    film f;
+    render_stats st;
+    int rc = render_scene(s, &ro, &f, &st, err);
+    if (!rc) rc = log_row(r, &f, &st, 1, err);
+    if (!rc) rc = fill_result(&f, &st, p, r->res, err);
+    film_free(&f);
+    return rc;
+}
+
+int dp_render(const dp_render_request *rq, dp_render_result *res, dp_error *err)
+{
+    memset(res, 0, sizeof *res);
+    dp_stop_flag own_stop = 0;
+    api_run r = {.rq = rq, .res = res, .stop = rq->stop ? rq->stop : &own_stop, .last_row = -1e300};
+    scene s;
+    if (load(rq, &s, err)) {
+        err->kind = DP_ERROR_INPUT;
+        return -1;
+    }
+    render_plan p;
+    int rc = plan_resolve(&s, &p, err);
+    if (rc) err->kind = DP_ERROR_INPUT;
+    else {
+        rc = run(&r, &s, &p, err);
+        plan_free(&p);
+    }
+    image_free(&r.ref);
+    scene_free(&s);
+    return rc;
+}
+
+void dp_render_result_free(dp_render_result *res)
+{
+    free(res->image);
+    free(res->frames);
+    free(res->frame_times);
+    free(res->plan_json);
+    free(res->integrator);
+    free(res->warnings);
+    free(res->log);
+    memset(res, 0, sizeof *res);
+}

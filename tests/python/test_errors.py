@@ -1,0 +1,89 @@
+"""Bad input raises dartspp.SceneError naming the file or the key, before any work (docs/python.md §4)."""
+import json
+
+import numpy as np
+import pytest
+
+import dartspp
+
+
+@pytest.mark.parametrize("change, words", [
+    (lambda s: s["integrator"].update(photon_count=-5), ["integrator", "photon_count"]),
+    (lambda s: s["camera"].update(fov="wide"), ["camera", "fov"]),
+    (lambda s: s["primitives"].append({"type": "mesh", "file": "nowhere.obj", "bsdf": "white"}), ["nowhere.obj"]),
+    (lambda s: s["primitives"].append({"type": "quad", "bsdf": "no-such-bsdf"}), ["no-such-bsdf"]),
+], ids=["range", "type", "missing-mesh", "missing-bsdf"])
+def test_scene_errors_name_the_key(fogbox, change, words):
+    change(fogbox)
+    with pytest.raises(dartspp.SceneError) as e:
+        dartspp.render(fogbox, spp=1)
+    for w in words:
+        assert w in str(e.value)
+    assert "<dict scene>" in str(e.value) or "nowhere.obj" in str(e.value)
+
+
+def test_file_errors(tmp_path):
+    with pytest.raises(dartspp.SceneError, match="no-such-scene.json"):
+        dartspp.render(tmp_path / "no-such-scene.json", spp=1)
+    bad = tmp_path / "bad.json"
+    bad.write_text('{"camera": {"resolution": [8, 8],}')
+    with pytest.raises(dartspp.SceneError, match=r"bad.json:1:\d+: malformed JSON"):
+        dartspp.render(bad, spp=1)
+
+
+@pytest.mark.parametrize("kwargs, words", [
+    ({"set": {"photon_count": "many"}}, "photon_count"),
+    ({"set": ["photon_count"]}, "key=value"),
+    ({"set": {"no_such_key": 1}}, "no_such_key"),
+    ({"spp": 0, "time": 0}, "nothing would end"),
+    ({"spp": -1}, "spp"),
+    ({"spp": 2.5}, "spp"),
+    ({"time": "10s"}, "time"),
+    ({"threads": 0}, "threads"),
+    ({"seed": -1}, "seed"),
+    ({"reference": np.zeros((3, 4, 3), np.float32)}, "array is 4x3 but the render is 40x30"),
+    ({"reference": np.zeros((30, 40), np.float32)}, "(height, width, 3)"),
+    ({"reference": "/nonexistent/ref.exr"}, "/nonexistent/ref.exr"),
+    ({"max_memory": 1e6}, "memory"),
+    ({"progress": 5}, "progress"),
+    ({"base_dir": "/tmp"}, None),  # legal for a dict scene: below the same for a file
+], ids=lambda v: str(v)[:40])
+def test_option_errors(fogbox, kwargs, words):
+    kwargs = dict({"spp": 1}, **kwargs)
+    if words is None:
+        assert dartspp.render(fogbox, **kwargs).passes == 1
+        return
+    with pytest.raises(dartspp.SceneError, match=None) as e:
+        dartspp.render(fogbox, **kwargs)
+    assert words in str(e.value)
+
+
+def test_reference_with_nan(fogbox):
+    ref = np.ones((30, 40, 3), np.float32)
+    ref[5, 6, 0] = np.inf
+    with pytest.raises(dartspp.SceneError, match="NaN or Inf"):
+        dartspp.render(fogbox, spp=1, reference=ref)
+
+
+def test_scene_type_and_base_dir(tmp_path, fogbox):
+    with pytest.raises(dartspp.SceneError, match="expected a path or a dict"):
+        dartspp.render(42, spp=1)
+    path = tmp_path / "s.json"
+    path.write_text(json.dumps(fogbox))
+    with pytest.raises(dartspp.SceneError, match="base_dir"):
+        dartspp.render(path, spp=1, base_dir=tmp_path)
+
+
+def test_scene_error_is_a_value_error():
+    """SceneError is a dartspp.Error and a ValueError, so either catches it."""
+    assert issubclass(dartspp.SceneError, dartspp.Error) and issubclass(dartspp.SceneError, ValueError)
+    assert issubclass(dartspp.Interrupted, KeyboardInterrupt)
+
+
+def test_unbounded_scene_refused(fogbox):
+    """A scene whose renderer sets no limit (spp 0, a negative timeout), rendered without spp or time, is
+    refused; with either it renders."""
+    fogbox["renderer"].update(spp=0, timeout="-1")
+    with pytest.raises(dartspp.SceneError, match="nothing would end the render"):
+        dartspp.render(fogbox)
+    assert dartspp.render(fogbox, spp=1).passes == 1
