@@ -366,10 +366,10 @@ static void test_files(void **state)
         free(raw);
     }
     /* the cache builds once and then loads the same bits */
-    assert_int_equal(eda_table_cached(&c, dir, 0.2, 0.01, -0.3, NR, NS, NC, 8.0, 0.2, 0.999, &err), 0);
+    assert_int_equal(eda_table_cached(&c, dir, 0.2, 0.01, -0.3, NR, NS, NC, 8.0, 0.2, 0.999, NULL, &err), 0);
     assert_memory_equal(a.cdf, c.cdf, sizeof(float) * NR * NS * NC);
     eda_table_free(&c);
-    assert_int_equal(eda_table_cached(&c, dir, 0.2, 0.01, -0.3, NR, NS, NC, 8.0, 0.2, 0.999, &err), 0);
+    assert_int_equal(eda_table_cached(&c, dir, 0.2, 0.01, -0.3, NR, NS, NC, 8.0, 0.2, 0.999, NULL, &err), 0);
     assert_memory_equal(a.cdf, c.cdf, sizeof(float) * NR * NS * NC);
     eda_table_free(&c);
     /* a medium without scattering: refused, the reason given */

@@ -21,6 +21,8 @@
 #ifndef DARTSPP_DARTS_H
 #define DARTSPP_DARTS_H
 
+#include <stdio.h>
+
 #include "dartspp/core.h"
 #include "dartspp/plan.h"
 #include "dartspp/scene.h"
@@ -223,10 +225,10 @@ int eda_table_load(eda_table *t, const char *path, dp_error *err);
  * come from the scene (max_T, dT_start, dT_end); checks every CDF. */
 int eda_table_load_raw(eda_table *t, const char *path, double s_max, double r_lo, double r_hi, dp_error *err);
 /* The cached table for these parameters: DIR/eda-<σs>-<σa>-<g>-<s_max>-<r_lo>-<r_hi>-<shape>.bin, built
- * and stored there first when missing (announced on stderr with its build time); a folder that cannot store
- * it is a warning on stderr, and the table is used from memory. */
+ * and stored there first when missing (announced on `messages` with its build time); a folder that cannot
+ * store it is a warning there, and the table is used from memory. messages NULL: silent. */
 int eda_table_cached(eda_table *t, const char *dir, double sigma_s, double sigma_a, double g, int n_ratio, int n_s,
-                     int n_cos, double s_max, double r_lo, double r_hi, dp_error *err);
+                     int n_cos, double s_max, double r_lo, double r_hi, FILE *messages, dp_error *err);
 
 /* The CDF of the cell of a record, or NULL where the table does not cover it (record invalid, C/T outside
  * [r_lo, r_hi)); the S index is clamped to the last column. */
@@ -250,8 +252,9 @@ typedef struct eda_set {
 } eda_set;
 
 /* Loads (table_path), or takes from the cache folder p->eda_table_dir (building it there when
- * missing), the table of every medium the plan gives EDA. A plan without EDA touches no file. */
-int eda_set_prepare(const scene *s, const render_plan *p, eda_set *set, dp_error *err);
+ * missing, said on `messages` unless NULL), the table of every medium the plan gives EDA. A plan without EDA
+ * touches no file. */
+int eda_set_prepare(const scene *s, const render_plan *p, eda_set *set, FILE *messages, dp_error *err);
 void eda_set_free(eda_set *set);
 /* Bytes the tables of eda_set_prepare will hold (the memory guard's estimate), without touching a file. */
 size_t eda_set_bytes(const scene *s, const render_plan *p);

@@ -88,6 +88,7 @@ typedef struct {
     long spp;               /* passes; < 0: as the scene says */
     double time_limit;      /* seconds; < 0: as the scene says */
     int progress;           /* progress line on stderr */
+    FILE *messages;         /* where the preparations say what they do (an EDA table built); NULL: silent */
     /* Set asynchronously (SIGINT/SIGTERM): the pass in progress stops within a batch of light paths or a row
      * of pixels and is dropped; render_scene returns with the completed passes. May be NULL. */
     const dp_stop_flag *stop;

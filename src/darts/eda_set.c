@@ -8,7 +8,8 @@
 /* The medium's table: the authors' headerless file (relative to the scene's folder), or our cache. The
  * table is scalar: σs and σa are averaged over the colour channels (it only steers directions, the
  * weights stay exact). S range: max_T, else the latest residual any vertex in the medium can have. */
-static int load_for_medium(const scene *s, const render_plan *p, const medium *m, eda_table *t, dp_error *err)
+static int load_for_medium(const scene *s, const render_plan *p, const medium *m, eda_table *t, FILE *messages,
+                           dp_error *err)
 {
     if (m->eda_table_path[0]) {
         char path[2048];
@@ -24,10 +25,10 @@ static int load_for_medium(const scene *s, const render_plan *p, const medium *m
     if (!(s_max > 0.0))
         return dp_fail(err, "%s: medium '%s': EDA needs a gate that ends after time 0", s->path, m->name);
     return eda_table_cached(t, p->keys.eda_table_dir, v3_avg(m->sigma_s), v3_avg(m->sigma_a), g, p->keys.eda_shape[0],
-                            p->keys.eda_shape[1], p->keys.eda_shape[2], s_max, m->eda_r_lo, m->eda_r_hi, err);
+                            p->keys.eda_shape[1], p->keys.eda_shape[2], s_max, m->eda_r_lo, m->eda_r_hi, messages, err);
 }
 
-int eda_set_prepare(const scene *s, const render_plan *p, eda_set *set, dp_error *err)
+int eda_set_prepare(const scene *s, const render_plan *p, eda_set *set, FILE *messages, dp_error *err)
 {
     memset(set, 0, sizeof *set);
     int n = s->medium_count;
@@ -43,7 +44,7 @@ int eda_set_prepare(const scene *s, const render_plan *p, eda_set *set, dp_error
     for (int i = 0; i < n; i++) {
         const medium *m = &s->media[i];
         if (!p->eda[i].on) continue;
-        if (load_for_medium(s, p, m, &set->tables[i], err)) {
+        if (load_for_medium(s, p, m, &set->tables[i], messages, err)) {
             eda_set_free(set);
             return -1;
         }

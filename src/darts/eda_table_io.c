@@ -168,31 +168,35 @@ int eda_table_load_raw(eda_table *t, const char *path, double s_max, double r_lo
     return check_cdfs(t, path, err);
 }
 
-/* Progress in place on a terminal; nothing in logs (the start and end lines say enough there). */
+/* Progress in place on a terminal; nothing in logs (the start and end lines say enough there). ctx: the
+ * messages' stream. */
 static void build_progress(void *ctx, int done, int rows)
 {
-    (void)ctx;
-    if (isatty(2) && (done % 8 == 0 || done == rows)) fprintf(stderr, "\rEDA table: row %d of %d", done, rows);
+    FILE *out = ctx;
+    if (isatty(fileno(out)) && (done % 8 == 0 || done == rows)) fprintf(out, "\rEDA table: row %d of %d", done, rows);
 }
 
 int eda_table_cached(eda_table *t, const char *dir, double sigma_s, double sigma_a, double g, int n_ratio, int n_s,
-                     int n_cos, double s_max, double r_lo, double r_hi, dp_error *err)
+                     int n_cos, double s_max, double r_lo, double r_hi, FILE *messages, dp_error *err)
 {
     char path[4096];
     snprintf(path, sizeof path, "%s/eda-s%.9g-a%.9g-g%.9g-S%.9g-r%.9g-%.9g-%dx%dx%d.bin", dir, sigma_s, sigma_a, g,
              s_max, r_lo, r_hi, n_ratio, n_s, n_cos);
     if (access(path, F_OK) == 0) return eda_table_load(t, path, err);
     double t0 = dp_seconds();
-    fprintf(stderr, "EDA table: building %s\n", path);
-    if (eda_table_build(t, sigma_s, sigma_a, g, n_ratio, n_s, n_cos, s_max, r_lo, r_hi, build_progress, NULL, err))
+    if (messages) fprintf(messages, "EDA table: building %s\n", path);
+    if (eda_table_build(t, sigma_s, sigma_a, g, n_ratio, n_s, n_cos, s_max, r_lo, r_hi,
+                        messages ? build_progress : NULL, messages, err))
         return -1;
-    fprintf(stderr, "%sEDA table: built in %.1f s\n", isatty(2) ? "\r" : "", dp_seconds() - t0);
+    if (messages)
+        fprintf(messages, "%sEDA table: built in %.1f s\n", isatty(fileno(messages)) ? "\r" : "", dp_seconds() - t0);
     /* the table is built and correct: a folder that cannot keep it costs the next render a rebuild, not
      * this render its work */
     dp_error save_err;
-    if (eda_table_save(t, path, &save_err))
-        fprintf(stderr, "warning: cannot store the EDA table in %s: %s; using it from memory\n", dir, save_err.msg);
-    else
-        fprintf(stderr, "EDA table: stored for later renders\n");
+    int saved = !eda_table_save(t, path, &save_err);
+    if (messages && !saved)
+        fprintf(messages, "warning: cannot store the EDA table in %s: %s; using it from memory\n", dir, save_err.msg);
+    else if (messages)
+        fprintf(messages, "EDA table: stored for later renders\n");
     return 0;
 }

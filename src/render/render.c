@@ -234,7 +234,7 @@ static int render_passes(const scene *s, const render_plan *p, const render_opti
                          dp_error *err)
 {
     eda_set eda = {0};
-    int ready = !eda_set_prepare(s, p, &eda, err) &&
+    int ready = !eda_set_prepare(s, p, &eda, opt->messages, err) &&
                 !film_init(f, s->cam.width, s->cam.height, &p->window, err) &&
                 !(opt->resume && film_resume(f, opt->resume, err));
     const render_cluster *c = opt->cluster && opt->cluster->size > 1 ? opt->cluster : NULL;

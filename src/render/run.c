@@ -24,7 +24,8 @@ static void start(render_run_job *j, const render_request *rq, const render_clus
     j->cl = cluster && cluster->size > 1 ? cluster : NULL;
     j->rank = j->cl ? j->cl->rank : 0;
     j->quiet = rq->quiet || j->rank != 0; /* rank 0 speaks for the job */
-    j->ro = (render_options){.threads = rq->threads, .seed = rq->seed, .spp = rq->spp, .time_limit = rq->time_limit};
+    j->ro = (render_options){.threads = rq->threads, .seed = rq->seed, .spp = rq->spp, .time_limit = rq->time_limit,
+                             .messages = stderr};
     /* Interrupts count from here: while loading, an interrupt exits at once (nothing to keep yet). */
     interrupt_install(&j->ro);
 }

@@ -244,3 +244,14 @@ def test_renders_in_threads_side_by_side(fogbox):
     for t in ts:
         t.join()
     assert all(np.array_equal(a, b) for a, b in zip(alone, together))
+
+
+def test_eda_table_build_is_silent(capfd, tmp_path):
+    """Building an EDA table (the CLI says so on stderr) prints nothing through Python; the table is stored
+    all the same."""
+    scene = small_fogbox(eda=True, eda_shape=[8, 8, 16], eda_table_dir=str(tmp_path / "tables"))
+    r = dartspp.render(scene, spp=1)
+    assert r.plan["eda"] and r.passes == 1
+    assert len(list((tmp_path / "tables").glob("eda-*.bin"))) == 1
+    out, err = capfd.readouterr()
+    assert out == "" and err == ""
