@@ -12,9 +12,12 @@ import dartspp
 from conftest import ROOT, small_fogbox
 
 CHILD = textwrap.dedent("""
-    import json, sys, time
+    import json, signal, sys, time
     import numpy as np
     import dartspp
+    # Python's own handler, as in a terminal: a parent that ignores SIGINT (a background job, CI) passes the
+    # ignore on, and a process that ignores SIGINT is not interrupted (docs/python.md §5)
+    signal.signal(signal.SIGINT, signal.default_int_handler)
     scene = json.loads(sys.argv[1])
     def progress(passes, seconds, radii):
         if passes == 2:
