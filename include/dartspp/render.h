@@ -194,6 +194,10 @@ typedef struct {
 
 /* have_reference: an error log holds a reference image. */
 void render_memory_estimate(const scene *s, const render_plan *p, int have_reference, memory_estimate *m);
+/* The guard: the estimate (into m) against max_memory bytes (0: memory_available()), shared by ranks_on_node
+ * processes; 0 when it fits, else -1 with err naming the scene, both sizes and the key that drives the most. */
+int render_memory_check(const scene *s, const render_plan *p, int have_reference, double max_memory, int ranks_on_node,
+                        memory_estimate *m, dp_error *err);
 /* The item with a key that needs the most (NULL if none). */
 const memory_item *memory_largest(const memory_estimate *m);
 /* Bytes the process can still use: MemAvailable, lowered to the cgroup's limit when there is one; -1 if

@@ -48,22 +48,6 @@ static int load(const dp_render_request *rq, scene *s, dp_error *err)
     return scene_load_text(rq->scene_text, rq->scene_name ? rq->scene_name : "<scene>", rq->base_dir, &lo, s, err);
 }
 
-/* The memory guard of `dartspp render` (run_prepare.c): the plan's estimate against the limit, naming the key
- * that drives it. */
-static int check_memory(const scene *s, const render_plan *p, const dp_render_request *rq, dp_error *err)
-{
-    memory_estimate m;
-    render_memory_estimate(s, p, rq->reference_path || rq->reference_rgb, &m);
-    double limit = rq->max_memory > 0 ? rq->max_memory : memory_available();
-    if (!(limit > 0) || m.total <= limit) return 0;
-    const memory_item *big = memory_largest(&m);
-    char need[32], have[32];
-    memory_format_bytes(m.total, need, sizeof need);
-    memory_format_bytes(limit, have, sizeof have);
-    return dp_fail(err, "%s: the render needs about %s of memory, more than the %s available%s%s", s->path, need,
-                   have, big ? "; driven by " : "", big ? big->key : "");
-}
-
 static int read_reference(api_run *r, const scene *s, dp_error *err)
 {
     const dp_render_request *rq = r->rq;
@@ -190,9 +174,11 @@ static int run(api_run *r, scene *s, render_plan *p, dp_error *err)
 {
     const dp_render_request *rq = r->rq;
     render_options ro = {.plan = p, .seed = rq->seed, .stop = r->stop, .after_pass = after_pass, .after_pass_ctx = r};
+    memory_estimate mem;
     if (resolve_budget(rq, s, p, &ro.spp, &ro.time_limit, err)) return -1;
-    if (plan_text(s, p, r->res, err) || check_memory(s, p, rq, err) || read_reference(r, s, err) ||
-        collect_warnings(s, p, r->res, err)) {
+    int have_ref = rq->reference_path || rq->reference_rgb;
+    if (plan_text(s, p, r->res, err) || render_memory_check(s, p, have_ref, rq->max_memory, 1, &mem, err) ||
+        read_reference(r, s, err) || collect_warnings(s, p, r->res, err)) {
         if (err->kind == DP_ERROR_INTERNAL) return -1;
         err->kind = DP_ERROR_INPUT;
         return -1;

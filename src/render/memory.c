@@ -137,3 +137,23 @@ void memory_format_bytes(double bytes, char *out, size_t n)
     }
     snprintf(out, n, u ? "%.1f %s" : "%.0f %s", bytes, unit[u]);
 }
+
+int render_memory_check(const scene *s, const render_plan *p, int have_reference, double max_memory, int ranks_on_node,
+                        memory_estimate *m, dp_error *err)
+{
+    render_memory_estimate(s, p, have_reference, m);
+    double limit = max_memory > 0 ? max_memory : memory_available();
+    if (ranks_on_node > 1 && limit > 0) limit /= ranks_on_node;
+    if (!(limit > 0) || m->total <= limit) return 0;
+    const memory_item *big = memory_largest(m);
+    char need[32], have[32], item[32], drives[256] = "";
+    memory_format_bytes(m->total, need, sizeof need);
+    memory_format_bytes(limit, have, sizeof have);
+    if (big) {
+        memory_format_bytes(big->bytes, item, sizeof item);
+        snprintf(drives, sizeof drives, "; %s drives it (%s: %s)", big->key, big->what, item);
+    }
+    return dp_fail(err, "%s: the render needs about %s of memory, more than the %s %s%s%s", s->path, need, have,
+                   max_memory > 0 ? "allowed by the memory limit (--max-memory)" : "available",
+                   ranks_on_node > 1 ? " to each of the ranks on this machine" : "", drives);
+}

@@ -56,28 +56,12 @@ static int check_outputs(render_run_job *j, dp_error *err)
     return render_outputs_check(j->out, j->s.cam.width, j->s.cam.height, j->p.window.frame_count, j->rq->skip, err);
 }
 
-/* The memory guard: the plan's estimate against the limit, naming the key that drives it when it does not
- * fit. Every rank on this machine needs as much. */
+/* The memory guard; every rank on this machine needs as much. */
 static int check_memory(render_run_job *j, dp_error *err)
 {
     const render_request *rq = j->rq;
-    int ranks_on_node = j->cl ? j->cl->ranks_on_node : 1;
-    render_memory_estimate(&j->s, &j->p, rq->reference != NULL, &j->mem);
-    const memory_estimate *m = &j->mem;
-    double limit = rq->max_memory > 0 ? rq->max_memory : memory_available();
-    if (ranks_on_node > 1 && limit > 0) limit /= ranks_on_node;
-    if (!(limit > 0) || m->total <= limit) return 0;
-    const memory_item *big = memory_largest(m);
-    char need[32], have[32], item[32], drives[256] = "";
-    memory_format_bytes(m->total, need, sizeof need);
-    memory_format_bytes(limit, have, sizeof have);
-    if (big) {
-        memory_format_bytes(big->bytes, item, sizeof item);
-        snprintf(drives, sizeof drives, "; %s drives it (%s: %s)", big->key, big->what, item);
-    }
-    return dp_fail(err, "%s: the render needs about %s of memory, more than the %s %s%s%s", j->s.path, need, have,
-                   rq->max_memory > 0 ? "allowed by --max-memory" : "available",
-                   ranks_on_node > 1 ? " to each of the ranks on this machine" : "", drives);
+    return render_memory_check(&j->s, &j->p, rq->reference != NULL, rq->max_memory, j->cl ? j->cl->ranks_on_node : 1,
+                               &j->mem, err);
 }
 
 /* Checkpoints are rank 0's, every --checkpoint seconds, else as the scene says. */
