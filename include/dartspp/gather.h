@@ -37,7 +37,9 @@ typedef struct {
  * Returns the rays traced; non-finite contributions are dropped and counted in f->nonfinite. */
 double sensor_pass(const scene *s, const gather_input *g, film *f, uint64_t seed, long iteration);
 
-/* Bytes the sensor pass allocates for a w × h image when the scene has a volume map (its primary lines). */
-size_t sensor_pass_bytes(int width, int height);
+/* Bytes the sensor pass allocates when the scene has a volume map: its primary lines and, with the splat
+ * (volume_gather "splat"), the splat's scratch for `photons` volume photons at radius r, estimated from a
+ * sample of n of them (the memory guard). */
+double sensor_pass_bytes(const scene *s, int splat, const photon *sample, size_t n, double r, double photons);
 
 #endif

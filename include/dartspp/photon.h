@@ -125,4 +125,7 @@ void photon_pass_input_init(photon_pass_input *in, const scene *s, const render_
 int photon_pass(const scene *s, const photon_pass_input *in, photon_set *out, dp_error *err);
 void photon_set_free(photon_set *ps);
 
+/* Bytes a photon set's array of n photons holds at its capacity (it grows by doubling: less than 2n). */
+double photon_array_bytes(double n);
+
 #endif

@@ -31,7 +31,10 @@ static void usage(FILE *f)
  * of tens to hundreds of MiB; handed back to the kernel each time (munmap, heap trims), they are paid again as
  * page faults, and each unmapping stops the other threads for a TLB shootdown — within one process only, so
  * two threads scaled worse than two processes (dragon 480², 10 passes, 2 threads ÷ 1: 1.77 before, 1.86 with
- * this). The peak resident size is unchanged: the same blocks are reused. Set here, by the program that owns
+ * this). The peak resident size stays that of one pass (dragon 480², 25 passes: 179 MiB), since the next
+ * pass reuses the same blocks — as long as nothing asks the heap for aligned huge-page blocks: the volume map
+ * once did (2 MiB-aligned arrays with MADV_HUGEPAGE), and the peak then grew pass after pass to 610 MiB
+ * (tests/test_cli.c checks the peak against the memory guard's estimate). Set here, by the program that owns
  * the process, not by the library. */
 static void keep_freed_memory(void)
 {

@@ -30,6 +30,11 @@ int volume_splat_applies(const scene *s, const gather_input *g);
 /* Bytes of the per-pass buffers for a w × h image (the memory guard's estimate). */
 size_t volume_splat_bytes(int width, int height);
 
+/* The splat's scratch (the memory guard's estimate) for `photons` volume photons at radius r, from a sample
+ * of n of them: footprints, tile starts and order, and the photon-in-tile entries (at most the cap beyond
+ * which the pass gathers by beam queries instead). */
+double volume_splat_scratch_bytes(const camera *c, const photon *sample, size_t n, double r, double photons);
+
 /* The point-beam 2D gather of every volume photon into the pixels whose primary line passes within r of
  * it, tile by tile (each tile's photons in index order, so the film does not depend on the thread count).
  * Returns 0, or -1 when the tile lists would exceed their memory cap (the caller then gathers the lines by

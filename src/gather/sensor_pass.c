@@ -248,7 +248,11 @@ static void gather_lines_by_beams(const scene *s, const gather_input *g, film *f
     f->nonfinite += bad;
 }
 
-size_t sensor_pass_bytes(int width, int height) { return volume_splat_bytes(width, height); }
+double sensor_pass_bytes(const scene *s, int splat, const photon *sample, size_t n, double r, double photons)
+{
+    double lines = (double)volume_splat_bytes(s->cam.width, s->cam.height);
+    return lines + (splat ? volume_splat_scratch_bytes(&s->cam, sample, n, r, photons) : 0.0);
+}
 
 /* The camera walks (surface gathers, continuations, beam queries off the primary line), then the volume
  * gather on the primary lines: photon by photon (volume_splat.c) where it applies, else by a beam query

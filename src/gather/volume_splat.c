@@ -76,6 +76,13 @@ static footprint photon_footprint(const camera *c, vec3 x, double r)
     return fp;
 }
 
+/* The tiles a footprint meets (0 when no pixel sees the photon). */
+static size_t footprint_tiles(const footprint *f)
+{
+    if (f->x1 < f->x0) return 0;
+    return (size_t)(f->y1 / TILE - f->y0 / TILE + 1) * (size_t)(f->x1 / TILE - f->x0 / TILE + 1);
+}
+
 typedef struct {
     int tiles_x, tiles_y;
     footprint *fp;    /* per photon */
@@ -108,7 +115,7 @@ static int tile_bins_build(tile_bins *b, const camera *c, const photon *ph, size
         if (f->x1 < f->x0) continue;
         for (int ty = f->y0 / TILE; ty <= f->y1 / TILE; ty++)
             for (int tx = f->x0 / TILE; tx <= f->x1 / TILE; tx++) b->start[(size_t)ty * b->tiles_x + tx + 1]++;
-        total += (size_t)(f->y1 / TILE - f->y0 / TILE + 1) * (size_t)(f->x1 / TILE - f->x0 / TILE + 1);
+        total += footprint_tiles(f);
         if (total > TILE_ENTRIES_MAX) return -1;
     }
     for (size_t t = 0; t < tiles; t++) b->start[t + 1] += b->start[t];
@@ -248,6 +255,17 @@ int volume_splat(const scene *s, const gather_input *g, film *f, const primary_l
     free(order);
     tile_bins_free(&b);
     return 0;
+}
+
+double volume_splat_scratch_bytes(const camera *c, const photon *sample, size_t n, double r, double photons)
+{
+    double tiles = (double)((c->width + TILE - 1) / TILE) * (double)((c->height + TILE - 1) / TILE), entries = 0.0;
+    for (size_t i = 0; i < n; i++) {
+        footprint f = photon_footprint(c, v3(sample[i].pos[0], sample[i].pos[1], sample[i].pos[2]), r);
+        entries += (double)footprint_tiles(&f);
+    }
+    entries = n > 0 ? fmin(entries * photons / (double)n, (double)TILE_ENTRIES_MAX) : 0.0;
+    return photons * sizeof(footprint) + tiles * (2 * sizeof(size_t) + sizeof(tile_load)) + entries * sizeof(uint32_t);
 }
 
 void primary_line_gather_beam(const scene *s, const gather_input *g, film_pixel *pix, const primary_line *line)

@@ -14,10 +14,12 @@ typedef struct {
     size_t n, cap;
 } photon_buf;
 
+#define PHOTON_BUF_FIRST 1024 /* a photon buffer's first capacity; it then doubles (photon_array_bytes) */
+
 static inline int buf_push(photon_buf *b, const photon *ph)
 {
     if (b->n == b->cap) {
-        size_t cap = b->cap ? 2 * b->cap : 1024;
+        size_t cap = b->cap ? 2 * b->cap : PHOTON_BUF_FIRST;
         photon *q = realloc(b->p, cap * sizeof(photon));
         if (!q) return -1;
         b->p = q;

@@ -484,6 +484,15 @@ int photon_pass(const scene *s, const photon_pass_input *in, photon_set *out, dp
     return 0;
 }
 
+double photon_array_bytes(double n)
+{
+    if (!(n > 0)) return 0;
+    if (!isfinite(n)) return HUGE_VAL;
+    double cap = PHOTON_BUF_FIRST;
+    while (cap < n) cap *= 2;
+    return cap * sizeof(photon);
+}
+
 void photon_set_free(photon_set *ps)
 {
     free(ps->vol);

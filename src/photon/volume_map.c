@@ -19,13 +19,11 @@
 #include <float.h>
 #include <stdint.h>
 #include <stdlib.h>
-#include <sys/mman.h>
 
 #define LEAF_MAX 16                 /* photons per leaf, at most (tuning: bench/results/volume_map.md) */
 #define STACK_MAX 64                /* traversal stack; the tree depth is below 32 */
 #define PAD_REL 1e-12               /* box padding relative to coordinate size (~4500 double ulps) */
 #define TASK_MIN ((size_t)1 << 15)  /* ranges smaller than this are built without spawning tasks */
-#define HUGE_PAGE ((size_t)2 << 20) /* arrays at least this big are aligned for transparent huge pages */
 #define INSERTION_MAX 16            /* selection finishes ranges this short by insertion sort */
 #define AXIS_SAMPLES 64             /* points looked at to choose a split axis */
 #define PIVOT_SAMPLES 255           /* keys sampled to place a pivot in long ranges */
@@ -267,20 +265,6 @@ static void build_node(const builder *b, size_t node, int level, size_t j)
     union_times(&b->times[node], &b->times[2 * node + 1], &b->times[2 * node + 2]);
 }
 
-/* malloc, but big arrays come 2 MiB-aligned and ask for transparent huge pages: a 10^7-photon map then
- * takes hundreds of page faults instead of ~10^5 to fill, and queries miss the TLB far less. */
-static void *alloc_array(size_t count, size_t size)
-{
-    size_t bytes = count * size;
-    if (bytes < HUGE_PAGE) return malloc(bytes);
-    bytes = (bytes + HUGE_PAGE - 1) / HUGE_PAGE * HUGE_PAGE;
-    void *p = aligned_alloc(HUGE_PAGE, bytes);
-#ifdef MADV_HUGEPAGE
-    if (p) madvise(p, bytes, MADV_HUGEPAGE); /* only a hint: ignoring its failure is fine */
-#endif
-    return p;
-}
-
 /* Copies the positions into build items (in parallel: this is also the first touch of their pages); fails on
  * a non-finite one, naming the first. Returns the largest |coordinate|. */
 static int gather_points(const photon *ph, size_t n, point_item *pts, double *max_abs, dp_error *err)
@@ -345,10 +329,10 @@ volume_photon_map *volume_map_build(const photon *ph, size_t n, double r, dp_err
     if (n == 0) return m;
     m->depth = leaf_depth(n);
     size_t node_count = ((size_t)2 << m->depth) - 1;
-    m->boxes = alloc_array(node_count, sizeof *m->boxes);
-    m->times = alloc_array(node_count, sizeof *m->times);
-    m->points = alloc_array(n, sizeof *m->points);
-    m->photons = alloc_array(n, sizeof *m->photons);
+    m->boxes = malloc(node_count * sizeof *m->boxes);
+    m->times = malloc(node_count * sizeof *m->times);
+    m->points = malloc(n * sizeof *m->points);
+    m->photons = malloc(n * sizeof *m->photons);
     if (!m->boxes || !m->times || !m->points || !m->photons) {
         dp_fail_kind(err, DP_ERROR_MEMORY, "volume photon map: out of memory for %zu photons", n);
         volume_map_free(m);

@@ -1,9 +1,10 @@
 /* The memory guard: what a render plan will hold at its peak, item by item with the key that drives each,
  * and what the machine can give (MemAvailable, and the cgroup limit when there is one). Everything of one
- * iteration is alive at once during the sensor pass (photon sets, both maps, film, tables, geometry), so the
- * peak is the sum. How many photons a light path stores depends on the scene (the DARTS time tests drop
- * most surface photons), so a pilot batch of light paths measures it; the budgets cap the extrapolation.
- * Written by hand: no library estimates this. */
+ * iteration is alive at once during the sensor pass (the photon sets' arrays at their capacity, both maps,
+ * the primary lines and the splat's scratch, film, tables, geometry), so the peak is the sum. How many
+ * photons a light path stores depends on the scene (the DARTS time tests drop most surface photons), so a
+ * pilot batch of light paths measures it; the budgets cap the extrapolation. tests/test_cli.c checks the
+ * estimate against the measured peak. Written by hand: no library estimates this. */
 #include "dartspp/darts.h"
 #include "dartspp/photon.h"
 #include "dartspp/gather.h"
@@ -27,21 +28,22 @@ static void add(memory_estimate *m, const char *what, const char *key, double by
     m->total += bytes;
 }
 
-/* Volume and surface photons one light path stores on average: one photon pass of a single batch (a few
- * milliseconds), without EDA tables and without budget cuts. Returns 0 on failure (then the budgets count). */
-static int pilot_photons_per_path(const scene *s, const render_plan *p, double *vol, double *surf)
+/* One photon pass of a single batch of light paths (a few milliseconds), without EDA tables and without
+ * budget cuts: how many volume and surface photons a light path stores, and a sample of the volume photons
+ * for the splat's footprints. *chains: the render's passes will feed the surface map by surface chains once
+ * the volume budget is full, which the pilot never is. Returns 0 on failure (then the budgets count). */
+static int pilot_pass(const scene *s, const render_plan *p, photon_set *ps, int *chains)
 {
     photon_pass_input pilot;
     photon_pass_input_init(&pilot, s, p, NULL, 0x70696c6f74ULL, 0, NULL);
+    *chains = pilot.surface_chains && pilot.guide.active && pilot.include_surfaces; /* as photon_pass decides */
     pilot.light_paths = dp_fmin(p->light_paths, PHOTON_PASS_BATCH);
     pilot.volume_budget = pilot.surface_budget = pilot.light_paths * 1e4; /* no budget cut */
-    photon_set ps;
     dp_error err;
-    if (photon_pass(s, &pilot, &ps, &err) || ps.paths <= 0) return 0;
-    *vol = (double)ps.n_vol / ps.paths;
-    *surf = (double)ps.n_surf / ps.paths;
-    photon_set_free(&ps);
-    return 1;
+    if (photon_pass(s, &pilot, ps, &err)) return 0;
+    if (ps->paths > 0) return 1;
+    photon_set_free(ps);
+    return 0;
 }
 
 void render_memory_estimate(const scene *s, const render_plan *p, int have_reference, memory_estimate *m)
@@ -67,19 +69,30 @@ void render_memory_estimate(const scene *s, const render_plan *p, int have_refer
     }
     if (p->type != INTEGRATOR_PHOTON_POINTS) return;
     add(m, "EDA tables", "integrator.eda_shape", (double)eda_set_bytes(s, p));
-    double V = p->volume_budget, S = p->surface_budget, ph = sizeof(photon), rate_v = 1, rate_s = 1;
-    if (pilot_photons_per_path(s, p, &rate_v, &rate_s)) { /* the budgets cap what the light paths store */
-        V = dp_fmin(V, rate_v * p->light_paths);
-        S = dp_fmin(S, rate_s * p->light_paths);
+    double V = p->volume_budget, S = p->surface_budget, batch_photons = 1.0;
+    photon_set pilot;
+    int chains, piloted = pilot_pass(s, p, &pilot, &chains);
+    /* the budgets cap what the light paths store; surface chains start once the volume budget is full, which
+     * the pilot's single batch never sees, and can fill the surface budget: counted full */
+    if (piloted) {
+        V = dp_fmin(V, (double)pilot.n_vol / pilot.paths * p->light_paths);
+        if (!chains) S = dp_fmin(S, (double)pilot.n_surf / pilot.paths * p->light_paths);
+        batch_photons = dp_fmax((double)(pilot.n_vol + pilot.n_surf) / pilot.paths * PHOTON_PASS_BATCH, 1.0);
     }
-    /* volume_map_bytes is about (16 + 48) B a photon plus the nodes; in double for huge budgets */
+    /* each set's array at its capacity, and its map: volume_map_bytes is about (16 + 56) B a photon plus the
+     * nodes (the surface map is the same tree); in double for huge budgets */
     double per_mapped = (double)volume_map_bytes(1 << 20) / (1 << 20);
     int volume = s->medium_count > 0;
-    if (volume) add(m, "volume photons and their map", "integrator.volume_photon_count", V * (ph + per_mapped));
-    if (volume) add(m, "primary lines of the sensor pass", "camera.resolution", (double)sensor_pass_bytes(1, 1) * px);
+    if (volume)
+        add(m, "volume photons and their map", "integrator.volume_photon_count", photon_array_bytes(V) + V * per_mapped);
+    if (volume) /* the first pass's radius is the largest: the most footprint entries */
+        add(m, "primary lines and splat of the sensor pass", "camera.resolution",
+            sensor_pass_bytes(s, p->volume_splat, piloted ? pilot.vol : NULL, piloted ? pilot.n_vol : 0,
+                              schedule_radius(&p->r_vol, 0), V));
     if (p->keys.include_surfaces || !volume)
-        add(m, "surface photons and their map", "integrator.photon_count", S * (ph + per_mapped));
-    add(m, "photon batch buffers", NULL, PHOTON_PASS_BATCH * dp_fmax(rate_v + rate_s, 1.0) * ph);
+        add(m, "surface photons and their map", "integrator.photon_count", photon_array_bytes(S) + S * per_mapped);
+    add(m, "photon batch buffers", NULL, photon_array_bytes(batch_photons));
+    if (piloted) photon_set_free(&pilot);
 }
 
 const memory_item *memory_largest(const memory_estimate *m)
