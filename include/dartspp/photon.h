@@ -122,6 +122,8 @@ typedef struct {
 
 void photon_pass_input_init(photon_pass_input *in, const scene *s, const render_plan *p, const eda_set *eda,
                             uint64_t seed, long iteration, const dp_stop_flag *stop);
+/* Whether the pass feeds the surface map by surface chains once the volume budget is full. */
+int photon_pass_uses_chains(const photon_pass_input *in);
 int photon_pass(const scene *s, const photon_pass_input *in, photon_set *out, dp_error *err);
 void photon_set_free(photon_set *ps);
 

@@ -435,6 +435,11 @@ static int chain_paths(const scene *s, const photon_pass_input *in, int nt, thre
     return rc;
 }
 
+int photon_pass_uses_chains(const photon_pass_input *in)
+{
+    return in->surface_chains && in->guide.active && in->include_surfaces;
+}
+
 int photon_pass(const scene *s, const photon_pass_input *in, photon_set *out, dp_error *err)
 {
     memset(out, 0, sizeof *out);
@@ -443,7 +448,7 @@ int photon_pass(const scene *s, const photon_pass_input *in, photon_set *out, dp
     int nt = omp_get_max_threads();
     thread_bufs *tb = dp_calloc_cache_aligned((size_t)nt, sizeof(thread_bufs));
     path_count *pc = malloc(PHOTON_PASS_BATCH * sizeof(path_count));
-    int chains = in->surface_chains && in->guide.active && in->include_surfaces;
+    int chains = photon_pass_uses_chains(in);
     int rc = (!tb || !pc) ? -1 : independent_paths(s, in, nt, tb, pc, chains, &pt);
     size_t n_independent = pt.surf.n; /* surface photons of the independent paths */
     if (!rc && chains && pt.bv.full && !pt.interrupted && pt.next < (long)in->light_paths)

@@ -36,7 +36,7 @@ static int pilot_pass(const scene *s, const render_plan *p, photon_set *ps, int 
 {
     photon_pass_input pilot;
     photon_pass_input_init(&pilot, s, p, NULL, 0x70696c6f74ULL, 0, NULL);
-    *chains = pilot.surface_chains && pilot.guide.active && pilot.include_surfaces; /* as photon_pass decides */
+    *chains = photon_pass_uses_chains(&pilot);
     pilot.light_paths = dp_fmin(p->light_paths, PHOTON_PASS_BATCH);
     pilot.volume_budget = pilot.surface_budget = pilot.light_paths * 1e4; /* no budget cut */
     dp_error err;
