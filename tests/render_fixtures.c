@@ -260,7 +260,7 @@ void scene_guide(const scene *s, darts_guide *g)
     render_plan p;
     dp_error err;
     if (plan_resolve(s, &p, &err)) fail_msg("%s", err.msg);
-    darts_guide_init(&p, s->cam.pos, g);
+    darts_guide_init(&p.darts, &p.window, s->cam.pos, g);
     plan_free(&p);
 }
 

@@ -151,7 +151,7 @@ static void test_darts_refractive_index(void **state)
     load_scene(t.path, NULL, 0, &s);
     darts_guide g;
     scene_guide(&s, &g);
-    assert_true(g.active && !g.control_vertices);
+    assert_true(g.active && !g.enable_elliptical);
     assert_float_equal(g.eta_lb, 1.0, 0.0);
     assert_float_equal(g.eta_ub, 4.0 / 3.0, 1e-15);
     scene_free(&s);
@@ -166,7 +166,7 @@ static void test_darts_refractive_index(void **state)
     tmp_scene_write(&t, darts);
     load_scene(t.path, NULL, 0, &s);
     scene_guide(&s, &g);
-    assert_true(g.active && g.control_vertices);
+    assert_true(g.active && g.enable_elliptical);
     scene_free(&s);
     snprintf(cmd, sizeof cmd, DARTSPP_BIN " render %s --spp 1 --quiet --output %s/out.exr", t.path, t.dir);
     assert_int_equal(test_run(cmd, out, sizeof out), 0);

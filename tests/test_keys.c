@@ -305,7 +305,7 @@ static void test_paper_path_trace_darts_keys_reported(void **state)
     if (s.notes && strstr(s.notes, "enable_elliptical")) fail_msg("enable_elliptical reported:\n%s", s.notes);
     render_plan p;
     assert_int_equal(plan_resolve(&s, &p, &err), 0);
-    assert_true(p.darts.active && p.darts.distance_sampling && p.darts.control_vertices);
+    assert_true(p.darts.active && p.darts.enable_guiding && p.darts.enable_elliptical);
     char json[16384];
     assert_int_equal(plan_json(&p, &s, json, sizeof json), 0);
     ASSERT_CONTAINS(json, "\"method\":\"DARTS path tracer\"");

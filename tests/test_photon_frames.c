@@ -137,7 +137,7 @@ static void test_frames_two_pulsed_emitters(void **state)
         assert_true(s.lights[1].pulse.start == 0.45 && s.lights[1].pulse.width == 0.3 && s.lights[0].pulse.start == 0);
         darts_guide g;
         scene_guide(&s, &g);
-        if (m == DARTS) assert_true(g.active && g.control_vertices && g.frames == FR_FRAMES);
+        if (m == DARTS) assert_true(g.active && g.enable_elliptical && g.frames == FR_FRAMES);
         else assert_false(g.active);
         render_totals(&s, 800 + 100 * m, runs[m], passes[m], &t[m]);
         scene_free(&s);

@@ -88,33 +88,33 @@ static void test_darts_and_eda_switches(void **state)
     render_plan p;
     plan_of("", PP GATE R "\"enable_guiding\": true, \"strict_time_width\": true, \"eda\": true, \"eda_alpha\": 0.25", "",
             &s, &p);
-    assert_true(p.darts.active && p.darts.distance_sampling && p.darts.strict);
-    assert_false(p.darts.control_vertices || p.darts.elliptical_asked);
-    assert_true(p.eda[0].on && p.eda[0].alpha == 0.25);
-    assert_false(p.eda[1].on); /* haze does not scatter */
-    assert_true(p.eda_active);
+    assert_true(p.darts.active && p.darts.enable_guiding && p.darts.strict_time_width);
+    assert_false(p.darts.enable_elliptical || p.darts.enable_elliptical_asked);
+    assert_true(p.darts.eda[0].on && p.darts.eda[0].alpha == 0.25);
+    assert_false(p.darts.eda[1].on); /* haze does not scatter */
+    assert_true(p.darts.eda_active);
     plan_done(&s, &p);
 
     plan_of(", \"phase_function\": { \"type\": \"ida\", \"alpha\": 2.5 }", PP GATE R "\"enable_elliptical\": true", "", &s,
             &p);
-    assert_true(p.darts.active && p.darts.control_vertices && !p.darts.distance_sampling);
-    assert_true(p.eda[0].on && p.eda[0].alpha == 2.5);
+    assert_true(p.darts.active && p.darts.enable_elliptical && !p.darts.enable_guiding);
+    assert_true(p.darts.eda[0].on && p.darts.eda[0].alpha == 2.5);
     plan_done(&s, &p);
 
     /* steady state: no bins to aim at, nothing of DARTS, no EDA */
     plan_of("", PP R "\"enable_guiding\": true, \"enable_elliptical\": true, \"eda\": true", "", &s, &p);
     assert_false(p.window.gated);
-    assert_false(p.darts.active || p.darts.control_vertices || p.eda_active || p.eda[0].on);
+    assert_false(p.darts.active || p.darts.enable_elliptical || p.darts.eda_active || p.darts.eda[0].on);
     plan_done(&s, &p);
 
     /* the path tracer: DARTS toward the light as the keys ask (docs/darts.md §14), and uniform time */
     plan_of("", "\"type\": \"path_tracer\", " GATE "\"enable_guiding\": true, \"eda\": true", "", &s, &p);
-    assert_true(p.darts.active && p.darts.distance_sampling && !p.darts.control_vertices && p.eda_active);
+    assert_true(p.darts.active && p.darts.enable_guiding && !p.darts.enable_elliptical && p.darts.eda_active);
     assert_false(p.uniform_time);
     plan_done(&s, &p);
     plan_of("", "\"type\": \"path_tracer\", " GATE "\"time_sampling\": \"uniform\"", "", &s, &p);
     assert_true(p.uniform_time);
-    assert_false(p.darts.active || p.eda_active);
+    assert_false(p.darts.active || p.darts.eda_active);
     plan_done(&s, &p);
     plan_of("", "\"type\": \"path_tracer\", " R "\"enable_guiding\": true, \"enable_elliptical\": true", "", &s, &p);
     assert_false(p.darts.active || p.uniform_time); /* steady state: nothing to aim at */
@@ -131,13 +131,13 @@ static void test_control_vertices_need_one_eta(void **state)
     scene s;
     render_plan p;
     plan_of(", \"speed_of_light\": 0.75", PP GATE R "\"enable_elliptical\": true", cube, &s, &p);
-    assert_true(p.darts.active && p.darts.elliptical_asked && !p.darts.control_vertices);
+    assert_true(p.darts.active && p.darts.enable_elliptical_asked && !p.darts.enable_elliptical);
     assert_float_equal(p.darts.eta_lb, 1.0, 0.0);
     assert_float_equal(p.darts.eta_ub, 4.0 / 3.0, 1e-15);
     plan_done(&s, &p);
     plan_of(", \"speed_of_light\": 0.75", PP GATE R "\"enable_elliptical\": true, \"vaccum_speed_of_light\": 0.75", cube,
             &s, &p);
-    assert_true(p.darts.control_vertices);
+    assert_true(p.darts.enable_elliptical);
     plan_done(&s, &p);
 }
 
@@ -158,14 +158,14 @@ static void test_darts_mirrors(void **state)
     plan_of("", PP GATE R "\"enable_elliptical\": true, \"strict_time_width\": true, \"mirror_defensive\": 0.1", floor,
             &s, &p);
     const darts_plan *d = &p.darts;
-    assert_true(d->side.seen && d->side.mirror_count == 1 && d->mirrors == DARTS_MIRRORS_FULL);
+    assert_true(d->side.seen && d->side.mirror_count == 1 && d->darts_mirrors == DARTS_MIRRORS_FULL);
     assert_string_equal(s.surfaces[d->side.mirror_surface[0]].name, "floor");
     assert_float_equal(d->side.focus[0].x, 0.0, 1e-6);
     assert_float_equal(d->side.focus[0].y, -2.0, 1e-6);
     assert_float_equal(d->side.focus[0].z, 0.0, 1e-6);
     assert_true(d->side.mirror_fraction[0] > 0.05 && d->side.mirror_fraction[0] < 0.5);
     assert_float_equal(d->side.other_fraction, 0.0, 0.0); /* the reflection ends in the fog: exact */
-    assert_true(d->cv_multi && !d->strict_surfaces && d->strict);
+    assert_true(d->cv_multi && !d->strict_surfaces && d->strict_time_width);
     assert_float_equal(d->cv_share[0] + d->cv_share[1] + d->cv_defensive, 1.0, 1e-12);
     assert_float_equal(d->cv_share[1] / d->cv_share[0], d->side.mirror_fraction[0], 1e-12);
     assert_float_equal(d->cv_defensive / d->cv_share[0], 0.1, 1e-12);
@@ -173,7 +173,7 @@ static void test_darts_mirrors(void **state)
 
     plan_of("", PP GATE R "\"enable_elliptical\": true, \"strict_time_width\": true, \"darts_mirrors\": \"straight\"",
             floor, &s, &p);
-    assert_true(p.darts.side.seen && p.darts.mirrors == DARTS_MIRRORS_STRAIGHT);
+    assert_true(p.darts.side.seen && p.darts.darts_mirrors == DARTS_MIRRORS_STRAIGHT);
     assert_true(!p.darts.cv_multi && p.darts.strict_surfaces && p.darts.cv_share[0] == 1.0 && p.darts.cv_defensive == 0.0);
     plan_done(&s, &p);
 
@@ -218,17 +218,17 @@ static void test_camera_unwarp(void **state)
     char json[8192];
     plan_of("", PP GATE R "\"enable_guiding\": true, \"enable_elliptical\": true, \"strict_time_width\": true,"
                           "\"eda\": true, \"camera_unwarp\": true", "", &s, &p);
-    assert_true(p.window.camera_unwarp && p.darts.active && p.darts.unwarped && p.darts.strict);
-    assert_true(p.darts.control_vertices && !p.darts.distance_sampling && !p.darts.unwarped_mirror_off);
-    assert_true(!p.eda[0].on && p.eda[0].asked_unwarped && !p.eda_active);
+    assert_true(p.window.camera_unwarp && p.darts.active && p.darts.strict_time_width);
+    assert_true(p.darts.enable_elliptical && !p.darts.enable_guiding && !p.darts.unwarped_mirror_off);
+    assert_true(!p.darts.eda[0].on && p.darts.eda[0].asked_unwarped && !p.darts.eda_active);
     assert_int_equal(plan_json(&p, &s, json, sizeof json), 0);
     assert_non_null(strstr(json, "\"time\":\"camera-unwarped optical path length\""));
     plan_done(&s, &p);
 
     /* the same keys warped: everything on */
     plan_of("", PP GATE R "\"enable_guiding\": true, \"enable_elliptical\": true, \"eda\": true", "", &s, &p);
-    assert_true(!p.darts.unwarped && p.darts.control_vertices && p.darts.distance_sampling && p.eda[0].on);
-    assert_false(p.eda[0].asked_unwarped);
+    assert_true(!p.window.camera_unwarp && p.darts.enable_elliptical && p.darts.enable_guiding && p.darts.eda[0].on);
+    assert_false(p.darts.eda[0].asked_unwarped);
     assert_int_equal(plan_json(&p, &s, json, sizeof json), 0);
     assert_non_null(strstr(json, "\"time\":\"camera-warped optical path length\""));
     plan_done(&s, &p);
@@ -237,14 +237,14 @@ static void test_camera_unwarp(void **state)
     const char *cube = ", { \"type\": \"cube\", \"bsdf\": { \"type\": \"forward\" }, \"int_medium\": \"fog\","
                        "    \"transform\": { \"position\": [0, 0, 2], \"scale\": [1, 1, 1] } }";
     plan_of(", \"speed_of_light\": 0.75", PP GATE R "\"enable_elliptical\": true, \"camera_unwarp\": true", cube, &s, &p);
-    assert_true(p.darts.control_vertices);
+    assert_true(p.darts.enable_elliptical);
     plan_done(&s, &p);
 
     /* a mirror in view: control vertices off, and said why */
     const char *mirror = ", { \"type\": \"quad\", \"name\": \"floor\", \"bsdf\": { \"type\": \"mirror\" },"
                          " \"transform\": { \"position\": [0, -1, 2], \"scale\": [10, 1, 10] } }";
     plan_of("", PP GATE R "\"enable_elliptical\": true, \"camera_unwarp\": true", mirror, &s, &p);
-    assert_true(p.darts.side.seen && !p.darts.control_vertices && p.darts.unwarped_mirror_off && !p.darts.cv_multi);
+    assert_true(p.darts.side.seen && !p.darts.enable_elliptical && p.darts.unwarped_mirror_off && !p.darts.cv_multi);
     plan_done(&s, &p);
 }
 

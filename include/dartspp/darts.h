@@ -16,7 +16,7 @@
  * and control vertices also aim at the camera's mirror images, with a defensive free flight (cv_techniques). Elliptical control vertices need
  * the exact camera-leg time, which the vertex medium's single η gives only when every region of the scene
  * (each medium present, and vacuum if present) has the same η: otherwise they are off
- * (darts_guide.control_vertices), as a control vertex is then placed on the wrong equal-time surface and
+ * (darts_guide.enable_elliptical), as a control vertex is then placed on the wrong equal-time surface and
  * in-gate places get no photon at all (free-flight volume photons are not stored while they are on). */
 #ifndef DARTSPP_DARTS_H
 #define DARTSPP_DARTS_H
@@ -24,8 +24,91 @@
 #include <stdio.h>
 
 #include "dartspp/core.h"
-#include "dartspp/plan.h"
 #include "dartspp/scene.h"
+#include "dartspp/surface.h"
+
+/* ---- the DARTS configuration (darts_plan.c, camera_side.c) ----
+ * What the DARTS samplers will run in a render, decided once from the integrator keys and the scene by
+ * darts_plan_resolve (called by plan_resolve, src/plan) and kept in render_plan.darts. Fields carry the names
+ * of the keys they are decided from. */
+typedef enum { RESIDUAL_UNIFORM = 0, RESIDUAL_EXPONENTIAL = 1 } residual_sampling;
+
+/* What camera paths see besides straight lines (camera_side.c). Camera paths continue through surfaces with
+ * `cont` lobes (surface_photon_split): through them the camera leg is longer than the straight line from the
+ * pinhole, which the DARTS time bounds and control vertices assume. The scan traces the camera's rays at the
+ * corners and centres of every pixel (up to 512² pixels; a 1025² grid over larger images), through
+ * null/forward surfaces, to the first surface that is not passthrough. A planar, flat-shaded surface whose
+ * continued lobes only reflect (a mirror, smooth or rough metal, a plastic's coat) reflects the medium as
+ * seen from the camera's mirror image, its focus: behind a delta reflection whose reflected ray then meets
+ * no other continued surface, a camera leg is exactly η·|x − focus|; behind a glossy one, about that.
+ * Anything else continued (curved, transmissive, smooth-shaded, a second continued bounce) has no focus. */
+#define DARTS_MAX_MIRRORS 4
+
+typedef struct {
+    int seen;                  /* the scan met some continued surface */
+    char first[64];            /* the name of one continued surface seen (messages) */
+    int rays;                  /* rays traced */
+    int mirror_count;          /* planar reflectors seen (the DARTS_MAX_MIRRORS seen most) */
+    int mirror_surface[DARTS_MAX_MIRRORS];
+    vec3 focus[DARTS_MAX_MIRRORS];              /* the camera's mirror image in each */
+    double mirror_fraction[DARTS_MAX_MIRRORS];  /* share of the rays that continue through it first */
+    double other_fraction;     /* share of the rays that continue through something no focus gives exactly */
+} camera_side_scan;
+
+/* Scans what the camera sees (above); cheap (one ray per pixel corner and centre, OpenMP). */
+void darts_scan_camera_side(const scene *s, const surface_shading *sh, camera_side_scan *out);
+
+/* darts_mirrors: "full" (ours, default): where the camera sees continued surfaces, control vertices also
+ * aim at each planar mirror's focus, a defensive share of free-flight volume photons covers the rest, both
+ * by one-sample MIS with the straight control vertex, and strict mode keeps every surface photon a camera
+ * path could gather; "straight": the authors' behaviour, a straight camera leg assumed everywhere (biased
+ * where the camera sees the medium through a mirror or glossy surface). */
+typedef enum { DARTS_MIRRORS_FULL = 0, DARTS_MIRRORS_STRAIGHT = 1 } darts_mirror_mode;
+
+/* EDA direction sampling in one medium. */
+typedef struct {
+    int on;
+    double alpha;          /* eda_alpha, or the medium's own: EDA/phase selection α */
+    int asked_unwarped;    /* asked for, but off: time is camera-unwarped */
+} eda_plan;
+
+typedef struct {
+    int active;            /* some DARTS sampler runs: a switch on, the window gated, a medium present */
+    int enable_guiding;    /* DA distance sampling runs */
+    int enable_elliptical; /* control vertices run: asked, and one η over every region of the scene (or
+                            * unwarped photon points: spheres need none) */
+    int enable_elliptical_asked; /* as written (control vertices may be off for η) */
+    int control_vertex_mis;
+    residual_sampling ellipse_residual;
+    int strict_time_width;
+    int early_exit;
+    double da_defensive;
+    double eta_lb, eta_ub; /* smallest and largest η of the scene's regions: bounds of a straight camera leg */
+    darts_mirror_mode darts_mirrors;
+    camera_side_scan side; /* scanned when DARTS runs control vertices or strict mode */
+    /* Control-vertex techniques (full mode, control vertices on, side.seen): selection probabilities of the
+     * straight focus, each mirror focus and the defensive free flight; cv_share[0] = 1 and the rest 0 when
+     * off (the authors' single technique, bit-identical images). */
+    int cv_multi;
+    double cv_share[1 + DARTS_MAX_MIRRORS];
+    double cv_defensive;
+    double mirror_defensive; /* the smallest defensive share where a continued surface is seen */
+    int strict_surfaces;   /* strict's start test on surface photons: strict_time_width, and not (full mode and
+                            * side.seen) */
+    int unwarped_mirror_off; /* control vertices off: camera-unwarped, and the camera sees a continued surface */
+    /* EDA: per medium (medium_count entries), whether any medium uses it, and where its tables come from */
+    eda_plan *eda;
+    int medium_count;
+    int eda_active;
+    char eda_table_dir[512];
+    int eda_shape[3];
+} darts_plan;
+
+/* Decides d from the scene's integrator keys (type: the integrator; sh: its shading rules, for the camera-side
+ * scan). The path tracer's uniform-time method (time_sampling "uniform") runs no DARTS sampler. 0, or -1 with
+ * err (out of memory); darts_plan_free releases d->eda. */
+int darts_plan_resolve(const scene *s, integrator_type type, const surface_shading *sh, darts_plan *d, dp_error *err);
+void darts_plan_free(darts_plan *d);
 
 /* ---- time window and target bins (docs/darts.md §2) ---- */
 typedef struct {
@@ -36,23 +119,24 @@ typedef struct {
     int frames;        /* 0: gate mode (one bin); else the frame count */
     double eta_lb;     /* smallest refractive index in the scene: time >= eta_lb * distance */
     double eta_ub;     /* largest: time <= eta_ub * distance along a straight segment */
-    int control_vertices; /* elliptical control vertices run: active, enable_elliptical, and one η in the scene */
-    int distance_sampling;  /* DA distance sampling */
+    /* the samplers' switches as darts_plan decided them (the path tracer's guides change some, path_aim.c) */
+    int enable_elliptical;  /* elliptical control vertices run */
+    int enable_guiding;     /* DA distance sampling */
     int control_vertex_mis; /* control vertices by one-sample MIS with an exponential (control_vertex_sample) */
-    residual_sampling residual;
-    int strict;             /* strict time mode's start test on surface photons (darts_plan.strict_surfaces) */
+    residual_sampling ellipse_residual;
+    int strict_surfaces;    /* strict time mode's start test on surface photons */
     int early_exit;         /* paths end once no photon can reach their bin */
     double da_defensive;
     /* control-vertex techniques behind continued surfaces (darts_plan.cv_multi; cv_techniques below) */
     int cv_multi;
     int focus_count;                        /* mirror foci */
-    vec3 focus[PLAN_MAX_MIRRORS];
-    double cv_share[1 + PLAN_MAX_MIRRORS];  /* straight focus, then each mirror focus */
+    vec3 focus[DARTS_MAX_MIRRORS];
+    double cv_share[1 + DARTS_MAX_MIRRORS];  /* straight focus, then each mirror focus */
     double cv_defensive;
     /* camera_unwarp: a path's time leaves out the camera segment adjacent to the sensor, so the camera leg
      * of every bound above is 0 (the equal-time set around a vertex is a sphere, not an ellipsoid), control
      * vertices are sphere_control_vertex and the plan turns DA distance sampling, EDA and the mirror foci off */
-    int unwarped;
+    int camera_unwarp;
 } darts_guide;
 
 typedef struct {
@@ -61,13 +145,14 @@ typedef struct {
     int frame;         /* -1 in gate mode, else the target frame: the path's photons count only there */
 } darts_bin;
 
-/* Fills g from the plan and the camera position; g->active is 0 when the plan runs no DARTS sampler. */
-void darts_guide_init(const render_plan *p, vec3 cam, darts_guide *g);
+/* Fills g from the DARTS plan, the time window and the target (the camera); g->active is 0 when no DARTS
+ * sampler runs. */
+void darts_guide_init(const darts_plan *d, const time_window *tw, vec3 cam, darts_guide *g);
 /* The length of a straight camera leg from x that counts in a path's time: |cam − x|, or 0 when time is
  * unwarped. */
 static inline double darts_leg_length(const darts_guide *g, vec3 x)
 {
-    return g->unwarped ? 0.0 : v3_len(v3_sub(g->cam, x));
+    return g->camera_unwarp ? 0.0 : v3_len(v3_sub(g->cam, x));
 }
 
 /* The least time a straight camera leg from x can take: η_lb times its length. */
@@ -155,8 +240,8 @@ double sphere_control_vertex_pdf(double tau, double eta, const darts_bin *b, dou
  * the defensive technique is: every place a photon can count by any camera path gets photons. */
 typedef struct {
     int n;                                     /* records: 1 + mirror foci */
-    ellipse_record rec[1 + PLAN_MAX_MIRRORS];
-    double share[1 + PLAN_MAX_MIRRORS];
+    ellipse_record rec[1 + DARTS_MAX_MIRRORS];
+    double share[1 + DARTS_MAX_MIRRORS];
     double defensive;
 } cv_techniques;
 
@@ -251,13 +336,14 @@ typedef struct eda_set {
     int count, active;       /* active: at least one medium uses EDA */
 } eda_set;
 
-/* Loads (table_path), or takes from the cache folder p->eda_table_dir (building it there when
+/* Loads (table_path), or takes from the cache folder d->eda_table_dir (building it there when
  * missing, said on `messages` unless NULL), the table of every medium the plan gives EDA. A plan without EDA
  * touches no file. */
-int eda_set_prepare(const scene *s, const render_plan *p, eda_set *set, FILE *messages, dp_error *err);
+int eda_set_prepare(const scene *s, const darts_plan *d, const time_window *w, eda_set *set, FILE *messages,
+                    dp_error *err);
 void eda_set_free(eda_set *set);
 /* Bytes the tables of eda_set_prepare will hold (the memory guard's estimate), without touching a file. */
-size_t eda_set_bytes(const scene *s, const render_plan *p);
+size_t eda_set_bytes(const scene *s, const darts_plan *d);
 
 /* ---- time-angular direction sampling (uniform-time PT; Jarabo et al. 2014 §5.3, supplement §B.4 eq. 21–22) ----
  * docs/darts.md §13. At a vertex x with the target (light) at x_L, l = x_L − x, and a distance r drawn

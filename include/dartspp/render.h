@@ -143,20 +143,6 @@ typedef struct render_stats {
  * interrupt, f holds the completed passes (possibly none) and the caller frees it with film_free. */
 int render_scene(const scene *s, const render_options *opt, film *f, render_stats *st, dp_error *err);
 
-struct eda_set;
-
-/* One pass of the path tracer (plain, DARTS or uniform time, as the plan says; eda: the EDA tables, may
- * be NULL when no medium uses EDA) over every pixel into f's pass layer; adds the rays traced to *rays.
- * Deterministic: the samples of pixel p in pass i come from rng_stream(seed, i, p). Once stop is set the
- * remaining rows are skipped (the caller drops the pass). 0, or -1 with err (out of memory). */
-int path_tracer_pass(const scene *s, const render_plan *p, const struct eda_set *eda, film *f, uint64_t seed,
-                     long pass, const dp_stop_flag *stop, double *rays, dp_error *err);
-
-/* One iteration of photon points: photon pass, maps, sensor pass into f's pass layer. Returns 0 or -1
- * with err. Once stop is set it returns early with the pass incomplete (the caller drops it). */
-int photon_points_pass(const scene *s, const render_plan *p, const struct eda_set *eda, film *f, uint64_t seed,
-                       long iteration, const dp_stop_flag *stop, render_stats *st, dp_error *err);
-
 /* ---- warnings before the render ----
  * Parts of the scene the chosen integrator or the DARTS samplers render with a known bias or not at all, and
  * how to avoid it (warnings.c): one line "warning: <scene>: ..." each, to `out` (the CLI: stderr; the Python

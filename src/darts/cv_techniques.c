@@ -54,7 +54,7 @@ static double mixture_pdf(const cv_techniques *ct, const double *share, double d
 double cv_techniques_pdf(const cv_techniques *ct, vec3 d, double tmax, int mis, residual_sampling mode, double sigma,
                          double t)
 {
-    double share[1 + PLAN_MAX_MIRRORS], def, t_d = defensive_end(ct, d, tmax);
+    double share[1 + DARTS_MAX_MIRRORS], def, t_d = defensive_end(ct, d, tmax);
     if (!(t >= 0.0 && t < tmax) || !usable_shares(ct, t_d, sigma, share, &def)) return 0.0;
     return mixture_pdf(ct, share, def, t_d, d, mis, mode, sigma, t);
 }
@@ -62,7 +62,7 @@ double cv_techniques_pdf(const cv_techniques *ct, vec3 d, double tmax, int mis, 
 int cv_techniques_sample(const cv_techniques *ct, vec3 d, double tmax, int mis, residual_sampling mode, double sigma,
                          const double u[3], double *t, double *pdf)
 {
-    double share[1 + PLAN_MAX_MIRRORS], def, t_d = defensive_end(ct, d, tmax);
+    double share[1 + DARTS_MAX_MIRRORS], def, t_d = defensive_end(ct, d, tmax);
     if (!usable_shares(ct, t_d, sigma, share, &def)) return 0;
     double tt, p_unused, c = u[0];
     int k = 0;

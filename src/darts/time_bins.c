@@ -3,20 +3,17 @@
  * light and emission time. */
 #include "dartspp/darts.h"
 
-void darts_guide_init(const render_plan *p, vec3 cam, darts_guide *g)
+void darts_guide_init(const darts_plan *d, const time_window *tw, vec3 cam, darts_guide *g)
 {
-    const time_window *tw = &p->window;
-    const darts_plan *d = &p->darts;
     *g = (darts_guide){.active = d->active, .cam = cam, .beg = tw->start, .end = time_window_end(tw),
                        .width = tw->width, .frames = tw->frame_count, .eta_lb = d->eta_lb, .eta_ub = d->eta_ub,
-                       .control_vertices = d->control_vertices, .distance_sampling = d->distance_sampling,
-                       .control_vertex_mis = d->control_vertex_mis, .residual = d->residual, .strict = d->strict,
+                       .enable_elliptical = d->enable_elliptical, .enable_guiding = d->enable_guiding,
+                       .control_vertex_mis = d->control_vertex_mis, .ellipse_residual = d->ellipse_residual, .strict_surfaces = d->strict_surfaces,
                        .early_exit = d->early_exit, .da_defensive = d->da_defensive, .cv_multi = d->cv_multi,
                        .focus_count = d->cv_multi ? d->side.mirror_count : 0, .cv_defensive = d->cv_defensive,
-                       .unwarped = tw->camera_unwarp};
-    g->strict = d->strict_surfaces;
+                       .camera_unwarp = tw->camera_unwarp};
     for (int k = 0; k < g->focus_count; k++) g->focus[k] = d->side.focus[k];
-    for (int k = 0; k <= PLAN_MAX_MIRRORS; k++) g->cv_share[k] = d->cv_share[k];
+    for (int k = 0; k <= DARTS_MAX_MIRRORS; k++) g->cv_share[k] = d->cv_share[k];
 }
 
 int darts_sample_bin(const darts_guide *g, vec3 x_light, double tau0, double u, darts_bin *b)

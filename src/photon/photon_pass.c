@@ -69,7 +69,7 @@ static void mirror_records(light_path *lp, const medium *m)
     for (int k = 0; k <= g->focus_count; k++) ct->share[k] = g->cv_share[k];
     for (int k = 0; k < g->focus_count; k++) {
         moved.cam = g->focus[k];
-        ellipse_record_init(&ct->rec[1 + k], &moved, &lp->bin, lp->o, lp->time, m->eta, g->residual, v3_avg(m->sigma_t),
+        ellipse_record_init(&ct->rec[1 + k], &moved, &lp->bin, lp->o, lp->time, m->eta, g->ellipse_residual, v3_avg(m->sigma_t),
                             rng_uniform(lp->rng));
     }
 }
@@ -78,9 +78,9 @@ static void mirror_records(light_path *lp, const medium *m)
 static void new_vertex(light_path *lp)
 {
     /* unwarped, the control vertex needs no record and DA and EDA are off (plan.c) */
-    if (!aims_at_volume(lp) || lp->med == MEDIUM_VACUUM || lp->g->unwarped) return;
+    if (!aims_at_volume(lp) || lp->med == MEDIUM_VACUUM || lp->g->camera_unwarp) return;
     const medium *m = &lp->s->media[lp->med];
-    ellipse_record_init(&lp->rec, lp->g, &lp->bin, lp->o, lp->time, m->eta, lp->g->residual, v3_avg(m->sigma_t),
+    ellipse_record_init(&lp->rec, lp->g, &lp->bin, lp->o, lp->time, m->eta, lp->g->ellipse_residual, v3_avg(m->sigma_t),
                         rng_uniform(lp->rng));
     if (lp->g->cv_multi) mirror_records(lp, m);
 }
@@ -98,7 +98,7 @@ static int surface_time_ok(const light_path *lp, vec3 x)
     double dist = darts_leg_length(lp->g, x);
     double t_lb = lp->time + lp->g->eta_lb * dist, t_ub = lp->time + lp->g->eta_ub * dist;
     double slack = lp->in->surface_slack;
-    return t_lb < lp->bin.end + slack && (!lp->g->strict || t_ub >= lp->bin.start - slack);
+    return t_lb < lp->bin.end + slack && (!lp->g->strict_surfaces || t_ub >= lp->bin.start - slack);
 }
 
 static int medium_event(light_path *lp, const medium *m, double t, int darts);
@@ -111,17 +111,17 @@ static int medium_segment(light_path *lp, double tmax)
     const medium *m = &lp->s->media[lp->med];
     /* nothing to aim where nothing scatters, or once no volume photon can be stored */
     int darts = aims_at_volume(lp) && medium_scatters(m);
-    if (darts && g->control_vertices) {
+    if (darts && g->enable_elliptical) {
         double t, pdf;
         double sigma = v3_avg(m->sigma_t), u1 = rng_uniform(lp->rng), u2 = rng_uniform(lp->rng);
         int made;
-        if (g->unwarped) {
+        if (g->camera_unwarp) {
             made = sphere_control_vertex(lp->time, m->eta, &lp->bin, tmax, sigma, u1, &t, &pdf);
         } else if (g->cv_multi) {
             const double u[3] = {u1, u2, rng_uniform(lp->rng)};
-            made = cv_techniques_sample(&lp->cvt, lp->d, tmax, g->control_vertex_mis, g->residual, sigma, u, &t, &pdf);
+            made = cv_techniques_sample(&lp->cvt, lp->d, tmax, g->control_vertex_mis, g->ellipse_residual, sigma, u, &t, &pdf);
         } else {
-            made = g->control_vertex_mis ? control_vertex_sample(&lp->rec, lp->d, tmax, g->residual, sigma, u1, u2, &t, &pdf)
+            made = g->control_vertex_mis ? control_vertex_sample(&lp->rec, lp->d, tmax, g->ellipse_residual, sigma, u1, u2, &t, &pdf)
                                          : ellipse_control_vertex(&lp->rec, lp->d, tmax, &t, &pdf);
         }
         if (made) { /* W = σs e^{−σt t}/p(t) (docs/darts.md §5.2) */
@@ -132,7 +132,7 @@ static int medium_segment(light_path *lp, double tmax)
     }
     int event;
     double t;
-    if (darts && g->distance_sampling && (lp->rec.valid || lp->rec.S_reach > lp->rec.C)) {
+    if (darts && g->enable_guiding && (lp->rec.valid || lp->rec.S_reach > lp->rec.C)) {
         da_sample ds;
         da_sample_distance(m, &lp->rec, lp->d, tmax, g->da_defensive, lp->rng, &ds);
         lp->beta = v3_mul(lp->beta, ds.weight);
@@ -152,7 +152,7 @@ static double reach_distance(const light_path *lp)
 {
     const darts_guide *g = lp->g;
     if (!g->active || !g->early_exit) return INFINITY;
-    if (g->unwarped) return dp_fmax(0.0, (lp->reach.end - lp->time) / g->eta_lb); /* τ + η_lb·h = end */
+    if (g->camera_unwarp) return dp_fmax(0.0, (lp->reach.end - lp->time) / g->eta_lb); /* τ + η_lb·h = end */
     vec3 to_cam = v3_sub(g->cam, lp->o);
     double C = v3_len(to_cam);
     return darts_reach_along((lp->reach.end - lp->time) / g->eta_lb, C, C > 0.0 ? v3_dot(lp->d, to_cam) / C : 0.0);
@@ -191,7 +191,7 @@ static int medium_event(light_path *lp, const medium *m, double t, int darts)
     if (++lp->medium_events > m->max_bounces) return -1;
     /* classic photons (no control vertices); low_order_scattering off: none at the first vertex after a
      * light or surface */
-    if (lp->volume_open && !(darts && g->control_vertices) && (in->low_order_scattering || lp->medium_events > 1))
+    if (lp->volume_open && !(darts && g->enable_elliptical) && (in->low_order_scattering || lp->medium_events > 1))
         store(lp, &lp->tb->vol, &lp->pc->n_vol, lp->o, lp->d, lp->beta, lp->bounce, lp->time);
     new_vertex(lp);
     const eda_table *et = darts && in->eda ? in->eda->table[lp->med] : NULL;
@@ -347,7 +347,7 @@ void photon_pass_input_init(photon_pass_input *in, const scene *s, const render_
                               .surface_slack = plan_surface_slack(p, iteration), .shading = p->shading,
                               .eda = eda, .seed = seed,
                               .iteration = iteration, .stop = stop};
-    darts_guide_init(p, s->cam.pos, &in->guide);
+    darts_guide_init(&p->darts, &p->window, s->cam.pos, &in->guide);
 }
 
 /* Light paths in independent batches; with surface chains on, they stop once the volume budget is full. */

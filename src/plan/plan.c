@@ -13,87 +13,13 @@ double progressive_radius(double r0, double alpha, long iteration, int dims)
     return r0 * exp(log_ratio / dims);
 }
 
-/* A medium uses EDA when the window is gated and it asks for it (phase "ida"), or the integrator does and
- * the medium scatters (there is no direction to pick where nothing scatters). */
-static void resolve_eda(const scene *s, render_plan *p)
+/* The path tracer's uniform-time sampling (time_sampling "uniform", Jarabo et al. 2014 as the DARTS supplement
+ * B.4 corrects it) is a method of its own: it needs a gate, a medium, a light to aim at and one η. */
+static int resolve_uniform_time(const scene *s, const render_plan *p)
 {
     const integrator_settings *in = &s->integrator;
-    for (int i = 0; i < s->medium_count; i++) {
-        const medium *m = &s->media[i];
-        eda_plan *e = &p->eda[i];
-        e->on = in->window.gated && (m->eda || (in->eda && medium_scatters(m))) &&
-                (p->type == INTEGRATOR_PHOTON_POINTS || (p->type == INTEGRATOR_PATH_TRACER && !in->time_sampling_uniform));
-        /* photon points: EDA aims at the camera's equal-time ellipsoid, which unwarped time does not have (the
-         * path tracer aims at the light, whose leg always counts) */
-        e->asked_unwarped = e->on && in->window.camera_unwarp && p->type == INTEGRATOR_PHOTON_POINTS;
-        if (e->asked_unwarped) e->on = 0;
-        e->alpha = m->eda_alpha > 0.0 ? m->eda_alpha : in->eda_alpha;
-        p->eda_active |= e->on;
-    }
-}
-
-/* The DARTS samplers run when one of them is on (EDA included), the window is gated and there is a
- * medium (and, in the path tracer, a light to aim at). Control vertices need one η over every region of the
- * scene (darts.h). The path tracer's uniform-time sampling (time_sampling "uniform") is a method of its own:
- * free flight, line-to-point connections and time-angular directions (p->uniform_time), no DARTS sampler. */
-static void resolve_darts(const scene *s, render_plan *p)
-{
-    const integrator_settings *in = &s->integrator;
-    darts_plan *d = &p->darts;
-    int pt = p->type == INTEGRATOR_PATH_TRACER;
-    int asked = in->enable_guiding || in->enable_elliptical || in->eda;
-    for (int i = 0; i < s->medium_count; i++) asked |= s->media[i].eda;
-    int gated_medium = in->window.gated && s->medium_count > 0 && (!pt || s->light_count > 0);
-    p->uniform_time = pt && in->time_sampling_uniform && gated_medium && scene_eta_uniform(s);
-    d->active = gated_medium && asked && (p->type == INTEGRATOR_PHOTON_POINTS || (pt && !in->time_sampling_uniform));
-    d->unwarped = in->window.camera_unwarp;
-    /* photon points: DA distance sampling aims at diffusion towards the camera within the residual time of
-     * the camera's ellipsoid: unwarped time has none, so it is off (free flight, unbiased); control vertices
-     * become sphere_control_vertex, which needs no η along a camera leg. The path tracer aims at the light,
-     * whose leg always counts: only its camera segment goes without (src/render/README.md) */
-    d->distance_sampling = in->enable_guiding && (pt || !d->unwarped);
-    d->elliptical_asked = in->enable_elliptical;
-    d->control_vertices = d->active && in->enable_elliptical && ((d->unwarped && !pt) || scene_eta_uniform(s));
-    d->control_vertex_mis = in->control_vertex_mis;
-    d->residual = in->ellipse_residual ? RESIDUAL_EXPONENTIAL : RESIDUAL_UNIFORM;
-    d->strict = in->strict_time_width;
-    d->early_exit = in->early_exit;
-    d->da_defensive = in->da_defensive;
-    d->eta_lb = d->eta_ub = in->vacuum_eta;
-    for (int i = 0; i < s->medium_count; i++) {
-        d->eta_lb = dp_fmin(d->eta_lb, s->media[i].eta);
-        d->eta_ub = dp_fmax(d->eta_ub, s->media[i].eta);
-    }
-    d->mirrors = in->darts_mirrors_straight ? DARTS_MIRRORS_STRAIGHT : DARTS_MIRRORS_FULL;
-    d->mirror_defensive = in->mirror_defensive;
-    d->cv_share[0] = 1.0;
-}
-
-/* Behind continued surfaces (full mode): the control-vertex techniques and strict mode's surface test.
- * Shares follow what the camera sees: the straight focus 1 (every camera ray starts with a straight leg),
- * each mirror focus its share of the scanned rays, the defensive free flight the share of rays with no
- * focus, at least mirror_defensive (thin features the scan misses still get photons), then normalised. */
-static void resolve_camera_side(const scene *s, render_plan *p)
-{
-    darts_plan *d = &p->darts;
-    d->strict_surfaces = d->strict;
-    if (p->type != INTEGRATOR_PHOTON_POINTS || !d->active || !(d->control_vertices || d->strict)) return;
-    plan_scan_camera_side(s, &p->shading, &d->side);
-    if (d->mirrors != DARTS_MIRRORS_FULL || !d->side.seen) return;
-    d->strict_surfaces = 0; /* a camera path behind a continued surface has no upper bound on its leg */
-    if (!d->control_vertices) return;
-    if (d->unwarped) { /* behind a mirror the camera's later segments count: no sphere aims there */
-        d->control_vertices = 0;
-        d->unwarped_mirror_off = 1;
-        return;
-    }
-    d->cv_multi = 1;
-    double sum = 1.0, def = dp_fmax(d->side.other_fraction, d->mirror_defensive);
-    for (int k = 0; k < d->side.mirror_count; k++) sum += d->side.mirror_fraction[k];
-    sum += def;
-    d->cv_share[0] = 1.0 / sum;
-    for (int k = 0; k < d->side.mirror_count; k++) d->cv_share[1 + k] = d->side.mirror_fraction[k] / sum;
-    d->cv_defensive = def / sum;
+    return p->type == INTEGRATOR_PATH_TRACER && in->time_sampling_uniform && in->window.gated && s->medium_count > 0 &&
+           s->light_count > 0 && scene_eta_uniform(s);
 }
 
 int plan_resolve(const scene *s, render_plan *p, dp_error *err)
@@ -114,12 +40,8 @@ int plan_resolve(const scene *s, render_plan *p, dp_error *err)
     p->r_vol = (radius_schedule){in->volume_gather_radius, in->volume_alpha, in->radius_schedule_3d ? 3 : 2};
     p->r_surf = (radius_schedule){in->gather_radius, in->alpha, 2};
     p->volume_splat = !in->volume_gather_beam;
-    p->medium_count = s->medium_count;
-    if (s->medium_count > 0 && !(p->eda = calloc((size_t)s->medium_count, sizeof *p->eda)))
-        return dp_fail_kind(err, DP_ERROR_MEMORY, "%s: out of memory for the render plan", s->path);
-    resolve_eda(s, p);
-    resolve_darts(s, p);
-    resolve_camera_side(s, p);
+    p->uniform_time = resolve_uniform_time(s, p);
+    if (darts_plan_resolve(s, p->type, &p->shading, &p->darts, err)) return -1;
     p->spp = s->renderer.spp;
     p->timeout_seconds = s->renderer.timeout_seconds;
     p->checkpoint_seconds = s->renderer.checkpoint_seconds;
@@ -128,8 +50,7 @@ int plan_resolve(const scene *s, render_plan *p, dp_error *err)
 
 void plan_free(render_plan *p)
 {
-    free(p->eda);
-    p->eda = NULL;
+    darts_plan_free(&p->darts);
 }
 
 double plan_surface_slack(const render_plan *p, long iteration)
@@ -188,8 +109,8 @@ static void add_darts(cJSON *root, const render_plan *p, const scene *s)
     cJSON *j = cJSON_AddObjectToObject(root, "darts");
     cJSON_AddBoolToObject(j, "active", d->active);
     if (!d->active) return;
-    cJSON_AddBoolToObject(j, "distance_sampling", d->distance_sampling);
-    cJSON_AddBoolToObject(j, "control_vertices", d->control_vertices);
+    cJSON_AddBoolToObject(j, "distance_sampling", d->enable_guiding);
+    cJSON_AddBoolToObject(j, "control_vertices", d->enable_elliptical);
     cJSON_AddBoolToObject(j, "strict_surfaces", d->strict_surfaces);
     double eta[2] = {d->eta_lb, d->eta_ub};
     cJSON_AddItemToObject(j, "eta", cJSON_CreateDoubleArray(eta, 2));
@@ -229,8 +150,9 @@ int plan_json(const render_plan *p, const scene *s, char *out, size_t n)
     if (p->type == INTEGRATOR_PHOTON_POINTS || p->darts.active) {
         add_darts(root, p, s);
         cJSON *eda = cJSON_AddObjectToObject(root, "eda");
-        for (int i = 0; i < p->medium_count; i++)
-            if (p->eda[i].on) cJSON_AddNumberToObject(cJSON_AddObjectToObject(eda, s->media[i].name), "alpha", p->eda[i].alpha);
+        for (int i = 0; i < p->darts.medium_count; i++)
+            if (p->darts.eda[i].on)
+                cJSON_AddNumberToObject(cJSON_AddObjectToObject(eda, s->media[i].name), "alpha", p->darts.eda[i].alpha);
     }
     char *text = cJSON_PrintUnformatted(root);
     cJSON_Delete(root);

@@ -9,6 +9,7 @@
 #include "dartspp/photon.h"
 #include "dartspp/gather.h"
 #include "dartspp/render.h"
+#include "integrators.h"
 
 #include <stdio.h>
 #include <stdlib.h>
@@ -20,9 +21,8 @@
 /* Geometry per triangle: our float vertices and indices, Embree's BVH and its build scratch, and the corner
  * normals and UVs of smooth and textured meshes (60 bytes, counted for every triangle: an upper bound). */
 #define BYTES_PER_TRIANGLE 220.0
-/* Photons one batch may leave in the per-thread buffers, per light path (they keep their capacity). */
 
-static void add(memory_estimate *m, const char *what, const char *key, double bytes)
+void memory_item_add(memory_estimate *m, const char *what, const char *key, double bytes)
 {
     if (m->count < MEMORY_ITEMS_MAX) m->item[m->count++] = (memory_item){what, key, bytes};
     m->total += bytes;
@@ -50,25 +50,32 @@ void render_memory_estimate(const scene *s, const render_plan *p, int have_refer
 {
     memset(m, 0, sizeof *m);
     double px = (double)s->cam.width * s->cam.height, image = px * 3 * sizeof(float);
-    add(m, "libraries and threads", NULL, RUNTIME_BYTES);
-    add(m, "geometry (triangles and Embree BVH)", NULL, s->tri_count * BYTES_PER_TRIANGLE);
+    memory_item_add(m, "libraries and threads", NULL, RUNTIME_BYTES);
+    memory_item_add(m, "geometry (triangles and Embree BVH)", NULL, s->tri_count * BYTES_PER_TRIANGLE);
     double texels = 0;
     for (int i = 0; i < s->texture_count; i++) texels += (double)s->textures[i].width * s->textures[i].height;
-    add(m, "albedo textures", NULL, texels * 3 * sizeof(float));
+    memory_item_add(m, "albedo textures", NULL, texels * 3 * sizeof(float));
     /* film_bytes in double: frames × pixels can be large */
     int frames = p->window.frame_count, layers = time_window_layers(&p->window);
     double film = 2 * px * 3 * sizeof(double) + 2 * px * 3 * (double)layers * sizeof(float);
-    add(m, "film (sums and the pass in progress)",
+    memory_item_add(m, "film (sums and the pass in progress)",
         p->window.orders > 0 ? "integrator.bounce_orders" : frames > 0 ? "integrator.frame_num" : "camera.resolution", film);
-    add(m, "output and reference images", "camera.resolution", image * (have_reference ? 3 : 2));
+    memory_item_add(m, "output and reference images", "camera.resolution", image * (have_reference ? 3 : 2));
     if (frames > 0) { /* written at the end: the viewer's embedded frames and histogram (io.h) */
         viewer_layout l;
         viewer_layout_of(s->cam.width, s->cam.height, frames, &l);
-        add(m, "viewer page data", "integrator.frame_num",
+        memory_item_add(m, "viewer page data", "integrator.frame_num",
             (double)l.embedded * l.dw * l.dh * 3 * sizeof(float) + VIEWER_HIST_BINS * sizeof(double));
     }
-    if (p->type != INTEGRATOR_PHOTON_POINTS) return;
-    add(m, "EDA tables", "integrator.eda_shape", (double)eda_set_bytes(s, p));
+    const integrator_entry *row = integrator_entry_of(p->type);
+    if (row->memory) row->memory(s, p, m);
+}
+
+/* Photon points: the EDA tables, the photon arrays at their budgets (capped by a pilot batch's yield), their
+ * maps, the sensor pass's primary lines and splat, and the batch buffers. */
+void memory_photon_points(const scene *s, const render_plan *p, memory_estimate *m)
+{
+    memory_item_add(m, "EDA tables", "integrator.eda_shape", (double)eda_set_bytes(s, &p->darts));
     double V = p->volume_budget, S = p->surface_budget, batch_photons = 1.0;
     photon_set pilot;
     int chains, piloted = pilot_pass(s, p, &pilot, &chains);
@@ -84,14 +91,14 @@ void render_memory_estimate(const scene *s, const render_plan *p, int have_refer
     double per_mapped = (double)volume_map_bytes(1 << 20) / (1 << 20);
     int volume = s->medium_count > 0;
     if (volume)
-        add(m, "volume photons and their map", "integrator.volume_photon_count", photon_array_bytes(V) + V * per_mapped);
+        memory_item_add(m, "volume photons and their map", "integrator.volume_photon_count", photon_array_bytes(V) + V * per_mapped);
     if (volume) /* the first pass's radius is the largest: the most footprint entries */
-        add(m, "primary lines and splat of the sensor pass", "camera.resolution",
+        memory_item_add(m, "primary lines and splat of the sensor pass", "camera.resolution",
             sensor_pass_bytes(s, p->volume_splat, piloted ? pilot.vol : NULL, piloted ? pilot.n_vol : 0,
                               schedule_radius(&p->r_vol, 0), V));
     if (p->keys.include_surfaces || !volume)
-        add(m, "surface photons and their map", "integrator.photon_count", photon_array_bytes(S) + S * per_mapped);
-    add(m, "photon batch buffers", NULL, photon_array_bytes(batch_photons));
+        memory_item_add(m, "surface photons and their map", "integrator.photon_count", photon_array_bytes(S) + S * per_mapped);
+    memory_item_add(m, "photon batch buffers", NULL, photon_array_bytes(batch_photons));
     if (piloted) photon_set_free(&pilot);
 }
 

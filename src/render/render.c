@@ -4,6 +4,7 @@
  * films are summed onto rank 0. */
 #include "dartspp/darts.h"
 #include "dartspp/render.h"
+#include "integrators.h"
 
 #include <omp.h>
 #include <stdio.h>
@@ -59,8 +60,7 @@ static int keep_going(const render_stats *st, long first, long spp, double limit
 static int render_pass(const scene *s, const render_plan *p, const eda_set *eda, const render_options *opt, film *f,
                        long iteration, render_stats *st, dp_error *err)
 {
-    if (p->type == INTEGRATOR_PATH_TRACER) return path_tracer_pass(s, p, eda, f, opt->seed, iteration, opt->stop, &st->rays, err);
-    return photon_points_pass(s, p, eda, f, opt->seed, iteration, opt->stop, st, err);
+    return integrator_entry_of(p->type)->pass(s, p, eda, f, opt->seed, iteration, opt->stop, st, err);
 }
 
 /* Commits the pass layer as iteration i: the film's weighted sums and the statistics. */
@@ -201,10 +201,8 @@ static int render_rounds(const scene *s, const render_plan *p, const eda_set *ed
         all.seconds = dp_seconds() - t0;
         all.t_cluster = st->t_cluster + (dp_seconds() - tc);
         all.reductions = st->reductions + 1;
-        if (p->type == INTEGRATOR_PHOTON_POINTS && all.passes > 0) {
-            all.r_vol = schedule_radius(&p->r_vol, all.passes - 1);
-            all.r_surf = schedule_radius(&p->r_surf, all.passes - 1);
-        }
+        const integrator_entry *row = integrator_entry_of(p->type);
+        if (row->last_pass_figures) row->last_pass_figures(p, all.passes, &all);
         *st = all;
     }
     if (any_failed && !failed)
@@ -234,7 +232,7 @@ static int render_passes(const scene *s, const render_plan *p, const render_opti
                          dp_error *err)
 {
     eda_set eda = {0};
-    int ready = !eda_set_prepare(s, p, &eda, opt->messages, err) &&
+    int ready = !eda_set_prepare(s, &p->darts, &p->window, &eda, opt->messages, err) &&
                 !film_init(f, s->cam.width, s->cam.height, &p->window, err) &&
                 !(opt->resume && film_resume(f, opt->resume, err));
     const render_cluster *c = opt->cluster && opt->cluster->size > 1 ? opt->cluster : NULL;

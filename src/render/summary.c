@@ -4,6 +4,7 @@
 #include <sys/resource.h>
 
 #include "dartspp/darts.h"
+#include "integrators.h"
 #include "run_internal.h"
 
 /* Where the camera sees a surface it continues through: how control vertices are split, and strict mode. */
@@ -17,12 +18,12 @@ static void print_continued_surfaces(const scene *s, const darts_plan *d)
                    s->surfaces[d->side.mirror_surface[k]].name);
         printf(", %.0f %% defensive free flight", 100.0 * d->cv_defensive);
     }
-    if (d->strict) printf("%s strict mode keeps every surface photon a camera path could gather", d->cv_multi ? ";" : "");
+    if (d->strict_time_width) printf("%s strict mode keeps every surface photon a camera path could gather", d->cv_multi ? ";" : "");
 }
 
 static void print_unwarped(const scene *s, const darts_plan *d)
 {
-    printf("; camera-unwarped time: control vertices %s", d->control_vertices ? "on the light leg's equal-time "
+    printf("; camera-unwarped time: control vertices %s", d->enable_elliptical ? "on the light leg's equal-time "
            "spheres" : d->unwarped_mirror_off ? "off (the camera sees a continued surface, whose later camera "
            "segments count)" : "off");
     if (s->integrator.enable_guiding) printf(", DA distance sampling off (it aims at the camera's ellipsoid)");
@@ -32,11 +33,11 @@ static void print_unwarped(const scene *s, const darts_plan *d)
 static void print_media(const scene *s, const render_plan *p)
 {
     for (int i = 0; i < s->medium_count; i++)
-        if (p->eda[i].asked_unwarped) printf("; EDA off in '%s' (camera-unwarped time)", s->media[i].name);
+        if (p->darts.eda[i].asked_unwarped) printf("; EDA off in '%s' (camera-unwarped time)", s->media[i].name);
     const char *sep = "; EDA direction sampling in ";
     for (int i = 0; i < s->medium_count; i++) {
-        if (!p->eda[i].on) continue;
-        printf("%s'%s' (alpha %g)", sep, s->media[i].name, p->eda[i].alpha);
+        if (!p->darts.eda[i].on) continue;
+        printf("%s'%s' (alpha %g)", sep, s->media[i].name, p->darts.eda[i].alpha);
         sep = ", ";
     }
     printf("%s", sep[0] == ';' ? "; EDA off" : "");
@@ -49,27 +50,27 @@ static void print_media(const scene *s, const render_plan *p)
 }
 
 /* Which photon-pass samplers run (docs/design.md §4.3: the summary says which parts are active). */
-static void print_samplers(const scene *s, const render_plan *p)
+void summary_print_photon_pass(const scene *s, const render_plan *p)
 {
     const darts_plan *d = &p->darts;
     if (!d->active) {
         printf("photon pass: baseline (free-flight distances, photons at scattering vertices)%s\n",
-               (d->distance_sampling || d->elliptical_asked) ? "; DARTS samplers off: the scene has no medium or no gate" : "");
+               (d->enable_guiding || d->enable_elliptical_asked) ? "; DARTS samplers off: the scene has no medium or no gate" : "");
         return;
     }
     printf("photon pass: DARTS, %s target bins; DA distance sampling %s; elliptical control vertices %s (residual %s); "
-           "strict time %s", p->window.frame_count ? "per-frame" : "gate", d->distance_sampling ? "on" : "off",
-           d->unwarped ? "off (camera-unwarped time)" : d->control_vertices ? "on"
-           : d->elliptical_asked ? "off: refractive index not uniform" : "off",
-           d->residual == RESIDUAL_EXPONENTIAL ? "exponential" : "uniform", d->strict ? "on" : "off");
-    if (d->side.seen && d->mirrors == DARTS_MIRRORS_FULL) print_continued_surfaces(s, d);
-    if (d->unwarped) print_unwarped(s, d);
+           "strict time %s", p->window.frame_count ? "per-frame" : "gate", d->enable_guiding ? "on" : "off",
+           p->window.camera_unwarp ? "off (camera-unwarped time)" : d->enable_elliptical ? "on"
+           : d->enable_elliptical_asked ? "off: refractive index not uniform" : "off",
+           d->ellipse_residual == RESIDUAL_EXPONENTIAL ? "exponential" : "uniform", d->strict_time_width ? "on" : "off");
+    if (d->side.seen && d->darts_mirrors == DARTS_MIRRORS_FULL) print_continued_surfaces(s, d);
+    if (p->window.camera_unwarp) print_unwarped(s, d);
     print_media(s, p);
     printf("\n");
 }
 
 /* Which method the path tracer runs (docs/darts.md §14): plain, DARTS (which samplers) or uniform time. */
-static void print_path_method(const scene *s, const render_plan *p)
+void summary_print_path_method(const scene *s, const render_plan *p)
 {
     const darts_plan *d = &p->darts;
     const integrator_settings *in = &s->integrator;
@@ -90,19 +91,25 @@ static void print_path_method(const scene *s, const render_plan *p)
     }
     printf("path tracer: DARTS toward %s, %s target bins; DA distance sampling %s; elliptical light connections %s "
            "(residual %s, %s)", s->light_count > 1 ? "one light per camera path" : "the light",
-           p->window.frame_count ? "per-frame" : "gate", d->distance_sampling ? "on" : "off",
-           d->control_vertices ? "on" : d->elliptical_asked ? "off: refractive index not uniform" : "off",
-           d->residual == RESIDUAL_EXPONENTIAL ? "exponential" : "uniform",
+           p->window.frame_count ? "per-frame" : "gate", d->enable_guiding ? "on" : "off",
+           d->enable_elliptical ? "on" : d->enable_elliptical_asked ? "off: refractive index not uniform" : "off",
+           d->ellipse_residual == RESIDUAL_EXPONENTIAL ? "exponential" : "uniform",
            d->control_vertex_mis ? "MIS with an in-bin exponential" : "no MIS");
     if (p->window.camera_unwarp) printf("; camera-unwarped time: no sampler aims along the camera segment");
     print_media(s, p);
     printf("\n");
 }
 
-/* How the integrator reaches one light (docs/emitters.md §7). */
-static const char *light_technique(const emitter *e, const render_plan *p)
+/* How each integrator reaches one light (docs/emitters.md §7): photon points by its light paths, the path
+ * tracer as the light allows. */
+const char *summary_photon_points_light(const emitter *e, const render_plan *p)
 {
-    if (p->type == INTEGRATOR_PHOTON_POINTS) return "light paths";
+    (void)e, (void)p;
+    return "light paths";
+}
+
+const char *summary_path_tracer_light(const emitter *e, const render_plan *p)
+{
     if (!emitter_connectable(e)) return "cannot be reached (a parallel beam of radius 0: only photon points render it)";
     if (emitter_is_parallel_beam(e))
         return p->darts.active || p->uniform_time ? "beam crossings of the camera segments (no control vertex, DA or EDA "
@@ -122,7 +129,7 @@ static void print_lights(const scene *s, const render_plan *p)
         printf("%s '%s' (%s, flux %.4g, p %.3g%s): %s", i ? ";" : "", e->name, e->type_name, v3_avg(e->flux),
                emitter_selection_pdf(s, i, by_power),
                e->pulse.width > 0 ? (e->pulse.shape == PULSE_GAUSSIAN ? ", gaussian pulse" : ", box pulse") : "",
-               light_technique(e, p));
+               integrator_entry_of(p->type)->light_technique(e, p));
     }
     printf("\n");
     const sensor_response *r = &s->cam.response;
@@ -193,8 +200,7 @@ static void print_summary(const scene *s, const render_plan *p, const render_sta
         printf(" (%ld of them whole pixels of the images, NaN or beyond the float range, written as 0)",
                st->nonfinite_pixels);
     printf("\n");
-    if (p->type == INTEGRATOR_PHOTON_POINTS) print_samplers(s, p);
-    else print_path_method(s, p);
+    integrator_entry_of(p->type)->print_method(s, p);
     if (s->light_count > 0) print_lights(s, p);
     print_photon_stats(st);
     if (st->reductions > 0) print_cluster(s, p, st);

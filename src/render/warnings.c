@@ -4,33 +4,44 @@
 
 #include "dartspp/darts.h"
 #include "dartspp/surface.h"
+#include "integrators.h"
 #include "run_internal.h"
 
 /* Specular and near-specular surfaces break two assumptions, and the user should hear which one applies
  * (src/darts/README.md, mirrors): the path tracer cannot reach a point light through a delta lobe (mirror,
  * smooth metal or glass, a plastic's coat), so light that takes one before any diffuse, glossy or medium
- * vertex is missing; DARTS's time bounds and control vertices assume a straight camera leg, so what the
- * camera sees through a surface it continues through (surface_photon_split) is biased. */
-static void warn_mirrors(FILE *out, const scene *s, const render_plan *p)
+ * vertex is missing (warn_caustics); DARTS's time bounds and control vertices assume a straight camera leg, so
+ * what the camera sees through a surface it continues through (surface_photon_split) is biased
+ * (warn_straight_mirrors). */
+static void warn_caustics(FILE *out, const scene *s)
 {
-    const char *delta = NULL, *continued = NULL;
-    for (int i = 0; i < s->surface_count; i++) {
+    const char *delta = NULL;
+    for (int i = 0; i < s->surface_count && !delta; i++) {
         const bsdf *b = &s->bsdfs[s->surfaces[i].bsdf];
         if (s->surfaces[i].tri_count == 0 || bsdf_is_passthrough(b)) continue;
-        if (!delta && (bsdf_lobes(b) & BSDF_LOBE_SPECULAR)) delta = s->surfaces[i].name;
-        if (!continued && surface_photon_split(b, &p->shading).cont) continued = s->surfaces[i].name;
+        if (bsdf_lobes(b) & BSDF_LOBE_SPECULAR) delta = s->surfaces[i].name;
     }
     const char *point_like = NULL;
     for (int i = 0; i < s->light_count && !point_like; i++)
         if (!emitter_hittable(&s->lights[i])) point_like = s->lights[i].name;
-    if (delta && p->type == INTEGRATOR_PATH_TRACER && point_like)
+    if (delta && point_like)
         fprintf(out, "warning: %s: surface '%s' is specular: the path tracer cannot connect through it to lights "
                 "without area (point, spot, collimated; here '%s'), so their light reflected or refracted by it before "
                 "any diffuse or medium vertex (caustics) is missing from the image; photon points render it\n", s->path,
                 delta, point_like);
+}
+
+static void warn_straight_mirrors(FILE *out, const scene *s, const render_plan *p)
+{
     const darts_plan *d = &p->darts;
-    if (continued && p->type == INTEGRATOR_PHOTON_POINTS && d->active && d->mirrors == DARTS_MIRRORS_STRAIGHT &&
-        d->side.seen)
+    if (!d->active || d->darts_mirrors != DARTS_MIRRORS_STRAIGHT || !d->side.seen) return;
+    const char *continued = NULL;
+    for (int i = 0; i < s->surface_count && !continued; i++) {
+        const bsdf *b = &s->bsdfs[s->surfaces[i].bsdf];
+        if (s->surfaces[i].tri_count == 0 || bsdf_is_passthrough(b)) continue;
+        if (surface_photon_split(b, &p->shading).cont) continued = s->surfaces[i].name;
+    }
+    if (continued)
         fprintf(out, "warning: %s: the camera sees surface '%s', which is specular or near-specular: camera paths "
                 "continue through it, but with darts_mirrors \"straight\" the DARTS time bounds and control vertices "
                 "assume a straight camera leg, so what the camera sees through it is too dark; darts_mirrors \"full\" "
@@ -38,11 +49,11 @@ static void warn_mirrors(FILE *out, const scene *s, const render_plan *p)
 }
 
 /* Elliptical control vertices assume one refractive index along the camera leg; when the media and vacuum
- * present in the scene differ in η, the photon pass turns them off (darts_guide.control_vertices) and the
+ * present in the scene differ in η, the photon pass turns them off (darts_guide.enable_elliptical) and the
  * user should hear why and how to get them back. */
 static void warn_mixed_eta(FILE *out, const scene *s, const render_plan *p)
 {
-    if (!p->darts.active || !p->darts.elliptical_asked || p->darts.control_vertices) return;
+    if (!p->darts.active || !p->darts.enable_elliptical_asked || p->darts.enable_elliptical) return;
     char list[1024] = "";
     size_t len = 0;
     int media = 0, medium = MEDIUM_VACUUM, vacuum = 0;
@@ -65,9 +76,8 @@ static void warn_mixed_eta(FILE *out, const scene *s, const render_plan *p)
 }
 
 /* A light the path tracer cannot reach at all (docs/emitters.md §7): its light is missing from the image. */
-static void warn_unreachable_lights(FILE *out, const scene *s, const render_plan *p)
+static void warn_unreachable_lights(FILE *out, const scene *s)
 {
-    if (p->type != INTEGRATOR_PATH_TRACER) return;
     for (int i = 0; i < s->light_count; i++)
         if (!emitter_connectable(&s->lights[i]) && v3_max(s->lights[i].flux) > 0.0)
             fprintf(out, "warning: %s: light '%s' (%s) is a parallel beam of radius 0: the path tracer can neither "
@@ -113,7 +123,21 @@ static void warn_camera_medium(FILE *out, const scene *s)
 void render_warn(FILE *out, const scene *s, const render_plan *p)
 {
     warn_camera_medium(out, s);
-    warn_unreachable_lights(out, s, p);
-    warn_mirrors(out, s, p);
+    const integrator_entry *row = integrator_entry_of(p->type);
+    if (row->warn) row->warn(out, s, p);
     warn_mixed_eta(out, s, p);
+}
+
+/* The path tracer's warnings: lights it cannot reach, and caustics it cannot render. */
+void warn_path_tracer(FILE *out, const scene *s, const render_plan *p)
+{
+    (void)p;
+    warn_unreachable_lights(out, s);
+    warn_caustics(out, s);
+}
+
+/* Photon points' warnings: DARTS assuming straight camera legs where the camera sees mirrors. */
+void warn_photon_points(FILE *out, const scene *s, const render_plan *p)
+{
+    warn_straight_mirrors(out, s, p);
 }

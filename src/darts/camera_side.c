@@ -5,7 +5,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "dartspp/plan.h"
+#include "dartspp/darts.h"
 
 #define SCAN_MAX_HOPS 64        /* null/forward crossings followed per ray */
 #define PLANE_REL_EPS 1e-5      /* planarity tolerance, relative to the scene's size */
@@ -81,7 +81,7 @@ static int classify_ray(const scene *s, const surface_shading *sh, const char *p
     return 1;
 }
 
-void plan_scan_camera_side(const scene *s, const surface_shading *sh, camera_side_scan *out)
+void darts_scan_camera_side(const scene *s, const surface_shading *sh, camera_side_scan *out)
 {
     memset(out, 0, sizeof *out);
     int ns = s->surface_count > 0 ? s->surface_count : 1;
@@ -122,8 +122,8 @@ void plan_scan_camera_side(const scene *s, const surface_shading *sh, camera_sid
     }
     for (int t = 0; t < omp_get_max_threads(); t++)
         for (int i = 0; i < ns; i++) hits[i] += my_hits[(size_t)ns * 2 * t + i], exact_hits[i] += my_hits[(size_t)ns * (2 * t + 1) + i];
-    /* the reflectors seen most, at most PLAN_MAX_MIRRORS (ties by surface order) */
-    for (int k = 0; k < PLAN_MAX_MIRRORS; k++) {
+    /* the reflectors seen most, at most DARTS_MAX_MIRRORS (ties by surface order) */
+    for (int k = 0; k < DARTS_MAX_MIRRORS; k++) {
         int best = -1;
         for (int i = 0; i < ns; i++)
             if (hits[i] > 0 && (best < 0 || hits[i] > hits[best])) best = i;

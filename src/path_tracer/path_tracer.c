@@ -234,7 +234,7 @@ static void sample_pixel(void *ctx, film_pixel *pix, vec3 dir, dp_rng *rng)
     trace_camera_path(&c, dir);
 }
 
-int path_tracer_pass(const scene *s, const render_plan *p, const struct eda_set *eda, film *f, uint64_t seed,
+int path_tracer_pass(const scene *s, const render_plan *p, const eda_set *eda, film *f, uint64_t seed,
                      long pass, const dp_stop_flag *stop, double *rays, dp_error *err)
 {
     pt_pass pp = {.s = s, .p = p, .eda = eda};

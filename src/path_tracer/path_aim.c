@@ -22,19 +22,19 @@
  * pass aim at images of the camera and do not apply. */
 static void guide_for_light(const render_plan *p, vec3 light, darts_guide *g)
 {
-    darts_guide_init(p, light, g);
-    g->unwarped = 0;
+    darts_guide_init(&p->darts, &p->window, light, g);
+    g->camera_unwarp = 0;
     g->cv_multi = 0;
     g->focus_count = 0;
-    g->strict = 0;
+    g->strict_surfaces = 0;
     if (!p->uniform_time) return;
     /* uniform time: line-to-point connections (the elliptical vertex with a uniform residual, J14 eq. 14–15)
      * over the whole window, free-flight distances; no bin is sampled */
     g->active = 1;
-    g->control_vertices = 1;
-    g->distance_sampling = 0;
+    g->enable_elliptical = 1;
+    g->enable_guiding = 0;
     g->control_vertex_mis = 0;
-    g->residual = RESIDUAL_UNIFORM;
+    g->ellipse_residual = RESIDUAL_UNIFORM;
     g->frames = 0;
 }
 
@@ -150,7 +150,7 @@ static void connect_control_vertex(pixel_ctx *c, const path_state *ps, const med
     const ellipse_record *r = &c->aim.rec;
     double t, pdf, sigma = v3_avg(m->sigma_t);
     double u1 = rng_uniform(c->rng), u2 = rng_uniform(c->rng);
-    int made = g->control_vertex_mis ? control_vertex_sample(r, ps->d, tmax, g->residual, sigma, u1, u2, &t, &pdf)
+    int made = g->control_vertex_mis ? control_vertex_sample(r, ps->d, tmax, g->ellipse_residual, sigma, u1, u2, &t, &pdf)
                                      : ellipse_control_vertex(r, ps->d, tmax, &t, &pdf);
     if (!made || !(pdf > 0.0)) return;
     path_state cv = *ps;
@@ -186,10 +186,10 @@ int pt_aim_medium_segment(pixel_ctx *c, path_state *ps, double tmax, int *event,
     if (emitter_is_parallel_beam(&c->pass->s->lights[a->light])) return beam_segment(c, ps, m, tmax, event, t);
     int aims = medium_scatters(m) && !pt_unwarped_camera_segment(c, ps);
     if (aims) {
-        ellipse_record_init(&a->rec, g, &a->bin, ps->o, ps->time, m->eta, g->residual, v3_avg(m->sigma_t),
+        ellipse_record_init(&a->rec, g, &a->bin, ps->o, ps->time, m->eta, g->ellipse_residual, v3_avg(m->sigma_t),
                             rng_uniform(c->rng));
         if (g->early_exit && !darts_can_reach(g, &a->reach, ps->o, ps->time)) return 0;
-        if (g->control_vertices) {
+        if (g->enable_elliptical) {
             ps->connected = 1;
             if (a->rec.valid && ps->medium_events + 1 <= m->max_bounces &&
                 bounces_count(&c->pass->p->bounces, ps->depth + 2))
@@ -198,7 +198,7 @@ int pt_aim_medium_segment(pixel_ctx *c, path_state *ps, double tmax, int *event,
     }
     if (a->pre_r >= 0.0) {
         predrawn_distance(c, ps, m, tmax, event, t);
-    } else if (aims && g->distance_sampling && (a->rec.valid || a->rec.S_reach > a->rec.C)) {
+    } else if (aims && g->enable_guiding && (a->rec.valid || a->rec.S_reach > a->rec.C)) {
         da_sample ds;
         da_sample_distance(m, &a->rec, ps->d, tmax, g->da_defensive, c->rng, &ds);
         ps->beta = v3_mul(ps->beta, ds.weight);
@@ -244,7 +244,7 @@ void pt_aim_scatter_direction(pixel_ctx *c, path_state *ps)
     if (et) { /* EDA toward the light with MIS against the phase function (docs/darts.md §8.2) */
         ellipse_record vr; /* its own residual; the segment's record draws another (docs/darts.md §14) */
         const darts_guide *g = c->aim.g;
-        ellipse_record_init(&vr, g, &c->aim.bin, ps->o, ps->time, m->eta, g->residual, v3_avg(m->sigma_t),
+        ellipse_record_init(&vr, g, &c->aim.bin, ps->o, ps->time, m->eta, g->ellipse_residual, v3_avg(m->sigma_t),
                             rng_uniform(c->rng));
         double u[4], w;
         for (int k = 0; k < 4; k++) u[k] = rng_uniform(c->rng);

@@ -4,7 +4,7 @@
 #define DARTSPP_PATH_TRACER_INTERNAL_H
 
 #include "dartspp/darts.h"
-#include "dartspp/render.h"
+#include "dartspp/path_tracer.h"
 #include "dartspp/surface.h"
 
 /* One pass: the scene, the plan and, when camera paths are aimed (plan: darts.active or uniform_time), a

@@ -1,0 +1,22 @@
+/* dartspp photon_points: progressive photon points ("type": "progressive_transient_photon_map"), the
+ * integrator the product is built around. One iteration drives the modules below it in order: the photon
+ * pass (src/photon, with the DARTS samplers of src/darts), the photon maps built with the iteration's radii
+ * (src/photon), the sensor pass that gathers them into the film (src/gather). Iterations are independent
+ * draws; the driver (src/render) keeps their weighted mean (plan_pass_weight). */
+#ifndef DARTSPP_PHOTON_POINTS_H
+#define DARTSPP_PHOTON_POINTS_H
+
+#include "dartspp/darts.h"
+#include "dartspp/film.h"
+#include "dartspp/plan.h"
+#include "dartspp/scene.h"
+
+struct render_stats;
+
+/* One iteration of photon points: photon pass, maps, sensor pass into f's pass layer; its figures (photon
+ * paths, photons stored, radii, phase times) added to *st. Returns 0 or -1 with err. Once stop is set it
+ * returns early with the pass incomplete (the caller drops it). */
+int photon_points_pass(const scene *s, const render_plan *p, const eda_set *eda, film *f, uint64_t seed,
+                       long iteration, const dp_stop_flag *stop, struct render_stats *st, dp_error *err);
+
+#endif
