@@ -99,7 +99,7 @@ static void test_path_tracer_json_values(void **state)
     assert_int_equal(s->integrator.window.frame_count, 0);
     assert_int_equal(s->integrator.max_bounces, 64);
     assert_int_equal(s->renderer.spp, 50);
-    ASSERT_NEAR(s->renderer.timeout_seconds, 0.0, 0.0);
+    ASSERT_NEAR(s->renderer.timeout, 0.0, 0.0);
     /* emission 1000 is radiant intensity, in the gas */
     ASSERT_VEC(s->lights[0].value, 1000, 1000, 1000, 1e-9);
     ASSERT_VEC(s->lights[0].pos, 2.779, 4.8, 2.4, 1e-12);
@@ -142,8 +142,8 @@ static void test_transient_json_values(void **state)
     ASSERT_NEAR(s->media[0].eta, 1.0, 0.0);
     assert_int_equal(s->media[0].max_bounces, 120);
     assert_int_equal(s->media[0].phase.type, PHASE_ISOTROPIC);
-    ASSERT_NEAR(s->renderer.timeout_seconds, 60.0, 1e-9);       /* "1.0": a bare number means minutes */
-    ASSERT_NEAR(s->renderer.checkpoint_seconds, 60000.0, 1e-6); /* "1000" minutes */
+    ASSERT_NEAR(s->renderer.timeout, 60.0, 1e-9);       /* "1.0": a bare number means minutes */
+    ASSERT_NEAR(s->renderer.checkpoint_interval, 60000.0, 1e-6); /* "1000" minutes */
     assert_int_equal(s->renderer.spp, 10000);
     assert_string_equal(s->renderer.hdr_output_file, "test.pfm");
     assert_string_equal(s->renderer.output_file, "./img/TungstenRender.png");
@@ -279,11 +279,11 @@ static void test_dragon_scenes_load(void **state)
         ASSERT_VEC(s->bsdfs[8].eta, eta.x, eta.y, eta.z, 0.0);
         assert_int_equal(s->bsdfs[11].type, BSDF_FORWARD);
         /* integrator keys the files set */
-        assert_int_equal(s->integrator.two_sided_shading, 1);
-        assert_int_equal(s->integrator.consistency_checks, 1);
+        assert_int_equal(s->integrator.enable_two_sided_shading, 1);
+        assert_int_equal(s->integrator.enable_consistency_checks, 1);
         ASSERT_NEAR(s->integrator.glossy_gather_alpha, 0.5, 0.0);
         /* path_trace.json: "timeout": "-1" = no limit; the others "14.5834" minutes */
-        ASSERT_NEAR(s->renderer.timeout_seconds, f == 2 ? 0.0 : 14.5834 * 60.0, 1e-9);
+        ASSERT_NEAR(s->renderer.timeout, f == 2 ? 0.0 : 14.5834 * 60.0, 1e-9);
         fx_drop(s);
     }
 }

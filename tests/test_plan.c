@@ -61,14 +61,14 @@ static void test_keys_resolved(void **state)
                         "\"min_bounces\": 1, \"max_bounces\": 5, \"radius_schedule\": \"3d\", \"camera_leg\": \"projected\"",
             "", &s, &p);
     assert_int_equal(p.type, INTEGRATOR_PHOTON_POINTS);
-    assert_true(p.light_paths == 1234 && p.surface_budget == 1234 && p.volume_budget == 567);
+    assert_true(p.photon_count == 1234 && p.volume_photon_count == 567);
     assert_true(p.r_surf.r0 == 0.3 && p.r_surf.alpha == 0.6 && p.r_surf.dims == 2);
     assert_true(p.r_vol.r0 == 0.2 && p.r_vol.alpha == 0.9 && p.r_vol.dims == 3);
-    assert_int_equal(p.keys.gather_photon_count, 9);
+    assert_int_equal(p.gather_photon_count, 9);
     assert_true(p.bounces.min == 1 && p.bounces.max == 5);
-    assert_true(p.keys.camera_leg_projected);
+    assert_true(p.camera_leg == CAMERA_LEG_PROJECTED);
     assert_true(p.window.gated && p.window.start == 2.75 && p.window.width == 0.5);
-    assert_true(p.spp == 7 && p.timeout_seconds == 12.0);
+    assert_true(p.spp == 7 && p.timeout == 12.0);
     /* path segments that count: n <= max and n - 1 >= min */
     assert_false(bounces_count(&p.bounces, 1));
     assert_true(bounces_count(&p.bounces, 2));

@@ -196,8 +196,8 @@ static void test_shading_keys_and_timeout(void **state)
     dp_error err;
     scene *s = fx_load_text("d.json", BASE_SCENE, NULL, &err);
     if (!s) fail_msg("%s", err.msg);
-    assert_int_equal(s->integrator.two_sided_shading, 1); /* defaults */
-    assert_int_equal(s->integrator.consistency_checks, 0);
+    assert_int_equal(s->integrator.enable_two_sided_shading, 1); /* defaults */
+    assert_int_equal(s->integrator.enable_consistency_checks, 0);
     ASSERT_NEAR(s->integrator.glossy_gather_alpha, 0.5, 0.0);
     fx_drop(s);
     char *text = replace1(BASE_SCENE, "\"max_bounces\": 4,",
@@ -208,10 +208,10 @@ static void test_shading_keys_and_timeout(void **state)
     s = fx_load_text("k.json", t2, NULL, &err);
     free(t2);
     if (!s) fail_msg("%s", err.msg);
-    assert_int_equal(s->integrator.two_sided_shading, 0);
-    assert_int_equal(s->integrator.consistency_checks, 1);
+    assert_int_equal(s->integrator.enable_two_sided_shading, 0);
+    assert_int_equal(s->integrator.enable_consistency_checks, 1);
     ASSERT_NEAR(s->integrator.glossy_gather_alpha, 0.25, 0.0);
-    ASSERT_NEAR(s->renderer.timeout_seconds, 0.0, 0.0);
+    ASSERT_NEAR(s->renderer.timeout, 0.0, 0.0);
     fx_drop(s);
     /* a negative number and a negative duration with a unit are "no limit" too */
     static const char *const neg[] = {"\"timeout\": -2", "\"timeout\": \"-30s\""};
@@ -220,7 +220,7 @@ static void test_shading_keys_and_timeout(void **state)
         s = fx_load_text("n.json", t2, NULL, &err);
         free(t2);
         if (!s) fail_msg("%s: %s", neg[i], err.msg);
-        ASSERT_NEAR(s->renderer.timeout_seconds, 0.0, 0.0);
+        ASSERT_NEAR(s->renderer.timeout, 0.0, 0.0);
         fx_drop(s);
     }
     /* glossy_gather_alpha must be finite and >= 0 */

@@ -58,12 +58,6 @@ typedef struct {
 /* Scans what the camera sees (above); cheap (one ray per pixel corner and centre, OpenMP). */
 void darts_scan_camera_side(const scene *s, const surface_shading *sh, camera_side_scan *out);
 
-/* darts_mirrors: "full" (ours, default): where the camera sees continued surfaces, control vertices also
- * aim at each planar mirror's focus, a defensive share of free-flight volume photons covers the rest, both
- * by one-sample MIS with the straight control vertex, and strict mode keeps every surface photon a camera
- * path could gather; "straight": the authors' behaviour, a straight camera leg assumed everywhere (biased
- * where the camera sees the medium through a mirror or glossy surface). */
-typedef enum { DARTS_MIRRORS_FULL = 0, DARTS_MIRRORS_STRAIGHT = 1 } darts_mirror_mode;
 
 /* EDA direction sampling in one medium. */
 typedef struct {
@@ -84,7 +78,13 @@ typedef struct {
     int early_exit;
     double da_defensive;
     double eta_lb, eta_ub; /* smallest and largest η of the scene's regions: bounds of a straight camera leg */
-    darts_mirror_mode darts_mirrors;
+    /* "full" (ours, default): where the camera sees continued surfaces, control vertices also aim at each
+     * planar mirror's focus, a defensive share of free-flight volume photons covers the rest, both by
+     * one-sample MIS with the straight control vertex, and strict mode keeps every surface photon a camera
+     * path could gather; "straight": the authors' behaviour, a straight camera leg assumed everywhere (biased
+     * where the camera sees the medium through a mirror or glossy surface). */
+    darts_mirrors_choice darts_mirrors;
+
     camera_side_scan side; /* scanned when DARTS runs control vertices or strict mode */
     /* Control-vertex techniques (full mode, control vertices on, side.seen): selection probabilities of the
      * straight focus, each mirror focus and the defensive free flight; cv_share[0] = 1 and the rest 0 when

@@ -35,23 +35,33 @@ static inline double schedule_radius(const radius_schedule *r, long iteration)
 }
 
 typedef struct render_plan {
-    integrator_settings keys;        /* the integrator keys as resolved (key table, scene.h); the decisions
-                                      * below are derived from them */
+    /* One decided value per setting, named as its key where it is one; the stages read these, never
+     * scene.integrator. */
     integrator_type type;
     char type_name[64];
-    time_window window;
+    time_window window;              /* the time keys resolved; camera_unwarp is here only */
     bounce_limits bounces;
     surface_shading shading;         /* two-sided shading, consistency checks, the photon-points glossy rule */
     /* photon points */
-    double light_paths;              /* photon_count: light paths per iteration */
-    double volume_budget, surface_budget; /* photons per iteration */
-    radius_schedule r_vol, r_surf;
-    int volume_splat;               /* primary lines gathered photon by photon (volume_gather "splat") */
+    double photon_count;             /* light paths per iteration, and the surface photon budget */
+    double volume_photon_count;      /* volume photon budget per iteration */
+    int gather_photon_count;         /* surface photons gathered per camera hit (k nearest) */
+    radius_schedule r_vol;           /* volume_gather_radius, volume_alpha, radius_schedule */
+    radius_schedule r_surf;          /* gather_radius, alpha */
+    int include_surfaces, low_order_scattering, surface_chains;
+    camera_leg_choice camera_leg;
+    volume_gather_choice volume_gather;
+    pass_weights_choice pass_weights;
+    double glossy_regularization;
+    /* the path tracer */
+    int enable_rr;
+    double time_angular_share;
+    int uniform_time;                /* time_sampling "uniform" runs: gated, a medium, a light, one η */
+    /* DARTS (both integrators) */
     darts_plan darts;
-    int uniform_time;                /* path tracer, time_sampling "uniform", gated, a medium, a light, one η */
     /* renderer (the command line may override) */
     long spp;
-    double timeout_seconds, checkpoint_seconds;
+    double timeout, checkpoint_interval; /* seconds */
 } render_plan;
 
 /* Resolves the plan of a loaded scene. 0, or -1 with err (out of memory; a plan this code cannot render). */

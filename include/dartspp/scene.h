@@ -120,9 +120,19 @@ static inline double time_window_end(const time_window *tw)
  * Parsing, validation, `--set`, the unknown/unread-key notes, the plan's JSON and `dartspp keys` all iterate
  * that table; the resolved values land in the structs below, which the plan reads. */
 typedef enum { INTEGRATOR_PATH_TRACER, INTEGRATOR_PHOTON_POINTS, INTEGRATOR_COUNT } integrator_type;
+/* The other choice keys, in the order of their choices in the key table. */
+typedef enum { LIGHT_SELECTION_POWER, LIGHT_SELECTION_UNIFORM } light_selection_choice;
+typedef enum { TIME_SAMPLING_NONE, TIME_SAMPLING_UNIFORM } time_sampling_choice;
+typedef enum { VOLUME_PHOTON_POINTS, VOLUME_PHOTON_BEAMS } volume_photon_type_choice;
+typedef enum { CAMERA_LEG_EUCLIDEAN, CAMERA_LEG_PROJECTED } camera_leg_choice;
+typedef enum { VOLUME_GATHER_SPLAT, VOLUME_GATHER_BEAM } volume_gather_choice;
+typedef enum { RADIUS_SCHEDULE_2D, RADIUS_SCHEDULE_3D } radius_schedule_choice;
+typedef enum { PASS_WEIGHTS_KERNEL_AREA, PASS_WEIGHTS_EQUAL } pass_weights_choice;
+typedef enum { DARTS_MIRRORS_FULL, DARTS_MIRRORS_STRAIGHT } darts_mirrors_choice;
 
 typedef struct {
-    /* choice keys hold the index of their choice in the key table */
+    /* Every field is named as its key; choice keys hold the index of their choice in the key table (the
+     * enums above) */
     int type;                       /* type: integrator_type */
     char type_name[64];             /* the chosen type's name */
     long min_bounces, max_bounces;  /* path segments incl. the light connection (docs/design.md §5.1) */
@@ -133,11 +143,11 @@ typedef struct {
     time_window window;
     double sensor_jitter_fwhm, sensor_jitter_tail; /* the sensor's time response (sensor.h) */
     char sensor_response_file[512];
-    double vacuum_speed;            /* vaccum_speed_of_light (the format's spelling) */
-    double vacuum_eta;              /* 1 / vacuum_speed */
-    int light_selection_uniform;    /* light_selection: 0 "power" (by flux), 1 "uniform" */
+    double vaccum_speed_of_light;   /* the format's spelling */
+    double vacuum_eta;              /* 1 / vaccum_speed_of_light */
+    int light_selection;            /* light_selection_choice: by flux or uniform */
     int enable_rr;                  /* path tracer: Russian roulette on throughput */
-    int time_sampling_uniform;      /* path tracer: time_sampling 0 "none", 1 "uniform" (Jarabo et al. 2014) */
+    int time_sampling;              /* path tracer: time_sampling_choice (uniform: Jarabo et al. 2014) */
     double time_angular_share;      /* path tracer, uniform time: share of time-angular directions */
     /* photon points */
     double photon_count, volume_photon_count;
@@ -145,33 +155,33 @@ typedef struct {
     double gather_radius, volume_gather_radius, alpha, volume_alpha;
     int fixed_volume_radius, include_surfaces, low_order_scattering;
     int enable_guiding, enable_elliptical, strict_time_width;
-    int volume_beams;               /* volume_photon_type: 0 points, 1 beams (loads, refused at render time) */
-    int camera_leg_projected;       /* camera_leg: 0 euclidean, 1 projected */
-    int volume_gather_beam;         /* volume_gather: 0 splat, 1 beam */
-    int radius_schedule_3d;         /* radius_schedule: 0 2d, 1 3d */
-    int pass_weights_equal;         /* pass_weights: 0 kernel_area, 1 equal */
+    int volume_photon_type;         /* volume_photon_type_choice (beams load and are refused at render time) */
+    int camera_leg;                 /* camera_leg_choice */
+    int volume_gather;              /* volume_gather_choice */
+    int radius_schedule;            /* radius_schedule_choice */
+    int pass_weights;               /* pass_weights_choice */
     int eda;
     double eda_alpha;
     char eda_table_dir[512];
     int eda_shape[3];               /* [C/S rows, S columns, cos bins] */
     double da_defensive;
-    int darts_mirrors_straight;     /* darts_mirrors: 0 full, 1 straight (plan.h) */
+    int darts_mirrors;              /* darts_mirrors_choice */
     double mirror_defensive;
     int surface_chains;
     int early_exit;
     int control_vertex_mis;
-    int ellipse_residual;           /* 0 uniform, 1 exponential (residual_sampling in plan.h) */
-    int two_sided_shading;          /* enable_two_sided_shading */
-    int consistency_checks;         /* enable_consistency_checks */
+    int ellipse_residual;           /* residual_sampling (darts.h): uniform or exponential */
+    int enable_two_sided_shading;
+    int enable_consistency_checks;
     double glossy_gather_alpha;
     double glossy_regularization;
 } integrator_settings;
 
 typedef struct {
     long spp;                /* progressive passes; 0 = no limit */
-    double timeout_seconds;  /* 0 = no limit */
+    double timeout;  /* seconds; 0 = no limit */
     char timeout_negative[32]; /* a negative timeout as written ("-1", "-5s"): no limit, with a warning; else "" */
-    double checkpoint_seconds;
+    double checkpoint_interval; /* seconds */
     char output_file[1024];  /* LDR preview as written in the scene (not written by dartspp) */
     char hdr_output_file[1024];
     int ground_truth;        /* also write depth, first arrival, normal and albedo images (docs/sensor.md §3) */

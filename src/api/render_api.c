@@ -34,7 +34,7 @@ static int resolve_budget(const dp_render_request *rq, const scene *s, const ren
     if (*spp >= 0 && *limit < 0) *limit = 0;
     if (*spp == 0 && *limit == 0)
         return dp_fail(err, "spp 0 and time 0: nothing would end the render (give spp > 0 or time > 0)");
-    if (*spp < 0 && !(p->spp > 0) && !(p->timeout_seconds > 0))
+    if (*spp < 0 && !(p->spp > 0) && !(p->timeout > 0))
         return dp_fail(err, "%s: the scene's renderer.spp and renderer.timeout set no limit, and neither spp nor time "
                             "was given: nothing would end the render", s->path);
     return 0;

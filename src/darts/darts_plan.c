@@ -10,7 +10,7 @@
 static void resolve_eda(const scene *s, integrator_type type, darts_plan *d)
 {
     const integrator_settings *in = &s->integrator;
-    int uniform_time_asked = in->time_sampling_uniform;
+    int uniform_time_asked = in->time_sampling == TIME_SAMPLING_UNIFORM;
     for (int i = 0; i < s->medium_count; i++) {
         const medium *m = &s->media[i];
         eda_plan *e = &d->eda[i];
@@ -35,7 +35,7 @@ static void resolve_samplers(const scene *s, integrator_type type, darts_plan *d
 {
     const integrator_settings *in = &s->integrator;
     int pt = type == INTEGRATOR_PATH_TRACER, unwarped = in->window.camera_unwarp;
-    int uniform_time_asked = in->time_sampling_uniform;
+    int uniform_time_asked = in->time_sampling == TIME_SAMPLING_UNIFORM;
     int asked = in->enable_guiding || in->enable_elliptical || in->eda;
     for (int i = 0; i < s->medium_count; i++) asked |= s->media[i].eda;
     int gated_medium = in->window.gated && s->medium_count > 0 && (!pt || s->light_count > 0);
@@ -57,7 +57,7 @@ static void resolve_samplers(const scene *s, integrator_type type, darts_plan *d
         d->eta_lb = dp_fmin(d->eta_lb, s->media[i].eta);
         d->eta_ub = dp_fmax(d->eta_ub, s->media[i].eta);
     }
-    d->darts_mirrors = in->darts_mirrors_straight ? DARTS_MIRRORS_STRAIGHT : DARTS_MIRRORS_FULL;
+    d->darts_mirrors = in->darts_mirrors;
     d->mirror_defensive = in->mirror_defensive;
     d->cv_share[0] = 1.0;
 }

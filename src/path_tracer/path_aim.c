@@ -56,7 +56,7 @@ int pt_pass_aim_init(pt_pass *pp, dp_error *err)
     double acc = 0.0;
     for (int i = 0; i < n; i++) {
         guide_for_light(p, s->lights[i].pos, &pp->guide[i]);
-        if (emitter_connectable(&s->lights[i])) acc += emitter_selection_pdf(s, i, !s->integrator.light_selection_uniform);
+        if (emitter_connectable(&s->lights[i])) acc += emitter_selection_pdf(s, i, s->integrator.light_selection == LIGHT_SELECTION_POWER);
         pp->light_cdf[i] = acc;
     }
     for (int i = 0; i < n; i++) pp->light_cdf[i] = acc > 0.0 ? pp->light_cdf[i] / acc : (i + 1.0) / n;
@@ -227,7 +227,7 @@ static void uniform_time_direction(pixel_ctx *c, path_state *ps, const medium *m
     a->pre_r = -log1p(-rng_uniform(c->rng)) / v3_comp(m->sigma_t, ch);
     double u[3] = {rng_uniform(c->rng), rng_uniform(c->rng), rng_uniform(c->rng)}, w;
     ps->d = time_angular_mix_sample(&m->phase, ps->d, ps->o, a->pt.y, a->pre_r,
-                                    c->pass->p->keys.time_angular_share, u, &w);
+                                    c->pass->p->time_angular_share, u, &w);
     ps->beta = v3_scale(ps->beta, w);
 }
 

@@ -185,7 +185,7 @@ static int survive(pixel_ctx *c, path_state *ps)
     const time_window *tw = &c->pass->p->window;
     if (tw->gated && ps->time >= time_window_end(tw)) return 0;
     if (v3_is_zero(ps->beta) || !v3_is_finite(ps->beta)) return 0;
-    if (!c->pass->p->keys.enable_rr || ps->depth < 5) return 1;
+    if (!c->pass->p->enable_rr || ps->depth < 5) return 1;
     double q = dp_fmin(1.0, v3_max(ps->beta));
     if (rng_uniform(c->rng) >= q) return 0;
     ps->beta = v3_scale(ps->beta, 1.0 / q);

@@ -10,9 +10,9 @@ int photon_points_pass(const scene *s, const render_plan *p, const eda_set *eda,
     photon_set ps;
     photon_pass_input pin;
     photon_pass_input_init(&pin, s, p, eda, seed, iteration, stop);
-    gather_input g = {.k_surf = (int)p->keys.gather_photon_count, .bounces = p->bounces, .shading = p->shading,
-                      .camera_leg_projected = p->keys.camera_leg_projected, .camera_unwarp = p->window.camera_unwarp,
-                      .volume_splat = p->volume_splat,
+    gather_input g = {.k_surf = p->gather_photon_count, .bounces = p->bounces, .shading = p->shading,
+                      .camera_leg_projected = p->camera_leg == CAMERA_LEG_PROJECTED, .camera_unwarp = p->window.camera_unwarp,
+                      .volume_splat = p->volume_gather == VOLUME_GATHER_SPLAT,
                       .stop = stop, .r_vol = schedule_radius(&p->r_vol, iteration),
                       .r_surf = schedule_radius(&p->r_surf, iteration),
                       .alpha_reg = plan_glossy_regularization(p, iteration)};

@@ -18,33 +18,45 @@ double progressive_radius(double r0, double alpha, long iteration, int dims)
 static int resolve_uniform_time(const scene *s, const render_plan *p)
 {
     const integrator_settings *in = &s->integrator;
-    return p->type == INTEGRATOR_PATH_TRACER && in->time_sampling_uniform && in->window.gated && s->medium_count > 0 &&
+    return p->type == INTEGRATOR_PATH_TRACER && in->time_sampling == TIME_SAMPLING_UNIFORM && in->window.gated && s->medium_count > 0 &&
            s->light_count > 0 && scene_eta_uniform(s);
+}
+
+static void resolve_photon_points(const integrator_settings *in, render_plan *p)
+{
+    p->photon_count = in->photon_count;
+    p->volume_photon_count = in->volume_photon_count;
+    p->gather_photon_count = (int)in->gather_photon_count;
+    p->r_vol = (radius_schedule){in->volume_gather_radius, in->volume_alpha, in->radius_schedule == RADIUS_SCHEDULE_3D ? 3 : 2};
+    p->r_surf = (radius_schedule){in->gather_radius, in->alpha, 2};
+    p->include_surfaces = in->include_surfaces;
+    p->low_order_scattering = in->low_order_scattering;
+    p->surface_chains = in->surface_chains;
+    p->camera_leg = in->camera_leg;
+    p->volume_gather = in->volume_gather;
+    p->pass_weights = in->pass_weights;
+    p->glossy_regularization = in->glossy_regularization;
 }
 
 int plan_resolve(const scene *s, render_plan *p, dp_error *err)
 {
     const integrator_settings *in = &s->integrator;
     memset(p, 0, sizeof *p);
-    p->keys = *in;
-    if (in->volume_beams)
+    if (in->volume_photon_type == VOLUME_PHOTON_BEAMS)
         return dp_fail(err, "%s: integrator.volume_photon_type: 'beams' is not supported (supported: points)", s->path);
     p->type = in->type;
     snprintf(p->type_name, sizeof p->type_name, "%s", in->type_name);
     p->window = in->window;
     p->bounces = (bounce_limits){(int)in->min_bounces, (int)in->max_bounces};
-    p->shading = (surface_shading){in->two_sided_shading, in->consistency_checks, in->glossy_gather_alpha};
-    p->light_paths = in->photon_count;
-    p->volume_budget = in->volume_photon_count;
-    p->surface_budget = in->photon_count;
-    p->r_vol = (radius_schedule){in->volume_gather_radius, in->volume_alpha, in->radius_schedule_3d ? 3 : 2};
-    p->r_surf = (radius_schedule){in->gather_radius, in->alpha, 2};
-    p->volume_splat = !in->volume_gather_beam;
+    p->shading = (surface_shading){in->enable_two_sided_shading, in->enable_consistency_checks, in->glossy_gather_alpha};
+    resolve_photon_points(in, p);
+    p->enable_rr = in->enable_rr;
+    p->time_angular_share = in->time_angular_share;
     p->uniform_time = resolve_uniform_time(s, p);
     if (darts_plan_resolve(s, p->type, &p->shading, &p->darts, err)) return -1;
     p->spp = s->renderer.spp;
-    p->timeout_seconds = s->renderer.timeout_seconds;
-    p->checkpoint_seconds = s->renderer.checkpoint_seconds;
+    p->timeout = s->renderer.timeout;
+    p->checkpoint_interval = s->renderer.checkpoint_interval;
     return 0;
 }
 
@@ -55,7 +67,7 @@ void plan_free(render_plan *p)
 
 double plan_surface_slack(const render_plan *p, long iteration)
 {
-    if (!p->keys.include_surfaces) return 0.0;
+    if (!p->include_surfaces) return 0.0;
     return p->darts.eta_ub * schedule_radius(&p->r_surf, iteration);
 }
 
@@ -63,15 +75,15 @@ double plan_surface_slack(const render_plan *p, long iteration)
  * with the surface radius, α_reg,i = α_reg,0 · R_i/R_0, so the estimate stays consistent (docs/defaults.md §3.7). */
 double plan_glossy_regularization(const render_plan *p, long iteration)
 {
-    double a0 = p->keys.glossy_regularization;
+    double a0 = p->glossy_regularization;
     if (p->type != INTEGRATOR_PHOTON_POINTS || !(a0 > 0.0)) return 0.0;
     return a0 * schedule_radius(&p->r_surf, iteration) / p->r_surf.r0;
 }
 
 double plan_pass_weight(const render_plan *p, long iteration)
 {
-    if (p->type != INTEGRATOR_PHOTON_POINTS || p->keys.pass_weights_equal) return 1.0;
-    const radius_schedule *r = p->keys.include_surfaces ? &p->r_surf : &p->r_vol;
+    if (p->type != INTEGRATOR_PHOTON_POINTS || p->pass_weights == PASS_WEIGHTS_EQUAL) return 1.0;
+    const radius_schedule *r = p->include_surfaces ? &p->r_surf : &p->r_vol;
     double q = schedule_radius(r, iteration) / r->r0;
     return q * q;
 }
@@ -92,14 +104,14 @@ static cJSON *key_value_json(const scene_key *k, const integrator_settings *in)
 }
 
 /* Every integrator key that changes the image and that this integrator reads, as resolved. */
-static void add_keys(cJSON *root, const render_plan *p)
+static void add_keys(cJSON *root, const render_plan *p, const scene *s)
 {
     cJSON *keys = cJSON_AddObjectToObject(root, "keys");
     int n;
     const scene_key *table = scene_keys(&n);
     for (int i = 0; i < n; i++)
         if (table[i].section == KEY_SECTION_INTEGRATOR && table[i].changes_image && scene_key_read_by(&table[i], p->type))
-            cJSON_AddItemToObject(keys, table[i].name, key_value_json(&table[i], &p->keys));
+            cJSON_AddItemToObject(keys, table[i].name, key_value_json(&table[i], &s->integrator));
 }
 
 /* What the DARTS photon pass will run, as derived from the keys and the scene. */
@@ -143,7 +155,7 @@ int plan_json(const render_plan *p, const scene *s, char *out, size_t n)
         cJSON_AddItemToObject(root, "window", cJSON_CreateDoubleArray(w, 2));
         cJSON_AddNumberToObject(root, "frames", tw->frame_count);
     }
-    add_keys(root, p);
+    add_keys(root, p, s);
     if (p->type == INTEGRATOR_PATH_TRACER)
         cJSON_AddStringToObject(root, "method", p->uniform_time ? "uniform-time path tracer (Jarabo et al. 2014)"
                                                 : p->darts.active ? "DARTS path tracer" : "path tracer");

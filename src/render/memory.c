@@ -37,7 +37,7 @@ static int pilot_pass(const scene *s, const render_plan *p, photon_set *ps, int 
     photon_pass_input pilot;
     photon_pass_input_init(&pilot, s, p, NULL, 0x70696c6f74ULL, 0, NULL);
     *chains = photon_pass_uses_chains(&pilot);
-    pilot.light_paths = dp_fmin(p->light_paths, PHOTON_PASS_BATCH);
+    pilot.light_paths = dp_fmin(p->photon_count, PHOTON_PASS_BATCH);
     pilot.volume_budget = pilot.surface_budget = pilot.light_paths * 1e4; /* no budget cut */
     dp_error err;
     if (photon_pass(s, &pilot, ps, &err)) return 0;
@@ -76,14 +76,14 @@ void render_memory_estimate(const scene *s, const render_plan *p, int have_refer
 void memory_photon_points(const scene *s, const render_plan *p, memory_estimate *m)
 {
     memory_item_add(m, "EDA tables", "integrator.eda_shape", (double)eda_set_bytes(s, &p->darts));
-    double V = p->volume_budget, S = p->surface_budget, batch_photons = 1.0;
+    double V = p->volume_photon_count, S = p->photon_count, batch_photons = 1.0;
     photon_set pilot;
     int chains, piloted = pilot_pass(s, p, &pilot, &chains);
     /* the budgets cap what the light paths store; surface chains start once the volume budget is full, which
      * the pilot's single batch never sees, and can fill the surface budget: counted full */
     if (piloted) {
-        V = dp_fmin(V, (double)pilot.n_vol / pilot.paths * p->light_paths);
-        if (!chains) S = dp_fmin(S, (double)pilot.n_surf / pilot.paths * p->light_paths);
+        V = dp_fmin(V, (double)pilot.n_vol / pilot.paths * p->photon_count);
+        if (!chains) S = dp_fmin(S, (double)pilot.n_surf / pilot.paths * p->photon_count);
         batch_photons = dp_fmax((double)(pilot.n_vol + pilot.n_surf) / pilot.paths * PHOTON_PASS_BATCH, 1.0);
     }
     /* each set's array at its capacity, and its map: volume_map_bytes is about (16 + 56) B a photon plus the
@@ -94,9 +94,9 @@ void memory_photon_points(const scene *s, const render_plan *p, memory_estimate 
         memory_item_add(m, "volume photons and their map", "integrator.volume_photon_count", photon_array_bytes(V) + V * per_mapped);
     if (volume) /* the first pass's radius is the largest: the most footprint entries */
         memory_item_add(m, "primary lines and splat of the sensor pass", "camera.resolution",
-            sensor_pass_bytes(s, p->volume_splat, piloted ? pilot.vol : NULL, piloted ? pilot.n_vol : 0,
+            sensor_pass_bytes(s, p->volume_gather == VOLUME_GATHER_SPLAT, piloted ? pilot.vol : NULL, piloted ? pilot.n_vol : 0,
                               schedule_radius(&p->r_vol, 0), V));
-    if (p->keys.include_surfaces || !volume)
+    if (p->include_surfaces || !volume)
         memory_item_add(m, "surface photons and their map", "integrator.photon_count", photon_array_bytes(S) + S * per_mapped);
     memory_item_add(m, "photon batch buffers", NULL, photon_array_bytes(batch_photons));
     if (piloted) photon_set_free(&pilot);

@@ -247,7 +247,7 @@ static int render_passes(const scene *s, const render_plan *p, const render_opti
         return -1;
     }
     long spp = opt->spp >= 0 ? opt->spp : p->spp;
-    double limit = opt->time_limit >= 0 ? opt->time_limit : p->timeout_seconds;
+    double limit = opt->time_limit >= 0 ? opt->time_limit : p->timeout;
     progress_line pl = {.tty = isatty(2), .last_print = -1e9};
     double t0 = dp_seconds();
     int rc = 0;

@@ -72,7 +72,7 @@ int render_run_refused(const render_cluster *cluster, int status)
 static void warn_unbounded(const render_run_job *j)
 {
     long spp = j->ro.spp >= 0 ? j->ro.spp : j->p.spp;
-    double limit = j->ro.time_limit >= 0 ? j->ro.time_limit : j->p.timeout_seconds;
+    double limit = j->ro.time_limit >= 0 ? j->ro.time_limit : j->p.timeout;
     const char *stop = "it runs until Ctrl-C (or SIGTERM), which writes the completed passes";
     if (limit > 0 && spp > 0) return;
     if (j->ro.time_limit < 0 && j->s.renderer.timeout_negative[0] && spp > 0)

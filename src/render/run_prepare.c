@@ -69,7 +69,7 @@ static void set_up_checkpoints(render_run_job *j)
 {
     const render_request *rq = j->rq;
     j->cp = (checkpoints){.p = &j->p, .plan_json = j->plan_json, .out = j->out, .quiet = j->quiet, .skip = rq->skip,
-                          .every = j->rank != 0 ? 0 : rq->checkpoint >= 0 ? rq->checkpoint : j->p.checkpoint_seconds};
+                          .every = j->rank != 0 ? 0 : rq->checkpoint >= 0 ? rq->checkpoint : j->p.checkpoint_interval};
 }
 
 /* The checkpoint state beside the outputs (resume.c), rank 0's: with --resume it is loaded into j->resumed and

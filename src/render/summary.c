@@ -81,10 +81,10 @@ void summary_print_path_method(const scene *s, const render_plan *p)
         return;
     }
     if (!d->active) {
-        int asked = in->enable_guiding || in->enable_elliptical || in->time_sampling_uniform;
+        int asked = in->enable_guiding || in->enable_elliptical || in->time_sampling == TIME_SAMPLING_UNIFORM;
         printf("path tracer: plain%s\n", !asked ? ""
                : s->light_count == 0 ? "; DARTS and uniform time off: the scene has no light"
-               : in->time_sampling_uniform && p->window.gated && s->medium_count > 0
+               : in->time_sampling == TIME_SAMPLING_UNIFORM && p->window.gated && s->medium_count > 0
                    ? "; uniform time off: the refractive index is not uniform"
                    : "; DARTS and uniform time off: the scene has no medium or no gate");
         return;
@@ -122,7 +122,7 @@ const char *summary_path_tracer_light(const emitter *e, const render_plan *p)
  * integrator reaches it. */
 static void print_lights(const scene *s, const render_plan *p)
 {
-    int by_power = !s->integrator.light_selection_uniform;
+    int by_power = s->integrator.light_selection == LIGHT_SELECTION_POWER;
     printf("lights (selected %s):", by_power ? "in proportion to flux" : "uniformly");
     for (int i = 0; i < s->light_count; i++) {
         const emitter *e = &s->lights[i];

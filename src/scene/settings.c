@@ -258,15 +258,15 @@ static int resolve_integrator(json_ctx *c, const cJSON *v, integrator_settings *
     if (in->min_bounces > in->max_bounces)
         return jfail(c, "integrator", "min_bounces", "%ld is more than max_bounces (%ld): no path would count",
                      in->min_bounces, in->max_bounces);
-    in->vacuum_eta = 1.0 / in->vacuum_speed;
+    in->vacuum_eta = 1.0 / in->vaccum_speed_of_light;
     if (!isfinite(in->vacuum_eta))
-        return jfail(c, "integrator", "vaccum_speed_of_light", "too small (got %g)", in->vacuum_speed);
+        return jfail(c, "integrator", "vaccum_speed_of_light", "too small (got %g)", in->vaccum_speed_of_light);
     if (in->type == INTEGRATOR_PHOTON_POINTS && !(in->volume_gather_radius > 0 && in->volume_gather_radius < 1e29))
         return jfail(c, "integrator", "volume_gather_radius", "photon points need a finite radius > 0 (got %g)",
                      in->volume_gather_radius);
     if (in->type == INTEGRATOR_PHOTON_POINTS && !(in->photon_count >= 1))
         return jfail(c, "integrator", "photon_count", "photon points need at least 1 light path per iteration");
-    if (in->type == INTEGRATOR_PATH_TRACER && in->time_sampling_uniform &&
+    if (in->type == INTEGRATOR_PATH_TRACER && in->time_sampling == TIME_SAMPLING_UNIFORM &&
         (in->enable_guiding || in->enable_elliptical || in->eda))
         return jfail(c, "integrator", "time_sampling",
                      "'uniform' is a method of its own (free flight, line-to-point connections, time-angular "
