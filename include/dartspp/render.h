@@ -126,34 +126,39 @@ typedef struct {
  *        RENDER_KEPT  the driver's own: render_stats_add leaves it; over the ranks rank 0's
  *   api: 1 when the embedding API returns it (dp_render_result.stats, in this order).
  * A new figure: one line here, and the line that measures it. */
-#define RENDER_FIGURES(X)                                                                                               \
-    X(double, camera_rays, RENDER_SUM, 1, "primary rays traced")                                                        \
-    X(double, rays, RENDER_SUM, 1, "all rays traced (primary, bounce, shadow)")                                         \
-    X(double, photon_paths, RENDER_SUM, 1, "light paths traced (photon points)")                                        \
-    X(double, stored_photons, RENDER_SUM, 1, "volume + surface photons stored, summed over iterations")                 \
-    X(double, r_vol, RENDER_LAST, 1, "the volume radius of the last iteration")                                         \
-    X(double, r_surf, RENDER_LAST, 1, "the surface radius of the last iteration")                                       \
-    X(double, t_photon, RENDER_SUM, 1, "seconds spent in the photon pass")                                              \
-    X(double, t_maps, RENDER_SUM, 1, "seconds spent in the map builds")                                                 \
-    X(double, t_gather, RENDER_SUM, 1, "seconds spent in the sensor pass")                                              \
-    X(long, nonfinite_pixels, RENDER_KEPT, 1, "pixels of the images not finite at the end, written as 0 "               \
-      "(film_nonfinite_pixels)")                                                                                        \
-    X(long, passes, RENDER_KEPT, 0, "passes completed (the film's count)")                                              \
-    X(long, resumed_passes, RENDER_KEPT, 0, "of them, held by the film resumed (render_options.resume)")                \
-    X(double, seconds, RENDER_KEPT, 0, "render time")                                                                   \
-    X(long, nonfinite, RENDER_KEPT, 0, "non-finite contributions dropped (the film's count)")                           \
-    X(int, interrupted, RENDER_MAX, 0, "the stop flag ended the render")                                                \
-    X(double, early_exits, RENDER_SUM, 0, "light paths ended by the DARTS early exit")                                  \
-    X(double, aimed_paths, RENDER_SUM, 0, "light paths traced with the DARTS samplers (the rest: surface photons only)") \
-    X(double, chain_paths, RENDER_SUM, 0, "surface chains (photon.h): light paths traced by chains")                     \
-    X(double, chain_large, RENDER_SUM, 0, "surface chains: independent (large) steps")                                   \
-    X(double, chain_visible, RENDER_SUM, 0, "surface chains: large steps that stored a surface photon that can count")   \
-    X(double, chain_small, RENDER_SUM, 0, "surface chains: small steps proposed")                                        \
-    X(double, chain_accepted, RENDER_SUM, 0, "surface chains: small steps accepted")                                     \
-    X(double, t_cluster, RENDER_KEPT, 0, "several ranks: rank 0's seconds in the rounds' agreement and the reductions") \
-    X(long, reductions, RENDER_KEPT, 0, "several ranks: film reductions onto rank 0 (checkpoints, log rows, the end)")  \
-    X(long, dropped, RENDER_SUM, 0, "several ranks: passes dropped unfinished (interrupt, error), summed over the "      \
-      "ranks by a reduction; 0 means the film holds iterations 0..passes-1 exactly")
+#define RENDER_FIGURES(X)                                                                                              \
+    X(double, camera_rays, RENDER_SUM, 1, "primary rays traced")                                                       \
+    X(double, rays, RENDER_SUM, 1, "all rays traced (primary, bounce, shadow)")                                        \
+    X(double, photon_paths, RENDER_SUM, 1, "light paths traced (photon points)")                                       \
+    X(double, stored_photons, RENDER_SUM, 1, "volume + surface photons stored, summed over iterations")                \
+    X(double, r_vol, RENDER_LAST, 1, "the volume radius of the last iteration")                                        \
+    X(double, r_surf, RENDER_LAST, 1, "the surface radius of the last iteration")                                      \
+    X(double, t_photon, RENDER_SUM, 1, "seconds spent in the photon pass")                                             \
+    X(double, t_maps, RENDER_SUM, 1, "seconds spent in the map builds")                                                \
+    X(double, t_gather, RENDER_SUM, 1, "seconds spent in the sensor pass")                                             \
+    X(long, nonfinite_pixels, RENDER_KEPT, 1, "pixels of the images not finite at the end, written as 0 "              \
+      "(film_nonfinite_pixels)")                                                                                       \
+    X(long, passes, RENDER_KEPT, 0, "passes completed (the film's count)")                                             \
+    X(long, resumed_passes, RENDER_KEPT, 0, "of them, held by the film resumed (render_options.resume)")               \
+    X(double, seconds, RENDER_KEPT, 0, "render time")                                                                  \
+    X(long, nonfinite, RENDER_KEPT, 0, "non-finite contributions dropped (the film's count)")                          \
+    X(int, interrupted, RENDER_MAX, 0, "the stop flag ended the render")                                               \
+    X(double, early_exits, RENDER_SUM, 0, "light paths ended by the DARTS early exit")                                 \
+    X(double, aimed_paths, RENDER_SUM, 0, "light paths traced with the DARTS samplers "                                \
+      "(the rest: surface photons only)")                                                                              \
+    X(double, chain_paths, RENDER_SUM, 0, "surface chains (photon.h): light paths traced by chains")                   \
+    X(double, chain_large, RENDER_SUM, 0, "surface chains: independent (large) steps")                                 \
+    X(double, chain_visible, RENDER_SUM, 0, "surface chains: large steps that stored a surface photon "                \
+      "that can count")                                                                                                \
+    X(double, chain_small, RENDER_SUM, 0, "surface chains: small steps proposed")                                      \
+    X(double, chain_accepted, RENDER_SUM, 0, "surface chains: small steps accepted")                                   \
+    X(double, t_cluster, RENDER_KEPT, 0, "several ranks: rank 0's seconds in the rounds' agreement "                   \
+      "and the reductions")                                                                                            \
+    X(long, reductions, RENDER_KEPT, 0, "several ranks: film reductions onto rank 0 "                                  \
+      "(checkpoints, log rows, the end)")                                                                              \
+    X(long, dropped, RENDER_SUM, 0, "several ranks: passes dropped unfinished (interrupt, error), "                    \
+      "summed over the ranks by a reduction; 0 means the film holds "                                                  \
+      "iterations 0..passes-1 exactly")
 
 typedef enum { RENDER_SUM, RENDER_LAST, RENDER_MAX, RENDER_KEPT } render_combine;
 
