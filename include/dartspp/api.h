@@ -41,6 +41,15 @@ typedef struct {
                            * mse_q99, nonfinite_pixels: the columns of the error log's CSV (render.h) */
 extern const char *const DP_LOG_COLUMN_NAMES[DP_LOG_COLUMNS];
 
+/* One of the run's figures (render.h, RENDER_FIGURES): its name (a static string) and value; integer: 1 when
+ * the figure is a count (the value is then a whole number). */
+#define DP_STATS_MAX 32
+typedef struct {
+    const char *name;
+    double value;
+    int integer;
+} dp_stat;
+
 typedef struct {
     int width, height, frame_count;
     float *image;                 /* height × width × 3 (the gate image) */
@@ -51,10 +60,11 @@ typedef struct {
     int gated, camera_warped;     /* the time window, as the EXR headers record it */
     double gate_start, gate_end;
     char *warnings;               /* the scene's warnings, one per line, "" when none */
-    /* the run's figures (render_stats) */
-    long passes, nonfinite_pixels;
+    long passes;
     int interrupted;              /* the stop flag (or the progress callback) ended the render */
-    double seconds, camera_rays, rays, photon_paths, stored_photons, r_vol, r_surf, t_photon, t_maps, t_gather;
+    double seconds;
+    dp_stat stats[DP_STATS_MAX];  /* the run's figures that render.h marks for the API, in its order */
+    int stat_count;
     double *log;                  /* log_rows × DP_LOG_COLUMNS */
     int log_rows;
 } dp_render_result;

@@ -29,6 +29,11 @@ typedef struct {
 
 int film_init(film *f, int width, int height, const time_window *tw, dp_error *err);
 void film_free(film *f);
+/* The completed passes of `from` (sums, pass count, weights, non-finite count) into `to`, a film of the same
+ * size and frames; the pass in progress is not copied. */
+void film_copy_sums(film *to, const film *from);
+/* A new film `to` (film_init) holding the completed passes of `from`. 0, or -1 with err (out of memory). */
+int film_copy(film *to, const film *from, dp_error *err);
 /* Where a contribution arriving at path time t (tagged with frame, as film_splat) lands: decided once, so
  * that an estimator adding many contributions of one time (a photon splatted into many pixels) divides
  * once. */

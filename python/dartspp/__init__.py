@@ -50,14 +50,11 @@ class Result:
     passes       completed passes (iterations)
     seconds      render time (s), loading and checks excluded
     stats        dict of the run summary's figures: camera_rays, rays, photon_paths, stored_photons, r_vol,
-                 r_surf, t_photon, t_maps, t_gather, nonfinite_pixels
+                 r_surf, t_photon, t_maps, t_gather, nonfinite_pixels (render.h's RENDER_FIGURES for the API)
     log          error log rows against the reference (list of dicts, the CSV columns of `--log`); [] without one
     warnings     the scene's warnings (list of str)
     interrupted  True when stopped early (the progress callback asked, or Ctrl-C)
     """
-
-    _STATS = ("camera_rays", "rays", "photon_paths", "stored_photons", "r_vol", "r_surf", "t_photon", "t_maps",
-              "t_gather", "nonfinite_pixels")
 
     def __init__(self, d):
         self.image = d["image"]
@@ -68,7 +65,7 @@ class Result:
         self.passes = d["passes"]
         self.seconds = d["seconds"]
         self.interrupted = d["interrupted"]
-        self.stats = {k: d[k] for k in self._STATS}
+        self.stats = d["stats"]
         self.log = [dict(zip(d["log_columns"], row.tolist())) for row in d["log"]]
         self.warnings = [w for w in d["warnings"].splitlines() if w]
         self._window = (d["gated"], d["camera_warped"], d["gate_start"], d["gate_end"])

@@ -83,6 +83,18 @@ static int put(PyObject *d, const char *key, PyObject *value)
     return rc;
 }
 
+/* The run's figures (dp_render_result.stats) as a dict, in their order: int for the counts, else float. */
+static PyObject *stats_dict(const dp_render_result *r)
+{
+    PyObject *d = PyDict_New();
+    for (int i = 0; d && i < r->stat_count; i++) {
+        const dp_stat *st = &r->stats[i];
+        if (put(d, st->name, st->integer ? PyLong_FromLong((long)st->value) : PyFloat_FromDouble(st->value)))
+            Py_CLEAR(d);
+    }
+    return d;
+}
+
 static PyObject *result_dict(const dp_render_result *r)
 {
     PyObject *d = PyDict_New();
@@ -100,15 +112,9 @@ static PyObject *result_dict(const dp_render_result *r)
              put(d, "gated", PyBool_FromLong(r->gated)) || put(d, "camera_warped", PyBool_FromLong(r->camera_warped)) ||
              put(d, "gate_start", PyFloat_FromDouble(r->gate_start)) ||
              put(d, "gate_end", PyFloat_FromDouble(r->gate_end)) || put(d, "passes", PyLong_FromLong(r->passes)) ||
-             put(d, "nonfinite_pixels", PyLong_FromLong(r->nonfinite_pixels)) ||
              put(d, "interrupted", PyBool_FromLong(r->interrupted)) ||
-             put(d, "seconds", PyFloat_FromDouble(r->seconds)) ||
-             put(d, "camera_rays", PyFloat_FromDouble(r->camera_rays)) || put(d, "rays", PyFloat_FromDouble(r->rays)) ||
-             put(d, "photon_paths", PyFloat_FromDouble(r->photon_paths)) ||
-             put(d, "stored_photons", PyFloat_FromDouble(r->stored_photons)) ||
-             put(d, "r_vol", PyFloat_FromDouble(r->r_vol)) || put(d, "r_surf", PyFloat_FromDouble(r->r_surf)) ||
-             put(d, "t_photon", PyFloat_FromDouble(r->t_photon)) || put(d, "t_maps", PyFloat_FromDouble(r->t_maps)) ||
-             put(d, "t_gather", PyFloat_FromDouble(r->t_gather)) || put(d, "log", double_array(r->log, 2, log));
+             put(d, "seconds", PyFloat_FromDouble(r->seconds)) || put(d, "stats", stats_dict(r)) ||
+             put(d, "log", double_array(r->log, 2, log));
     if (rc) Py_CLEAR(d);
     return d;
 }

@@ -115,6 +115,19 @@ static int after_pass(void *ctx, const film *f, const render_stats *st, dp_error
     return 0;
 }
 
+_Static_assert(RENDER_FIGURE_COUNT <= DP_STATS_MAX, "dp_render_result.stats has room for every figure");
+
+/* The figures render.h marks for the API (RENDER_FIGURES) into res->stats, in its order. */
+static void fill_stats(const render_stats *st, dp_render_result *res)
+{
+    res->stat_count = 0;
+    for (int i = 0; i < RENDER_FIGURE_COUNT; i++) {
+        const render_figure *fg = &render_figures[i];
+        if (fg->api)
+            res->stats[res->stat_count++] = (dp_stat){fg->name, render_figure_get(st, fg), fg->type != RENDER_FIGURE_DOUBLE};
+    }
+}
+
 /* The film's images, the time window and the figures of the run into res. */
 static int fill_result(const film *f, const render_stats *st, const render_plan *p, dp_render_result *res,
                        dp_error *err)
@@ -144,18 +157,11 @@ static int fill_result(const film *f, const render_stats *st, const render_plan 
         }
     }
     res->passes = st->passes;
-    res->nonfinite_pixels = film_nonfinite_pixels(f);
     res->interrupted = st->interrupted;
     res->seconds = st->seconds;
-    res->camera_rays = st->camera_rays;
-    res->rays = st->rays;
-    res->photon_paths = st->photon_paths;
-    res->stored_photons = st->stored_photons;
-    res->r_vol = st->r_vol;
-    res->r_surf = st->r_surf;
-    res->t_photon = st->t_photon;
-    res->t_maps = st->t_maps;
-    res->t_gather = st->t_gather;
+    render_stats figures = *st;
+    figures.nonfinite_pixels = film_nonfinite_pixels(f);
+    fill_stats(&figures, res);
     return 0;
 }
 

@@ -82,6 +82,15 @@ vec3 bsdf_plastic_substrate(const bsdf *b, vec3 albedo, vec3 wi, vec3 wo);
 /* rough_plastic: the table b->coat_scale (after alpha, ior and ks are set) */
 void bsdf_rough_plastic_prepare(bsdf *b);
 
+/* ---- a rough coat over a diffuse base: the sampling shared by rough_plastic and pbrt_plastic (rough_plastic.c) ----
+ * The coat rb's reflection with probability pg (the glossy lobe's share when both lobes are asked), else the
+ * cosine-weighted diffuse base; the sample's pdf and weight come from the model's own pdf and eval over the
+ * lobes asked. For wi.z > 0: 1 and *s filled, or 0 when nothing can be sampled. */
+typedef vec3 bsdf_eval_fn(const bsdf *b, vec3 albedo, vec3 wi, vec3 wo, unsigned lobes);
+typedef double bsdf_pdf_fn(const bsdf *b, vec3 albedo, vec3 wi, vec3 wo, unsigned lobes);
+int bsdf_coat_sample(const bsdf *b, vec3 albedo, vec3 wi, const double u[3], unsigned lobes, double pg,
+                     const bsdf_rough_boundary *rb, bsdf_eval_fn *eval, bsdf_pdf_fn *pdf, bsdf_sample *s);
+
 /* ---- small helpers ---- */
 static inline vec3 bsdf_reflect_z(vec3 w) { return v3(-w.x, -w.y, w.z); }
 /* A value safe to return: finite and non-negative, else 0. */

@@ -54,19 +54,6 @@ int bsdf_pbrt_plastic_sample(const bsdf *b, vec3 albedo, vec3 wi, const double u
     if (wi.z <= 0.0) return 0;
     int gl = (lobes & BSDF_LOBE_GLOSSY) != 0, di = (lobes & BSDF_LOBE_DIFFUSE) != 0;
     double pg = gl && di ? 0.5 : (gl ? 1.0 : 0.0);
-    if (gl && u[2] < pg) {
-        bsdf_rough_boundary rb = coat_of(b);
-        double f, p;
-        if (!bsdf_rough_boundary_sample(&rb, wi, u, &s->wo, &f, &p)) return 0;
-        s->lobe = BSDF_LOBE_GLOSSY;
-    } else {
-        if (!di) return 0;
-        s->wo = sample_cosine_hemisphere(u[0], u[1]);
-        s->lobe = BSDF_LOBE_DIFFUSE;
-    }
-    if (s->wo.z <= 0.0) return 0;
-    s->pdf = bsdf_pbrt_plastic_pdf(b, albedo, wi, s->wo, lobes);
-    if (!(s->pdf > 0.0)) return 0;
-    s->weight = v3_scale(bsdf_pbrt_plastic_eval(b, albedo, wi, s->wo, lobes), s->wo.z / s->pdf);
-    return 1;
+    bsdf_rough_boundary rb = coat_of(b);
+    return bsdf_coat_sample(b, albedo, wi, u, lobes, pg, &rb, bsdf_pbrt_plastic_eval, bsdf_pbrt_plastic_pdf, s);
 }

@@ -84,25 +84,31 @@ double bsdf_rough_plastic_pdf(const bsdf *b, vec3 albedo, vec3 wi, vec3 wo, unsi
     return p;
 }
 
+int bsdf_coat_sample(const bsdf *b, vec3 albedo, vec3 wi, const double u[3], unsigned lobes, double pg,
+                     const bsdf_rough_boundary *rb, bsdf_eval_fn *eval, bsdf_pdf_fn *pdf, bsdf_sample *s)
+{
+    if (pg > 0.0 && u[2] < pg) {
+        double f, p;
+        if (!bsdf_rough_boundary_sample(rb, wi, u, &s->wo, &f, &p)) return 0;
+        s->lobe = BSDF_LOBE_GLOSSY;
+    } else {
+        if (!(lobes & BSDF_LOBE_DIFFUSE)) return 0;
+        s->wo = sample_cosine_hemisphere(u[0], u[1]);
+        s->lobe = BSDF_LOBE_DIFFUSE;
+    }
+    if (s->wo.z <= 0.0) return 0;
+    s->pdf = pdf(b, albedo, wi, s->wo, lobes);
+    if (!(s->pdf > 0.0)) return 0;
+    s->weight = v3_scale(eval(b, albedo, wi, s->wo, lobes), s->wo.z / s->pdf);
+    return 1;
+}
+
 int bsdf_rough_plastic_sample(const bsdf *b, vec3 albedo, vec3 wi, const double u[3], unsigned lobes,
                               bsdf_sample *s)
 {
     if (wi.z <= 0.0) return 0;
     int gl = (lobes & BSDF_LOBE_GLOSSY) != 0, di = (lobes & BSDF_LOBE_DIFFUSE) != 0;
     double pg = gl && di ? glossy_probability(b, albedo, wi) : (gl ? 1.0 : 0.0);
-    if (gl && u[2] < pg) {
-        bsdf_rough_boundary rb = coat_of(b, wi);
-        double f, p;
-        if (!bsdf_rough_boundary_sample(&rb, wi, u, &s->wo, &f, &p)) return 0;
-        s->lobe = BSDF_LOBE_GLOSSY;
-    } else {
-        if (!di) return 0;
-        s->wo = sample_cosine_hemisphere(u[0], u[1]);
-        s->lobe = BSDF_LOBE_DIFFUSE;
-    }
-    if (s->wo.z <= 0.0) return 0;
-    s->pdf = bsdf_rough_plastic_pdf(b, albedo, wi, s->wo, lobes);
-    if (!(s->pdf > 0.0)) return 0;
-    s->weight = v3_scale(bsdf_rough_plastic_eval(b, albedo, wi, s->wo, lobes), s->wo.z / s->pdf);
-    return 1;
+    bsdf_rough_boundary rb = coat_of(b, wi);
+    return bsdf_coat_sample(b, albedo, wi, u, lobes, pg, &rb, bsdf_rough_plastic_eval, bsdf_rough_plastic_pdf, s);
 }

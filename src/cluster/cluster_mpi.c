@@ -39,40 +39,25 @@ static int mpi_reduce(const render_cluster *c, const film *mine, film *total, co
     if (reduce_chunks(mine->sum, total->sum, n, MPI_DOUBLE, sizeof(double), c->rank) ||
         (nf > 0 && reduce_chunks(mine->frame_sum, total->frame_sum, nf, MPI_FLOAT, sizeof(float), c->rank)))
         return dp_fail_kind(err, DP_ERROR_INTERNAL, "MPI: the reduction of the films failed");
-    /* the scalars: the counts, the weight sum and the statistics that add up */
-    double v[18] = {(double)mine->passes,    mine->weight_sum,        (double)mine->nonfinite, st_mine->camera_rays,
-                    st_mine->rays,           st_mine->photon_paths,   st_mine->stored_photons, st_mine->early_exits,
-                    st_mine->aimed_paths,    st_mine->t_photon,       st_mine->t_maps,         st_mine->t_gather,
-                    st_mine->chain_paths,    st_mine->chain_large,    st_mine->chain_visible,  st_mine->chain_small,
-                    st_mine->chain_accepted, (double)st_mine->dropped};
-    double w[18];
-    int intr = st_mine->interrupted, intr_all = 0;
-    if (MPI_Reduce(v, w, 18, MPI_DOUBLE, MPI_SUM, 0, MPI_COMM_WORLD) != MPI_SUCCESS ||
-        MPI_Reduce(&intr, &intr_all, 1, MPI_INT, MPI_MAX, 0, MPI_COMM_WORLD) != MPI_SUCCESS)
+    /* the scalars: the film's counts and weight sum, then the figures that add up over the ranks (RENDER_SUM),
+     * and apart those of which the largest counts (RENDER_MAX); the other figures are rank 0's */
+    double v[3 + RENDER_FIGURE_COUNT], w[3 + RENDER_FIGURE_COUNT], m[RENDER_FIGURE_COUNT], m_all[RENDER_FIGURE_COUNT];
+    v[0] = (double)mine->passes;
+    v[1] = mine->weight_sum;
+    v[2] = (double)mine->nonfinite;
+    int ns = 3 + render_stats_pack(st_mine, RENDER_SUM, v + 3), nm = render_stats_pack(st_mine, RENDER_MAX, m);
+    if (MPI_Reduce(v, w, ns, MPI_DOUBLE, MPI_SUM, 0, MPI_COMM_WORLD) != MPI_SUCCESS ||
+        MPI_Reduce(m, m_all, nm, MPI_DOUBLE, MPI_MAX, 0, MPI_COMM_WORLD) != MPI_SUCCESS)
         return dp_fail_kind(err, DP_ERROR_INTERNAL, "MPI: the reduction of the statistics failed");
     if (c->rank != 0) return 0;
     total->passes = (long)w[0];
     total->weight_sum = w[1];
     total->nonfinite = (long)w[2];
     *st_total = *st_mine;
+    render_stats_unpack(st_total, RENDER_SUM, w + 3);
+    render_stats_unpack(st_total, RENDER_MAX, m_all);
     st_total->passes = total->passes;
     st_total->nonfinite = total->nonfinite;
-    st_total->camera_rays = w[3];
-    st_total->rays = w[4];
-    st_total->photon_paths = w[5];
-    st_total->stored_photons = w[6];
-    st_total->early_exits = w[7];
-    st_total->aimed_paths = w[8];
-    st_total->t_photon = w[9];
-    st_total->t_maps = w[10];
-    st_total->t_gather = w[11];
-    st_total->chain_paths = w[12];
-    st_total->chain_large = w[13];
-    st_total->chain_visible = w[14];
-    st_total->chain_small = w[15];
-    st_total->chain_accepted = w[16];
-    st_total->dropped = (long)w[17];
-    st_total->interrupted = intr_all;
     return 0;
 }
 

@@ -36,6 +36,24 @@ void film_free(film *f)
     memset(f, 0, sizeof *f);
 }
 
+void film_copy_sums(film *to, const film *from)
+{
+    size_t n = (size_t)from->width * from->height * 3, nf = n * (size_t)time_window_layers(&from->window);
+    memcpy(to->sum, from->sum, n * sizeof(double));
+    if (nf > 0) memcpy(to->frame_sum, from->frame_sum, nf * sizeof(float));
+    to->passes = from->passes;
+    to->weight_sum = from->weight_sum;
+    to->last_weight = from->last_weight;
+    to->nonfinite = from->nonfinite;
+}
+
+int film_copy(film *to, const film *from, dp_error *err)
+{
+    if (film_init(to, from->width, from->height, &from->window, err)) return -1;
+    film_copy_sums(to, from);
+    return 0;
+}
+
 int film_splat(film *f, size_t px, double t, vec3 c, int frame, int order)
 {
     if (!v3_is_finite(c)) return 0;

@@ -35,22 +35,23 @@ int photon_points_pass(const scene *s, const render_plan *p, const eda_set *eda,
         g.surf_photons = ps.surf;
         g.vol_photons = ps.vol;
         g.n_vol = ps.n_vol;
-        st->rays += sensor_pass(s, &g, f, seed, iteration);
-        st->photon_paths += (double)ps.paths;
-        st->early_exits += (double)ps.early_exits;
-        st->aimed_paths += (double)ps.aimed_paths;
-        st->chain_paths += (double)ps.chain.traced;
-        st->chain_large += (double)ps.chain.large;
-        st->chain_visible += (double)ps.chain.visible;
-        st->chain_small += (double)ps.chain.small;
-        st->chain_accepted += (double)ps.chain.accepted;
-        st->stored_photons += (double)(ps.n_vol + ps.n_surf);
-        st->r_vol = g.r_vol;
-        st->r_surf = g.r_surf;
+        render_stats pass = {.rays = sensor_pass(s, &g, f, seed, iteration),
+                             .photon_paths = (double)ps.paths,
+                             .early_exits = (double)ps.early_exits,
+                             .aimed_paths = (double)ps.aimed_paths,
+                             .chain_paths = (double)ps.chain.traced,
+                             .chain_large = (double)ps.chain.large,
+                             .chain_visible = (double)ps.chain.visible,
+                             .chain_small = (double)ps.chain.small,
+                             .chain_accepted = (double)ps.chain.accepted,
+                             .stored_photons = (double)(ps.n_vol + ps.n_surf),
+                             .r_vol = g.r_vol,
+                             .r_surf = g.r_surf,
+                             .t_photon = t1 - t0,
+                             .t_maps = t2 - t1};
+        pass.t_gather = dp_seconds() - t2;
         f->nonfinite += ps.nonfinite;
-        st->t_photon += t1 - t0;
-        st->t_maps += t2 - t1;
-        st->t_gather += dp_seconds() - t2;
+        render_stats_add(st, &pass);
     }
     volume_map_free(vm);
     surface_map_free(sm);

@@ -217,13 +217,7 @@ static int film_resume(film *f, const film *from, dp_error *err)
         from->window.orders != f->window.orders)
         return dp_fail(err, "the film to resume is %dx%d with %d frames, the render %dx%d with %d", from->width,
                        from->height, from->window.frame_count, f->width, f->height, f->window.frame_count);
-    size_t n = (size_t)f->width * f->height * 3, nf = n * (size_t)time_window_layers(&f->window);
-    memcpy(f->sum, from->sum, n * sizeof(double));
-    if (nf > 0) memcpy(f->frame_sum, from->frame_sum, nf * sizeof(float));
-    f->passes = from->passes;
-    f->weight_sum = from->weight_sum;
-    f->last_weight = from->last_weight;
-    f->nonfinite = from->nonfinite;
+    film_copy_sums(f, from);
     return 0;
 }
 

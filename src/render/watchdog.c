@@ -38,25 +38,11 @@ void survivors_init(survivors *k, const dp_stop_flag *stop, const char *out, con
     k->running = 0;
 }
 
-/* A copy of f, or -1 (out of memory). */
-static int film_copy(film *to, const film *f)
-{
-    dp_error err;
-    if (film_init(to, f->width, f->height, &f->window, &err)) return -1;
-    size_t n = (size_t)f->width * f->height * 3, nf = n * (size_t)time_window_layers(&f->window);
-    memcpy(to->sum, f->sum, n * sizeof(double));
-    if (nf > 0) memcpy(to->frame_sum, f->frame_sum, nf * sizeof(float));
-    to->passes = f->passes;
-    to->weight_sum = f->weight_sum;
-    to->last_weight = f->last_weight;
-    to->nonfinite = f->nonfinite;
-    return 0;
-}
-
 void survivors_keep(survivors *k, const film *f, double seconds)
 {
     film copy;
-    if (film_copy(&copy, f)) return;
+    dp_error err;
+    if (film_copy(&copy, f, &err)) return;
     pthread_mutex_lock(&k->lock);
     film_free(&k->f);
     k->f = copy;
