@@ -248,7 +248,7 @@ int run_photon_pass(const scene *s, uint64_t seed, long iteration, double surfac
     if (plan_resolve(s, &p, err)) return -1;
     photon_pass_input in;
     photon_pass_input_init(&in, s, &p, NULL, seed, iteration, NULL);
-    in.surface_slack = p.keys.include_surfaces ? p.darts.eta_ub * surface_radius : 0.0;
+    in.surface_slack = p.include_surfaces ? p.darts.eta_ub * surface_radius : 0.0;
     int rc = photon_pass(s, &in, out, err);
     plan_free(&p);
     return rc;

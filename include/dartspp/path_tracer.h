@@ -8,14 +8,15 @@
 
 #include "dartspp/darts.h"
 #include "dartspp/film.h"
+#include "dartspp/integrator.h"
 #include "dartspp/plan.h"
 #include "dartspp/scene.h"
 
 /* One pass of the path tracer (plain, DARTS or uniform time, as the plan says; eda: the EDA tables, may
- * be NULL when no medium uses EDA) over every pixel into f's pass layer; adds the rays traced to *rays.
+ * be NULL when no medium uses EDA) over every pixel into f's pass layer; adds the rays traced to st->rays.
  * Deterministic: the samples of pixel p in pass i come from rng_stream(seed, i, p). Once stop is set the
  * remaining rows are skipped (the caller drops the pass). 0, or -1 with err (out of memory). */
 int path_tracer_pass(const scene *s, const render_plan *p, const eda_set *eda, film *f, uint64_t seed,
-                     long pass, const dp_stop_flag *stop, double *rays, dp_error *err);
+                     long pass, const dp_stop_flag *stop, render_stats *st, dp_error *err);
 
 #endif

@@ -8,15 +8,18 @@
 
 #include "dartspp/darts.h"
 #include "dartspp/film.h"
+#include "dartspp/integrator.h"
 #include "dartspp/plan.h"
 #include "dartspp/scene.h"
-
-struct render_stats;
 
 /* One iteration of photon points: photon pass, maps, sensor pass into f's pass layer; its figures (photon
  * paths, photons stored, radii, phase times) added to *st. Returns 0 or -1 with err. Once stop is set it
  * returns early with the pass incomplete (the caller drops it). */
 int photon_points_pass(const scene *s, const render_plan *p, const eda_set *eda, film *f, uint64_t seed,
-                       long iteration, const dp_stop_flag *stop, struct render_stats *st, dp_error *err);
+                       long iteration, const dp_stop_flag *stop, render_stats *st, dp_error *err);
+
+/* The memory of a pass at its peak (the memory guard): EDA tables, photon arrays at their budgets (capped by
+ * a pilot batch's yield), their maps, the sensor pass's primary lines and splat, the batch buffers. */
+void photon_points_memory(const scene *s, const render_plan *p, memory_estimate *m);
 
 #endif

@@ -235,11 +235,11 @@ static void sample_pixel(void *ctx, film_pixel *pix, vec3 dir, dp_rng *rng)
 }
 
 int path_tracer_pass(const scene *s, const render_plan *p, const eda_set *eda, film *f, uint64_t seed,
-                     long pass, const dp_stop_flag *stop, double *rays, dp_error *err)
+                     long pass, const dp_stop_flag *stop, render_stats *st, dp_error *err)
 {
     pt_pass pp = {.s = s, .p = p, .eda = eda};
     if (pt_pass_aim_init(&pp, err)) return -1;
-    *rays += film_sample_pixels(f, &s->cam, seed, pass, stop, sample_pixel, &pp);
+    st->rays += film_sample_pixels(f, &s->cam, seed, pass, stop, sample_pixel, &pp);
     pt_pass_aim_free(&pp);
     return 0;
 }

@@ -2,7 +2,6 @@
  * sensor pass → film. Iterations are independent draws; the film keeps their mean. */
 #include "dartspp/gather.h"
 #include "dartspp/photon_points.h"
-#include "dartspp/render.h" /* render_stats, until the per-pass figures have a header below the integrators */
 
 int photon_points_pass(const scene *s, const render_plan *p, const eda_set *eda, film *f, uint64_t seed,
                        long iteration, const dp_stop_flag *stop, render_stats *st, dp_error *err)

@@ -3,12 +3,6 @@
 #include "dartspp/photon_points.h"
 #include "integrators.h"
 
-static int path_tracer_row_pass(const scene *s, const render_plan *p, const eda_set *eda, film *f, uint64_t seed,
-                                long pass, const dp_stop_flag *stop, render_stats *st, dp_error *err)
-{
-    return path_tracer_pass(s, p, eda, f, seed, pass, stop, &st->rays, err);
-}
-
 /* The radii of the last pass (the schedules depend on the pass index only). */
 static void photon_points_radii(const render_plan *p, long passes, render_stats *st)
 {
@@ -19,14 +13,14 @@ static void photon_points_radii(const render_plan *p, long passes, render_stats 
 
 static const integrator_entry table[INTEGRATOR_COUNT] = {
     [INTEGRATOR_PATH_TRACER] = {.type = INTEGRATOR_PATH_TRACER,
-                                .pass = path_tracer_row_pass,
+                                .pass = path_tracer_pass,
                                 .print_method = summary_print_path_method,
                                 .light_technique = summary_path_tracer_light,
                                 .warn = warn_path_tracer},
     [INTEGRATOR_PHOTON_POINTS] = {.type = INTEGRATOR_PHOTON_POINTS,
                                   .pass = photon_points_pass,
                                   .last_pass_figures = photon_points_radii,
-                                  .memory = memory_photon_points,
+                                  .memory = photon_points_memory,
                                   .print_method = summary_print_photon_pass,
                                   .light_technique = summary_photon_points_light,
                                   .warn = warn_photon_points},

@@ -19,7 +19,7 @@ typedef struct {
     /* Its figures after `passes` passes that are not sums over passes (the radii of the last pass), set after
      * the ranks' figures were summed (render.c); NULL: none. */
     void (*last_pass_figures)(const render_plan *p, long passes, render_stats *st);
-    /* The memory it needs beyond the scene and the film (memory.c); NULL: none. */
+    /* The memory it needs beyond the scene and the film (its module); NULL: none. */
     void (*memory)(const scene *s, const render_plan *p, memory_estimate *m);
     /* Its line of the run summary: the method and the samplers that run (summary.c). */
     void (*print_method)(const scene *s, const render_plan *p);
@@ -33,8 +33,6 @@ typedef struct {
 const integrator_entry *integrator_entry_of(integrator_type t);
 
 /* The rows' functions, in the files named. */
-void memory_photon_points(const scene *s, const render_plan *p, memory_estimate *m);     /* memory.c */
-void memory_item_add(memory_estimate *m, const char *what, const char *key, double bytes); /* memory.c */
 void summary_print_photon_pass(const scene *s, const render_plan *p);                     /* summary.c */
 void summary_print_path_method(const scene *s, const render_plan *p);                     /* summary.c */
 const char *summary_photon_points_light(const emitter *e, const render_plan *p);          /* summary.c */

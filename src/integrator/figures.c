@@ -1,8 +1,8 @@
-/* The figures of a render (RENDER_FIGURES in render.h) as a table, and the ways they combine: a pass's figures
+/* The figures of a render (RENDER_FIGURES in integrator.h) as a table, and the ways they combine: a pass's figures
  * into the run's, and the packing of those that the MPI reduction sums (or maxes) over the ranks. */
 #include <stddef.h>
 
-#include "dartspp/render.h"
+#include "dartspp/integrator.h"
 
 #define FIGURE_TYPE(field) \
     _Generic(((render_stats *)0)->field, long: RENDER_FIGURE_LONG, int: RENDER_FIGURE_INT, default: RENDER_FIGURE_DOUBLE)

@@ -1,0 +1,57 @@
+/* What photon points hold at the peak of a pass (the memory guard, src/render/memory.c): everything of one
+ * iteration is alive at once during the sensor pass — the photon sets' arrays at their capacity, both maps,
+ * the primary lines and the splat's scratch, the EDA tables. How many photons a light path stores depends on
+ * the scene (the DARTS time tests drop most surface photons), so a pilot batch of light paths measures it;
+ * the budgets cap the extrapolation. */
+#include "dartspp/gather.h"
+#include "dartspp/photon.h"
+#include "dartspp/photon_points.h"
+
+/* One photon pass of a single batch of light paths (a few milliseconds), without EDA tables and without
+ * budget cuts: how many volume and surface photons a light path stores, and a sample of the volume photons
+ * for the splat's footprints. *chains: the render's passes will feed the surface map by surface chains once
+ * the volume budget is full, which the pilot never is. Returns 0 on failure (then the budgets count). */
+static int pilot_pass(const scene *s, const render_plan *p, photon_set *ps, int *chains)
+{
+    photon_pass_input pilot;
+    photon_pass_input_init(&pilot, s, p, NULL, 0x70696c6f74ULL, 0, NULL);
+    *chains = photon_pass_uses_chains(&pilot);
+    pilot.light_paths = dp_fmin(p->photon_count, PHOTON_PASS_BATCH);
+    pilot.volume_budget = pilot.surface_budget = pilot.light_paths * 1e4; /* no budget cut */
+    dp_error err;
+    if (photon_pass(s, &pilot, ps, &err)) return 0;
+    if (ps->paths > 0) return 1;
+    photon_set_free(ps);
+    return 0;
+}
+
+/* Photon points: the EDA tables, the photon arrays at their budgets (capped by a pilot batch's yield), their
+ * maps, the sensor pass's primary lines and splat, and the batch buffers. */
+void photon_points_memory(const scene *s, const render_plan *p, memory_estimate *m)
+{
+    memory_item_add(m, "EDA tables", "integrator.eda_shape", (double)eda_set_bytes(s, &p->darts));
+    double V = p->volume_photon_count, S = p->photon_count, batch_photons = 1.0;
+    photon_set pilot;
+    int chains, piloted = pilot_pass(s, p, &pilot, &chains);
+    /* the budgets cap what the light paths store; surface chains start once the volume budget is full, which
+     * the pilot's single batch never sees, and can fill the surface budget: counted full */
+    if (piloted) {
+        V = dp_fmin(V, (double)pilot.n_vol / pilot.paths * p->photon_count);
+        if (!chains) S = dp_fmin(S, (double)pilot.n_surf / pilot.paths * p->photon_count);
+        batch_photons = dp_fmax((double)(pilot.n_vol + pilot.n_surf) / pilot.paths * PHOTON_PASS_BATCH, 1.0);
+    }
+    /* each set's array at its capacity, and its map: volume_map_bytes is about (16 + 56) B a photon plus the
+     * nodes (the surface map is the same tree); in double for huge budgets */
+    double per_mapped = (double)volume_map_bytes(1 << 20) / (1 << 20);
+    int volume = s->medium_count > 0;
+    if (volume)
+        memory_item_add(m, "volume photons and their map", "integrator.volume_photon_count", photon_array_bytes(V) + V * per_mapped);
+    if (volume) /* the first pass's radius is the largest: the most footprint entries */
+        memory_item_add(m, "primary lines and splat of the sensor pass", "camera.resolution",
+            sensor_pass_bytes(s, p->volume_gather == VOLUME_GATHER_SPLAT, piloted ? pilot.vol : NULL, piloted ? pilot.n_vol : 0,
+                              schedule_radius(&p->r_vol, 0), V));
+    if (p->include_surfaces || !volume)
+        memory_item_add(m, "surface photons and their map", "integrator.photon_count", photon_array_bytes(S) + S * per_mapped);
+    memory_item_add(m, "photon batch buffers", NULL, photon_array_bytes(batch_photons));
+    if (piloted) photon_set_free(&pilot);
+}
