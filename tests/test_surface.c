@@ -1,4 +1,4 @@
-/* The surface module (include/dartspp/surface.h) and what only whole renders show of it:
+/* The surface module (include/dartspp/surface_site.h) and what only whole renders show of it:
  * 1. the gather/continue rule of photon points, per BSDF;
  * 2. path time through a dielectric: the region's refractive index counts, not the BSDF's ior (our decision,
  *    the reference's convention), for the path tracer and photon points, against the geometry;
@@ -14,7 +14,7 @@
 #include "test_util.h"
 
 #include "dartspp/render.h"
-#include "dartspp/surface.h"
+#include "dartspp/surface_site.h"
 
 static void load_text(const char *text, char **dir, scene *s)
 {

@@ -103,7 +103,7 @@ static void check_query(const surface_photon_map *m, const photon *ph, size_t n,
     assert_non_null(iw);
     assert_non_null(dg);
     assert_non_null(dw);
-    int ng = photon_map_query_knn(m, x, k, R, ig, dg);
+    int ng = surface_map_query_knn(m, x, k, R, ig, dg);
     int nw = brute_knn(ph, n, x, k, R, iw, dw);
     char what[160];
     snprintf(what, sizeof what, "x = (%.9g, %.9g, %.9g), k = %d, R = %g", x.x, x.y, x.z, k, R);
@@ -195,7 +195,7 @@ static void test_random_queries_match_brute_force(void **state)
                 double R2 = Rs[b] * Rs[b];
                 int want = 0;
                 while (want < k && dw[want] < R2) want++;
-                int ng = photon_map_query_knn(m, x, k, Rs[b], ig, dg);
+                int ng = surface_map_query_knn(m, x, k, Rs[b], ig, dg);
                 char what[160];
                 snprintf(what, sizeof what, "query %d x = (%.9g, %.9g, %.9g), k = %d, R = %g", q, x.x, x.y, x.z, k,
                          Rs[b]);
@@ -231,12 +231,12 @@ static void test_query_at_photon_positions(void **state)
         vec3 x = v3(ph[i].pos[0], ph[i].pos[1], ph[i].pos[2]);
         int idx[20];
         double d2[20];
-        int got = photon_map_query_knn(m, x, 1, 1e-3, idx, d2);
+        int got = surface_map_query_knn(m, x, 1, 1e-3, idx, d2);
         assert_int_equal(got, 1);
         assert_int_equal(idx[0], (int)i);
         assert_true(d2[0] == 0.0);
         /* a tiny radius still finds it: 0 < R^2 */
-        assert_int_equal(photon_map_query_knn(m, x, 20, 1e-30, idx, d2), 1);
+        assert_int_equal(surface_map_query_knn(m, x, 20, 1e-30, idx, d2), 1);
         assert_int_equal(idx[0], (int)i);
         CHECK_QUERY(m, ph, n, x, 20, 0.05);
         CHECK_QUERY(m, ph, n, x, 20, 1e30);
@@ -255,15 +255,15 @@ static void test_radius_zero_and_bad_arguments(void **state)
     vec3 x = v3(ph[5].pos[0], ph[5].pos[1], ph[5].pos[2]);
     int idx[8];
     double d2[8];
-    assert_int_equal(photon_map_query_knn(m, x, 8, 0.0, idx, d2), 0);
-    assert_int_equal(photon_map_query_knn(m, x, 8, -1.0, idx, d2), 0);
-    assert_int_equal(photon_map_query_knn(m, x, 8, NAN, idx, d2), 0);
-    assert_int_equal(photon_map_query_knn(m, x, 8, 1e-200, idx, d2), 0); /* R*R == 0 */
-    assert_int_equal(photon_map_query_knn(m, x, 0, 1.0, idx, d2), 0);
-    assert_int_equal(photon_map_query_knn(m, x, -3, 1.0, idx, d2), 0);
-    assert_int_equal(photon_map_query_knn(m, v3(NAN, 0, 0), 8, 1.0, idx, d2), 0);
-    assert_int_equal(photon_map_query_knn(m, v3(0, INFINITY, 0), 8, 1e30, idx, d2), 0);
-    assert_int_equal(photon_map_query_knn(NULL, x, 8, 1.0, idx, d2), 0);
+    assert_int_equal(surface_map_query_knn(m, x, 8, 0.0, idx, d2), 0);
+    assert_int_equal(surface_map_query_knn(m, x, 8, -1.0, idx, d2), 0);
+    assert_int_equal(surface_map_query_knn(m, x, 8, NAN, idx, d2), 0);
+    assert_int_equal(surface_map_query_knn(m, x, 8, 1e-200, idx, d2), 0); /* R*R == 0 */
+    assert_int_equal(surface_map_query_knn(m, x, 0, 1.0, idx, d2), 0);
+    assert_int_equal(surface_map_query_knn(m, x, -3, 1.0, idx, d2), 0);
+    assert_int_equal(surface_map_query_knn(m, v3(NAN, 0, 0), 8, 1.0, idx, d2), 0);
+    assert_int_equal(surface_map_query_knn(m, v3(0, INFINITY, 0), 8, 1e30, idx, d2), 0);
+    assert_int_equal(surface_map_query_knn(NULL, x, 8, 1.0, idx, d2), 0);
     /* R = infinity is "no radius limit" */
     CHECK_QUERY(m, ph, n, x, 8, INFINITY);
     surface_map_free(m);
@@ -279,7 +279,7 @@ static void test_k_larger_than_n(void **state)
     surface_photon_map *m = build_ok(ph, n);
     int idx[100];
     double d2[100];
-    assert_int_equal(photon_map_query_knn(m, v3(0, 0, 0), 100, 1e30, idx, d2), 37);
+    assert_int_equal(surface_map_query_knn(m, v3(0, 0, 0), 100, 1e30, idx, d2), 37);
     CHECK_QUERY(m, ph, n, v3(0, 0, 0), 100, 1e30);
     CHECK_QUERY(m, ph, n, v3(0.5, -0.9, 0.1), 100, 1.0);
     CHECK_QUERY(m, ph, n, v3(0.5, -0.9, 0.1), 37, 1e30);
@@ -296,12 +296,12 @@ static void test_empty_map(void **state)
     assert_non_null(m);
     int idx[4];
     double d2[4];
-    assert_int_equal(photon_map_query_knn(m, v3(0, 0, 0), 4, 1e30, idx, d2), 0);
+    assert_int_equal(surface_map_query_knn(m, v3(0, 0, 0), 4, 1e30, idx, d2), 0);
     surface_map_free(m);
     photon p = at(1, 2, 3);
     m = build_map(&p, 0, &err);
     assert_non_null(m);
-    assert_int_equal(photon_map_query_knn(m, v3(1, 2, 3), 4, 1.0, idx, d2), 0);
+    assert_int_equal(surface_map_query_knn(m, v3(1, 2, 3), 4, 1.0, idx, d2), 0);
     surface_map_free(m);
     surface_map_free(NULL);
 }
@@ -314,15 +314,15 @@ static void test_single_photon(void **state)
     surface_photon_map *m = build_ok(&p, 1);
     int idx[5] = {-1, -1, -1, -1, -1};
     double d2[5];
-    assert_int_equal(photon_map_query_knn(m, v3(0.75, -0.5, 2.0), 5, 1.0, idx, d2), 1);
+    assert_int_equal(surface_map_query_knn(m, v3(0.75, -0.5, 2.0), 5, 1.0, idx, d2), 1);
     assert_int_equal(idx[0], 0);
     assert_true(d2[0] == 0.25);
     assert_int_equal(idx[1], -1); /* nothing written past the count */
-    assert_int_equal(photon_map_query_knn(m, v3(0.75, -0.5, 2.0), 5, 0.5, idx, d2), 0);
-    assert_int_equal(photon_map_query_knn(m, v3(0.75, -0.5, 2.0), 5, nextafter(0.5, 1.0), idx, d2), 1);
-    assert_int_equal(photon_map_query_knn(m, v3(0.25, -0.5, 2.0), 1, 1e-20, idx, d2), 1);
+    assert_int_equal(surface_map_query_knn(m, v3(0.75, -0.5, 2.0), 5, 0.5, idx, d2), 0);
+    assert_int_equal(surface_map_query_knn(m, v3(0.75, -0.5, 2.0), 5, nextafter(0.5, 1.0), idx, d2), 1);
+    assert_int_equal(surface_map_query_knn(m, v3(0.25, -0.5, 2.0), 1, 1e-20, idx, d2), 1);
     assert_true(d2[0] == 0.0);
-    assert_int_equal(photon_map_query_knn(m, v3(-100, 50, 7), 1, 1e30, idx, d2), 1);
+    assert_int_equal(surface_map_query_knn(m, v3(-100, 50, 7), 1, 1e30, idx, d2), 1);
     assert_true(d2[0] == sq_dist(&p, v3(-100, 50, 7)));
     surface_map_free(m);
 }
@@ -340,10 +340,10 @@ static void test_strict_radius_and_ties_on_a_grid(void **state)
     int idx[125];
     double d2[125];
     /* R = 1 from the centre: only the centre itself (its 6 neighbours sit at d2 == 1) */
-    assert_int_equal(photon_map_query_knn(m, v3(0, 0, 0), 125, 1.0, idx, d2), 1);
+    assert_int_equal(surface_map_query_knn(m, v3(0, 0, 0), 125, 1.0, idx, d2), 1);
     assert_int_equal(idx[0], 62);
     /* just past 1: the centre and its 6 neighbours */
-    assert_int_equal(photon_map_query_knn(m, v3(0, 0, 0), 125, nextafter(1.0, 2.0), idx, d2), 7);
+    assert_int_equal(surface_map_query_knn(m, v3(0, 0, 0), 125, nextafter(1.0, 2.0), idx, d2), 7);
     for (int k = 1; k <= 125; k++) {
         CHECK_QUERY(m, ph, n, v3(0, 0, 0), k, 1e30);
         CHECK_QUERY(m, ph, n, v3(0.5, 0.5, 0.5), k, 1e30); /* 8 photons at the same distance, and so on */
@@ -366,15 +366,15 @@ static void test_duplicate_positions(void **state)
     vec3 x = v3(0.125, -1.0, 0.5);
     int idx[100], idx2[100];
     double d2[100], d22[100];
-    assert_int_equal(photon_map_query_knn(m, x, 20, 0.1, idx, d2), 20);
+    assert_int_equal(surface_map_query_knn(m, x, 20, 0.1, idx, d2), 20);
     for (int i = 0; i < 20; i++) {
         assert_int_equal(idx[i], 1000 + i);
         assert_true(d2[i] == 0.0);
     }
     for (int k = 1; k <= 100; k += 11) {
         for (int rep = 0; rep < 3; rep++) {
-            int a = photon_map_query_knn(m, v3(0.13, -0.999, 0.5), k, 0.2, idx, d2);
-            int b = photon_map_query_knn(m, v3(0.13, -0.999, 0.5), k, 0.2, idx2, d22);
+            int a = surface_map_query_knn(m, v3(0.13, -0.999, 0.5), k, 0.2, idx, d2);
+            int b = surface_map_query_knn(m, v3(0.13, -0.999, 0.5), k, 0.2, idx2, d22);
             assert_int_equal(a, b);
             assert_memory_equal(idx, idx2, sizeof(int) * (size_t)a);
             assert_memory_equal(d2, d22, sizeof(double) * (size_t)a);
@@ -474,7 +474,7 @@ static void test_concurrent_queries(void **state)
     for (int q = 0; q < nq; q++) xs[q] = room_query(&r, q);
     const double Rs[3] = {0.01, 0.1, 1e30};
     for (int q = 0; q < nq; q++)
-        cnt1[q] = photon_map_query_knn(m, xs[q], k, Rs[q % 3], idx1 + (size_t)q * k, d1 + (size_t)q * k);
+        cnt1[q] = surface_map_query_knn(m, xs[q], k, Rs[q % 3], idx1 + (size_t)q * k, d1 + (size_t)q * k);
     memset(idx2, 0xff, sizeof(int) * (size_t)(nq * k));
     memset(d2, 0, sizeof(double) * (size_t)(nq * k));
     int threads = 0;
@@ -488,7 +488,7 @@ static void test_concurrent_queries(void **state)
         /* interleaved so that both threads are in FLANN at the same time on neighbouring queries */
 #pragma omp for schedule(static, 1)
         for (int q = 0; q < nq; q++) {
-            cnt2[q] = photon_map_query_knn(m, xs[q], k, Rs[q % 3], idx2 + (size_t)q * k, d2 + (size_t)q * k);
+            cnt2[q] = surface_map_query_knn(m, xs[q], k, Rs[q % 3], idx2 + (size_t)q * k, d2 + (size_t)q * k);
             per_thread[t]++;
         }
     }
@@ -531,8 +531,8 @@ static void test_rebuild_is_deterministic(void **state)
         vec3 x = room_query(&r, q);
         int ia[20], ib[20];
         double da[20], db[20];
-        int na = photon_map_query_knn(a, x, 20, 0.1, ia, da);
-        int nb = photon_map_query_knn(b, x, 20, 0.1, ib, db);
+        int na = surface_map_query_knn(a, x, 20, 0.1, ia, da);
+        int nb = surface_map_query_knn(b, x, 20, 0.1, ib, db);
         assert_int_equal(na, nb);
         assert_memory_equal(ia, ib, sizeof(int) * (size_t)na);
         assert_memory_equal(da, db, sizeof(double) * (size_t)na);

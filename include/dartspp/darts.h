@@ -25,7 +25,7 @@
 
 #include "dartspp/core.h"
 #include "dartspp/scene.h"
-#include "dartspp/surface.h"
+#include "dartspp/surface_site.h"
 
 /* ---- the DARTS configuration (darts_plan.c, camera_side.c) ----
  * What the DARTS samplers will run in a render, decided once from the integrator keys and the scene by

@@ -35,11 +35,11 @@ typedef struct {
 /* Adds one camera sample per pixel to f's pass layer (pixel p of iteration i uses rng_stream(seed, i, p));
  * once g->stop is set the remaining rows are skipped and the pass is incomplete (the caller drops it).
  * Returns the rays traced; non-finite contributions are dropped and counted in f->nonfinite. */
-double sensor_pass(const scene *s, const gather_input *g, film *f, uint64_t seed, long iteration);
+double gather_pass(const scene *s, const gather_input *g, film *f, uint64_t seed, long iteration);
 
 /* Bytes the sensor pass allocates when the scene has a volume map: its primary lines and, with the splat
  * (volume_gather "splat"), the splat's scratch for `photons` volume photons at radius r, estimated from a
  * sample of n of them (the memory guard). */
-double sensor_pass_bytes(const scene *s, int splat, const photon *sample, size_t n, double r, double photons);
+double gather_pass_bytes(const scene *s, int splat, const photon *sample, size_t n, double r, double photons);
 
 #endif

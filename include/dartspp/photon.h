@@ -47,14 +47,14 @@ typedef struct {
 void photon_map_query_beam_window(const volume_photon_map *m, vec3 o, vec3 d, double tmax, const beam_time_filter *w,
                                   beam_visit_fn visit, void *ctx);
 
-/* The same search as photon_map_query_knn, on a volume map (built with any r): k nearest within R in
+/* The same search as surface_map_query_knn, on a volume map (built with any r): k nearest within R in
  * (d2, index) order, indices into the array given to volume_map_build. */
-int photon_map_query_knn_tree(const volume_photon_map *m, vec3 x, int k, double R, int *idx, double *d2);
+int volume_map_query_knn(const volume_photon_map *m, vec3 x, int k, double R, int *idx, double *d2);
 
 /* ---- surface photon map ---- */
 typedef struct surface_photon_map surface_photon_map;
 
-/* Default backend: our BVH (photon_map_query_knn_tree) — about 10x faster per query than FLANN's C API,
+/* Default backend: our BVH (volume_map_query_knn) — about 10x faster per query than FLANN's C API,
  * whose every call opens an OpenMP region and allocates (bench/results/surface_map.md). The FLANN backend
  * (single kd-tree, exact search, exact double distances over its candidates) is kept for comparison. */
 surface_photon_map *surface_map_build(const photon *ph, size_t n, dp_error *err);
@@ -62,7 +62,7 @@ surface_photon_map *surface_map_build_flann(const photon *ph, size_t n, dp_error
 void surface_map_free(surface_photon_map *m);
 /* Up to k photons nearest to x with squared distance < R^2, nearest first: indices into the photon
  * array given to surface_map_build, and their squared distances. Returns the count found. Thread-safe. */
-int photon_map_query_knn(const surface_photon_map *m, vec3 x, int k, double R, int *idx, double *d2);
+int surface_map_query_knn(const surface_photon_map *m, vec3 x, int k, double R, int *idx, double *d2);
 
 /* Bytes volume_map_build allocates for n photons (the memory guard's estimate; the surface map's default
  * backend is the same structure). */

@@ -9,7 +9,7 @@
 
 #include "dartspp/darts.h"
 #include "dartspp/scene.h"
-#include "dartspp/surface.h"
+#include "dartspp/surface_site.h"
 
 /* Which light paths count, in path segments including the light connection (docs/design.md §5.1). */
 typedef struct {

@@ -5,7 +5,7 @@
 
 #include "dartspp/darts.h"
 #include "dartspp/path_tracer.h"
-#include "dartspp/surface.h"
+#include "dartspp/surface_site.h"
 
 /* One pass: the scene, the plan and, when camera paths are aimed (plan: darts.active or uniform_time), a
  * DARTS guide per light (the light as the target of every sampler) and the light-selection CDF. */

@@ -8,7 +8,7 @@
 #include "dartspp/darts.h"
 #include "dartspp/photon.h"
 #include "dartspp/scene.h"
-#include "dartspp/surface.h"
+#include "dartspp/surface_site.h"
 #include "photon_internal.h"
 
 

@@ -205,12 +205,12 @@ static double lower_bound(float df, double a)
     return s > 0.0 ? s * s * (1.0 - 1e-12) : 0.0;
 }
 
-int photon_map_query_knn(const surface_photon_map *m, vec3 x, int k, double R, int *idx, double *d2)
+int surface_map_query_knn(const surface_photon_map *m, vec3 x, int k, double R, int *idx, double *d2)
 {
     if (!m || m->n == 0 || k <= 0 || !(R > 0.0) || !v3_is_finite(x)) return 0;
     double R2 = R * R;
     if (!(R2 > 0.0)) return 0; /* R*R underflows: nothing has d2 < 0 */
-    if (m->tree) return photon_map_query_knn_tree(m->tree, x, k, R, idx, d2);
+    if (m->tree) return volume_map_query_knn(m->tree, x, k, R, idx, d2);
     int n = (int)m->n;
     if (k > n) k = n;
     if (!coord_ok(x.x) || !coord_ok(x.y) || !coord_ok(x.z)) return query_linear(m, x, k, R2, idx, d2);

@@ -542,7 +542,7 @@ static double box_dist2(const node_box *b, const double x[3])
     return s;
 }
 
-int photon_map_query_knn_tree(const volume_photon_map *m, vec3 x, int k, double R, int *idx, double *d2)
+int volume_map_query_knn(const volume_photon_map *m, vec3 x, int k, double R, int *idx, double *d2)
 {
     if (!m || m->n == 0 || k <= 0 || !(R > 0.0) || !v3_is_finite(x)) return 0;
     double q[3] = {x.x, x.y, x.z}, R2 = R * R;

@@ -34,7 +34,7 @@ int photon_points_pass(const scene *s, const render_plan *p, const eda_set *eda,
         g.surf_photons = ps.surf;
         g.vol_photons = ps.vol;
         g.n_vol = ps.n_vol;
-        render_stats pass = {.rays = sensor_pass(s, &g, f, seed, iteration),
+        render_stats pass = {.rays = gather_pass(s, &g, f, seed, iteration),
                              .photon_paths = (double)ps.paths,
                              .early_exits = (double)ps.early_exits,
                              .aimed_paths = (double)ps.aimed_paths,

@@ -48,7 +48,7 @@ void photon_points_memory(const scene *s, const render_plan *p, memory_estimate 
         memory_item_add(m, "volume photons and their map", "integrator.volume_photon_count", photon_array_bytes(V) + V * per_mapped);
     if (volume) /* the first pass's radius is the largest: the most footprint entries */
         memory_item_add(m, "primary lines and splat of the sensor pass", "camera.resolution",
-            sensor_pass_bytes(s, p->volume_gather == VOLUME_GATHER_SPLAT, piloted ? pilot.vol : NULL, piloted ? pilot.n_vol : 0,
+            gather_pass_bytes(s, p->volume_gather == VOLUME_GATHER_SPLAT, piloted ? pilot.vol : NULL, piloted ? pilot.n_vol : 0,
                               schedule_radius(&p->r_vol, 0), V));
     if (p->include_surfaces || !volume)
         memory_item_add(m, "surface photons and their map", "integrator.photon_count", photon_array_bytes(S) + S * per_mapped);

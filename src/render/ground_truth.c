@@ -9,7 +9,7 @@
 #include <string.h>
 
 #include "dartspp/render.h"
-#include "dartspp/surface.h"
+#include "dartspp/surface_site.h"
 
 /* The first scattering surface along the camera ray; its hit, site and the camera leg's optical length. */
 static int first_surface(const scene *s, const surface_shading *sh, vec3 d, hit_record *h, surface_site *ss,

@@ -3,7 +3,7 @@
 #include <stdio.h>
 
 #include "dartspp/darts.h"
-#include "dartspp/surface.h"
+#include "dartspp/surface_site.h"
 #include "integrators.h"
 #include "run_internal.h"
 

@@ -1,5 +1,5 @@
 /* The surface interaction shared by the path tracer, the photon pass and the sensor pass. */
-#include "dartspp/surface.h"
+#include "dartspp/surface_site.h"
 
 /* Geometric and shading normals agree on the side of w (consistency checks), or no check is asked. */
 static int consistent(const surface_site *ss, vec3 w)

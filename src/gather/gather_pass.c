@@ -3,7 +3,7 @@
 #include <stdlib.h>
 
 #include "dartspp/gather.h"
-#include "dartspp/surface.h"
+#include "dartspp/surface_site.h"
 #include "primary_line.h"
 
 typedef struct {
@@ -92,7 +92,7 @@ static void gather_surface(pixel_ctx *c, const surface_site *ss, unsigned lobes,
     int idx[256];
     double d2[256];
     int k = g->k_surf < 256 ? g->k_surf : 256;
-    int n = photon_map_query_knn(g->surf, ss->p, k, g->r_surf, idx, d2);
+    int n = surface_map_query_knn(g->surf, ss->p, k, g->r_surf, idx, d2);
     if (n == 0) return;
     double r2 = n == k ? d2[n - 1] : g->r_surf * g->r_surf;
     if (!(r2 > 0.0)) return;
@@ -248,7 +248,7 @@ static void gather_lines_by_beams(const scene *s, const gather_input *g, film *f
     f->nonfinite += bad;
 }
 
-double sensor_pass_bytes(const scene *s, int splat, const photon *sample, size_t n, double r, double photons)
+double gather_pass_bytes(const scene *s, int splat, const photon *sample, size_t n, double r, double photons)
 {
     double lines = (double)volume_splat_bytes(s->cam.width, s->cam.height);
     return lines + (splat ? volume_splat_scratch_bytes(&s->cam, sample, n, r, photons) : 0.0);
@@ -257,7 +257,7 @@ double sensor_pass_bytes(const scene *s, int splat, const photon *sample, size_t
 /* The camera walks (surface gathers, continuations, beam queries off the primary line), then the volume
  * gather on the primary lines: photon by photon (volume_splat.c) where it applies, else by a beam query
  * per recorded segment (volume_gather "beam", and the splat's fallback). */
-double sensor_pass(const scene *s, const gather_input *g, film *f, uint64_t seed, long iteration)
+double gather_pass(const scene *s, const gather_input *g, film *f, uint64_t seed, long iteration)
 {
     pass_ctx p = {s, g, NULL};
     if (g->vol) p.lines = malloc(volume_splat_bytes(s->cam.width, s->cam.height)); /* NULL: queries in the walk */
