@@ -1,6 +1,7 @@
 /* dartspp photon: photon records, the photon pass, and the two photon maps — volume photons answering
  * "every photon within r of the segment o + tω, 0 <= t <= t_max", surface photons answering "k nearest
- * within R" (FLANN kd-tree, exact search). Maps are rebuilt every iteration. */
+ * within R" (exact search; our BVH by default, FLANN's kd-tree kept for comparison). Maps are rebuilt every
+ * iteration. */
 #ifndef DARTSPP_PHOTON_H
 #define DARTSPP_PHOTON_H
 
