@@ -34,8 +34,10 @@ static void resolve_photon_points(const integrator_settings *in, render_plan *p)
     p->surface_chains = in->surface_chains;
     p->camera_leg = in->camera_leg;
     p->volume_gather = in->volume_gather;
-    p->pass_weights = in->pass_weights;
-    p->glossy_regularization = in->glossy_regularization;
+    /* the path tracer's passes weigh 1 and regularize nothing */
+    int pp = p->type == INTEGRATOR_PHOTON_POINTS;
+    p->pass_weights = pp ? in->pass_weights : PASS_WEIGHTS_EQUAL;
+    p->glossy_regularization = pp ? in->glossy_regularization : 0.0;
 }
 
 int plan_resolve(const scene *s, render_plan *p, dp_error *err)
@@ -76,13 +78,13 @@ double plan_surface_slack(const render_plan *p, long iteration)
 double plan_glossy_regularization(const render_plan *p, long iteration)
 {
     double a0 = p->glossy_regularization;
-    if (p->type != INTEGRATOR_PHOTON_POINTS || !(a0 > 0.0)) return 0.0;
+    if (!(a0 > 0.0)) return 0.0;
     return a0 * schedule_radius(&p->r_surf, iteration) / p->r_surf.r0;
 }
 
 double plan_pass_weight(const render_plan *p, long iteration)
 {
-    if (p->type != INTEGRATOR_PHOTON_POINTS || p->pass_weights == PASS_WEIGHTS_EQUAL) return 1.0;
+    if (p->pass_weights == PASS_WEIGHTS_EQUAL) return 1.0;
     const radius_schedule *r = p->include_surfaces ? &p->r_surf : &p->r_vol;
     double q = schedule_radius(r, iteration) / r->r0;
     return q * q;
