@@ -266,6 +266,66 @@ static int check_plan(const counts_args *a, const spad_bins *b, const float *cub
     return 0;
 }
 
+/* The frames' time bins of a cube of F frames: from --frames or the cube's own <stem>_frames.csv, F rows in
+ * time order. Fills start and end (F entries each); 0, or 2 with the message printed. */
+static int read_frame_bins(const counts_args *a, const char *frames_path, int F, double *start, double *end)
+{
+    dp_error err;
+    int n = 0;
+    const char *fp = a->frames ? a->frames : frames_path;
+    if (frames_csv_read(fp, start, end, F, &n, &err)) {
+        fprintf(stderr, "dartspp counts: %s\n", err.msg);
+        return 2;
+    }
+    if (n != F) {
+        fprintf(stderr, "dartspp counts: %s has %d frames, the cube %s %d\n", fp, n, a->cube, F);
+        return 2;
+    }
+    for (int k = 1; k < F; k++)
+        if (start[k] < end[k - 1]) {
+            fprintf(stderr, "dartspp counts: %s: frame %d starts before frame %d ends\n", fp, k, k - 1);
+            return 2;
+        }
+    return 0;
+}
+
+/* The counts (and Coates estimates) of every pixel, written with the sidecar; the run's line on stderr.
+ * 0, 1 (out of memory, a failed write) or 2 (a plan the checks refuse), the message printed. */
+static int write_counts(const counts_args *a, const spad_bins *b, spad_model m, const float *cube, const size_t *shape,
+                        const char *json, const char *coates_path)
+{
+    int F = b->count, rc = 1;
+    size_t pixels = shape[1] * shape[2];
+    if (check_plan(a, b, cube, pixels, m)) return 2;
+    int32_t *counts = malloc((size_t)F * pixels * sizeof *counts);
+    float *coates = a->coates ? malloc((size_t)F * pixels * sizeof *coates) : NULL;
+    double total, t0 = dp_seconds();
+    long odd;
+    dp_error err;
+    if (!counts || (a->coates && !coates) || count_pixels(a, b, cube, pixels, counts, coates, &total, &odd)) {
+        fprintf(stderr, "dartspp counts: out of memory\n");
+        goto done;
+    }
+    size_t out_shape[3] = {(size_t)F, shape[1], shape[2]};
+    if (npy_write_i32(a->output, out_shape, 3, counts, &err) ||
+        (coates && npy_write_f32(coates_path, out_shape, 3, coates, &err)) ||
+        write_sidecar(json, a, b, out_shape, m, total, coates_path, &err)) {
+        fprintf(stderr, "dartspp counts: %s\n", err.msg);
+        goto done;
+    }
+    fprintf(stderr, "dartspp counts: %d frames of %zux%zu pixels, %g pulses, %s: %.6g counts (%.4g per pixel) in %.2f s\n",
+            F, shape[2], shape[1], a->sp.pulses, MODEL_NAMES[m], total, total / (double)pixels, dp_seconds() - t0);
+    if (odd) fprintf(stderr, "dartspp counts: warning: %ld bins saturated or after every pulse had its detection: their "
+                             "Coates estimates are bounds\n", odd);
+    fprintf(stderr, "wrote %s\nwrote %s\n", a->output, json);
+    if (coates_path) fprintf(stderr, "wrote %s\n", coates_path);
+    rc = 0;
+done:
+    free(counts);
+    free(coates);
+    return rc;
+}
+
 int cli_counts(int argc, char **argv)
 {
     counts_args a;
@@ -286,31 +346,19 @@ int cli_counts(int argc, char **argv)
     char *frames_path = a.frames ? NULL : frames_of(a.cube), *json = beside(a.output, ".json"),
          *coates_path = a.coates ? beside(a.output, "_coates.npy") : NULL;
     double *start = NULL, *end = NULL;
-    int32_t *counts = NULL;
-    float *coates = NULL;
     if (ndim != 4 || shape[3] != 3 || shape[0] < 1 || shape[0] > 1000000) {
         fprintf(stderr, "dartspp counts: %s: expected a transient cube of shape (frames, height, width, 3), got %d axes\n",
                 a.cube, ndim);
         goto done;
     }
-    int F = (int)shape[0], n = 0;
-    size_t pixels = shape[1] * shape[2];
+    int F = (int)shape[0];
     start = malloc((size_t)F * sizeof *start), end = malloc((size_t)F * sizeof *end);
-    if (!start || !end || !json || (!a.frames && !frames_path) || (a.coates && !coates_path)) goto oom;
-    const char *fp = a.frames ? a.frames : frames_path;
-    if (frames_csv_read(fp, start, end, F, &n, &err)) {
-        fprintf(stderr, "dartspp counts: %s\n", err.msg);
+    if (!start || !end || !json || (!a.frames && !frames_path) || (a.coates && !coates_path)) {
+        fprintf(stderr, "dartspp counts: out of memory\n");
+        rc = 1;
         goto done;
     }
-    if (n != F) {
-        fprintf(stderr, "dartspp counts: %s has %d frames, the cube %s %d\n", fp, n, a.cube, F);
-        goto done;
-    }
-    for (int k = 1; k < F; k++)
-        if (start[k] < end[k - 1]) {
-            fprintf(stderr, "dartspp counts: %s: frame %d starts before frame %d ends\n", fp, k, k - 1);
-            goto done;
-        }
+    if (read_frame_bins(&a, frames_path, F, start, end)) goto done;
     spad_bins b = {start, end, F};
     spad_model m = spad_model_of(&a.sp, &b);
     if (a.coates && m != SPAD_FIRST_PHOTON) {
@@ -318,39 +366,11 @@ int cli_counts(int argc, char **argv)
                         "at least the frames' span (%g)\n", end[F - 1] - start[0]);
         goto done;
     }
-    if (check_plan(&a, &b, cube, pixels, m)) goto done;
-    rc = 1;
-    counts = malloc((size_t)F * pixels * sizeof *counts);
-    if (a.coates) coates = malloc((size_t)F * pixels * sizeof *coates);
-    if (!counts || (a.coates && !coates)) goto oom;
-    double total;
-    long odd;
-    double t0 = dp_seconds();
-    if (count_pixels(&a, &b, cube, pixels, counts, coates, &total, &odd)) goto oom;
-    size_t out_shape[3] = {(size_t)F, shape[1], shape[2]};
-    if (npy_write_i32(a.output, out_shape, 3, counts, &err) ||
-        (coates && npy_write_f32(coates_path, out_shape, 3, coates, &err)) ||
-        write_sidecar(json, &a, &b, out_shape, m, total, coates_path, &err)) {
-        fprintf(stderr, "dartspp counts: %s\n", err.msg);
-        goto done;
-    }
-    fprintf(stderr, "dartspp counts: %d frames of %zux%zu pixels, %g pulses, %s: %.6g counts (%.4g per pixel) in %.2f s\n",
-            F, shape[2], shape[1], a.sp.pulses, MODEL_NAMES[m], total, total / (double)pixels, dp_seconds() - t0);
-    if (odd) fprintf(stderr, "dartspp counts: warning: %ld bins saturated or after every pulse had its detection: their "
-                             "Coates estimates are bounds\n", odd);
-    fprintf(stderr, "wrote %s\nwrote %s\n", a.output, json);
-    if (coates_path) fprintf(stderr, "wrote %s\n", coates_path);
-    rc = 0;
-    goto done;
-oom:
-    fprintf(stderr, "dartspp counts: out of memory\n");
-    rc = 1;
+    rc = write_counts(&a, &b, m, cube, shape, json, coates_path);
 done:
     free(cube);
     free(start);
     free(end);
-    free(counts);
-    free(coates);
     free(frames_path);
     free(json);
     free(coates_path);
