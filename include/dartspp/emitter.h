@@ -1,6 +1,7 @@
-/* dartspp emitters: the lights of a scene and their pulses (docs/emitters.md). One file per emitter in
- * src/emitter: point, spot, collimated (with directional_point as its pencil-beam case) and area lights
- * (an emissive quad, disk, sphere, cube or mesh). Each has
+/* dartspp emitters: the lights of a scene and their pulses (docs/emitters.md). One table of operations
+ * (emitter_ops), one row per type, each defined by its own file in src/emitter: point, spot, collimated (with
+ * directional_point as its pencil-beam case) and area lights (an emissive quad, disk, sphere, cube or mesh).
+ * Each has its keys (parsed with the loader's messages) and
  *   - emission sampling (a light path's first vertex and direction, with the flux it carries),
  *   - a direct-light sample for next-event estimation from a point x, where one exists,
  *   - the radiance a camera path sees when it hits the emitter (area lights),
