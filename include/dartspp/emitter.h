@@ -150,7 +150,7 @@ struct emitter_ops {
     int (*prepare)(const struct scene *s, emitter *e);
     void (*sample_ray)(const struct scene *s, const emitter *e, const double u[4], emitter_ray *r);
     void (*sample_point)(const struct scene *s, const emitter *e, const double u[2], emitter_point *pt);
-    /* with out preset to {.denom = 1} */
+    /* connect_point and sample_direct: out comes preset to {.denom = 1} (emitter_connect_point, ...) */
     int (*connect_point)(const emitter *e, const emitter_point *pt, vec3 x, emitter_direct *out);
     int (*sample_direct)(const struct scene *s, const emitter *e, vec3 x, const double u[2], emitter_direct *out);
     vec3 (*hit_radiance)(const emitter *e, vec3 d, vec3 ng);   /* NULL unless it sets EMITTER_HITTABLE */
