@@ -124,7 +124,7 @@ static void check_beam(const char *label, const char *integrator, int gated, dou
     scene s;
     load_scene(path, NULL, 0, &s);
     const emitter *L = &s.lights[0];
-    assert_int_equal(L->type, EMITTER_COLLIMATED);
+    assert_string_equal(L->ops->name, "collimated");
     assert_true(emitter_is_parallel_beam(L));
     beam_case b = {.cam = s.cam.pos, .pos = L->pos, .axis = L->axis, .E = L->value, .ss = s.media[0].sigma_s,
                    .st = s.media[0].sigma_t, .r = 0.2, .g = 0.3, .eta = 1.0, .gated = gated, .unwarp = unwarp,
@@ -478,7 +478,7 @@ static void test_collimated_slabs(void **state)
         load_scene(path, NULL, 0, &s);
         assert_int_equal(s.light_count, 1);
         const emitter *L = &s.lights[0];
-        assert_int_equal(L->type, EMITTER_COLLIMATED);
+        assert_string_equal(L->ops->name, "collimated");
         assert_true(L->radius == 0.001 && L->cos_div == 1.0 && emitter_is_parallel_beam(L));
         assert_float_equal(L->pos.z, -(thick[i] / 2 + 0.001), 1e-15);
         assert_float_equal(L->axis.z, 1.0, 1e-15);

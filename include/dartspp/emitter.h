@@ -1,6 +1,7 @@
-/* dartspp emitters: the lights of a scene and their pulses (docs/emitters.md). One file per emitter in
- * src/emitter: point, spot, collimated (with directional_point as its pencil-beam case) and area lights
- * (an emissive quad, disk, sphere, cube or mesh). Each has
+/* dartspp emitters: the lights of a scene and their pulses (docs/emitters.md). One table of operations
+ * (emitter_ops), one row per type, each defined by its own file in src/emitter: point, spot, collimated (with
+ * directional_point as its pencil-beam case) and area lights (an emissive quad, disk, sphere, cube or mesh).
+ * Each has its keys (parsed with the loader's messages) and
  *   - emission sampling (a light path's first vertex and direction, with the flux it carries),
  *   - a direct-light sample for next-event estimation from a point x, where one exists,
  *   - the radiance a camera path sees when it hits the emitter (area lights),
@@ -11,13 +12,14 @@
 #ifndef DARTSPP_EMITTER_H
 #define DARTSPP_EMITTER_H
 
+#include <stddef.h>
 #include <stdint.h>
 
 #include "dartspp/core.h"
 
 struct scene;
 
-typedef enum { EMITTER_POINT, EMITTER_SPOT, EMITTER_COLLIMATED, EMITTER_AREA } emitter_type;
+typedef struct emitter_ops emitter_ops;
 typedef enum { PULSE_BOX, PULSE_GAUSSIAN } pulse_shape;
 
 /* The emission time τ of a light path or a light connection (docs/time.md §5). width 0: a delta pulse at
@@ -34,7 +36,8 @@ double emitter_pulse_sample(const emitter_pulse *p, dp_rng *rng);
 typedef struct {
     char name[64];
     char type_name[24];  /* the scene file's type: point, spot, collimated, directional_point, quad, ... */
-    emitter_type type;
+    const emitter_ops *ops; /* its type: the row of the table of emitter types (emitter_ops_find) */
+    unsigned flags;      /* how the integrators reach it: EMITTER_* below, set by emitter_prepare */
     int medium;          /* ext_medium (MEDIUM_VACUUM without): where light paths start */
     emitter_pulse pulse;
     vec3 value;          /* point: intensity I; spot: I on the axis; collimated: irradiance E across the
@@ -60,17 +63,36 @@ typedef struct {
     double extent;
 } emitter;
 
-/* ---- what each kind allows ---- */
-/* Next-event estimation can reach the emitter from some points: every emitter but a parallel beam of
- * radius 0 (collimated with radius 0 and no divergence, directional_point). */
-int emitter_connectable(const emitter *e);
-/* A parallel beam of radius > 0: light arrives only inside the beam's half-cylinder, along the axis; the
- * path tracer connects it by sampling where a camera segment crosses the beam (emitter_beam_crossing). */
-int emitter_is_parallel_beam(const emitter *e);
-/* Camera paths can hit it (area lights). */
-static inline int emitter_hittable(const emitter *e) { return e->type == EMITTER_AREA; }
+/* ---- what each emitter allows: its flags, set by its type's prepare from its keys ---- */
+enum {
+    /* Next-event estimation can reach the emitter from some points: every emitter but a parallel beam of
+     * radius 0 (collimated with radius 0 and no divergence, directional_point). */
+    EMITTER_CONNECTABLE = 1u << 0,
+    /* A parallel beam of radius > 0: light arrives only inside the beam's half-cylinder, along the axis; the
+     * path tracer connects it by sampling where a camera segment crosses the beam (emitter_beam_crossing). */
+    EMITTER_PARALLEL_BEAM = 1u << 1,
+    /* Camera paths can hit it (area lights): emitter_hit_radiance. */
+    EMITTER_HITTABLE = 1u << 2,
+    /* emitter_sample_direct and emitter_sample_point use their two uniforms (area lights, diverging beams of
+     * radius > 0); the callers draw none for the others, so that a scene of point lights draws what it
+     * always drew. */
+    EMITTER_DIRECT_DRAWS = 1u << 3,
+    /* Every light path starts at `pos` (point, spot: a delta in position): the photon pass draws a DARTS
+     * bin from pos before the emission's uniforms, so that a scene of point lights draws what it always drew. */
+    EMITTER_STARTS_AT_POS = 1u << 4,
+    /* An aimed camera path connects with a point drawn per connection (emitter_sample_direct), not with its
+     * one fixed point of the light (a diverging beam's disc: a fixed point lights only a narrow cone,
+     * docs/emitters.md §4). */
+    EMITTER_AIM_PER_CONNECTION = 1u << 5,
+};
 
-/* ---- emission: the first vertex and direction of a light path ---- */
+static inline int emitter_connectable(const emitter *e) { return (e->flags & EMITTER_CONNECTABLE) != 0; }
+static inline int emitter_is_parallel_beam(const emitter *e) { return (e->flags & EMITTER_PARALLEL_BEAM) != 0; }
+static inline int emitter_hittable(const emitter *e) { return (e->flags & EMITTER_HITTABLE) != 0; }
+static inline int emitter_direct_draws(const emitter *e) { return (e->flags & EMITTER_DIRECT_DRAWS) != 0; }
+
+/* ---- what a sample gives ---- */
+/* Emission: the first vertex and direction of a light path. */
 typedef struct {
     vec3 p;      /* the start point */
     vec3 n;      /* area lights: the surface normal at p (rays leave on its side); else 0 */
@@ -78,10 +100,7 @@ typedef struct {
     vec3 flux;   /* what the path carries: L_e·cosθ/(p_A·p_ω), or I/p_ω, ... (the emitter's flux per path) */
 } emitter_ray;
 
-/* Four uniforms in [0,1). */
-void emitter_sample_ray(const struct scene *s, const emitter *e, const double u[4], emitter_ray *r);
-
-/* ---- next-event estimation ---- */
+/* Next-event estimation: a light connection from a point x. */
 typedef struct {
     vec3 y;      /* the point on the emitter (collimated: where the light entered the beam's disc) */
     vec3 wi;     /* unit direction from x toward y (for a beam: −axis) */
@@ -92,15 +111,6 @@ typedef struct {
     vec3 n;      /* area lights: the surface normal at y (the shadow ray stops just before the surface); else 0 */
 } emitter_direct;
 
-/* Whether emitter_sample_direct uses its uniforms (area lights, diverging beams of radius > 0); the callers
- * draw none for the others, so that a scene of point lights draws what it always drew. */
-int emitter_direct_draws(const emitter *e);
-
-/* A direct-light sample from x with two uniforms; 0 when the emitter cannot light x this way (behind
- * an area light, outside a spot's cone or a beam, a parallel beam of radius 0). A parallel beam of radius
- * > 0 connects deterministically from a point inside it (wi = −axis, no 1/dist², docs/emitters.md §4). */
-int emitter_sample_direct(const struct scene *s, const emitter *e, vec3 x, const double u[2], emitter_direct *out);
-
 /* The aimed path tracer fixes one point of the emitter per camera path, the target of its samplers. */
 typedef struct {
     vec3 y;       /* the point */
@@ -108,19 +118,99 @@ typedef struct {
     double pdf_a; /* its area density (1 for a point) */
 } emitter_point;
 
-void emitter_sample_point(const struct scene *s, const emitter *e, const double u[2], emitter_point *pt);
+/* ---- the table of emitter types ----
+ * One row per type, each defined by its own file src/emitter/<type>.c (docs/emitters.md §8 says how to add
+ * one). The integrators never ask which type an emitter is: they call the operations below through the
+ * emitter_* functions and read the emitter's flags. */
+
+/* What a type's parse reads its own keys with: the scene loader's reader of one primitive or emissive shape,
+ * whose messages name the file, the primitive and the key. */
+typedef struct emitter_keys {
+    void *ctx;           /* the loader's */
+    const char *type;    /* the scene file's type of the primitive or shape (directional_point, quad, ...) */
+    int is_power;        /* the emitter's value holds `power` (the flux Φ), to be turned into its own unit */
+    vec3 z, y;           /* a primitive's transform: local +z (toward look_at, not unit) and local +y (up) */
+    /* a number: def when absent; lo <= value, and value <= hi when hi > lo; -1 with the message when bad */
+    int (*number)(const struct emitter_keys *k, const char *key, double def, double lo, double hi, double *out);
+    /* -1, with "<file>: <where>.<key>: <reason>" (key NULL: "<file>: <where>: <reason>") */
+    int (*fail)(const struct emitter_keys *k, const char *key, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
+} emitter_keys;
+
+struct emitter_ops {
+    const char *name;               /* point, spot, collimated, area */
+    /* the scene file's primitive types it is, NULL-terminated (collimated: collimated, directional_point);
+     * NULL for the emitter of an emissive shape (area lights) */
+    const char *const *primitives;
+    int ray_uniforms;               /* how many of sample_ray's four uniforms it reads (the photon pass draws those) */
+    /* its own keys, after the common ones (emission or power, pulse, ext_medium, name) and pos: its axes, its
+     * parameters, value in its own unit (docs/emitters.md §1); for an emissive shape, after surface,
+     * first_tri and tri_count. -1 with the message in k. */
+    int (*parse)(const struct scene *s, emitter *e, const emitter_keys *k);
+    /* flux, extent and flags from the parsed emitter (and the scene's triangles); -1 when out of memory */
+    int (*prepare)(const struct scene *s, emitter *e);
+    void (*sample_ray)(const struct scene *s, const emitter *e, const double u[4], emitter_ray *r);
+    void (*sample_point)(const struct scene *s, const emitter *e, const double u[2], emitter_point *pt);
+    /* connect_point and sample_direct: out comes preset to {.denom = 1} (emitter_connect_point, ...) */
+    int (*connect_point)(const emitter *e, const emitter_point *pt, vec3 x, emitter_direct *out);
+    int (*sample_direct)(const struct scene *s, const emitter *e, vec3 x, const double u[2], emitter_direct *out);
+    vec3 (*hit_radiance)(const emitter *e, vec3 d, vec3 ng);   /* NULL unless it sets EMITTER_HITTABLE */
+    int (*beam_crossing)(const emitter *e, vec3 o, vec3 d, double tmax, double *t0, double *t1);
+                                                               /* NULL unless it sets EMITTER_PARALLEL_BEAM */
+};
+
+/* The type whose primitive is `type` (point, spot, collimated, directional_point), NULL for another. */
+const emitter_ops *emitter_ops_find(const char *type);
+/* The type of an emissive shape's emitter (area lights). */
+const emitter_ops *emitter_ops_shape(void);
+/* The primitive types of the table, in its order, joined by ", " and `last` before the last one. */
+void emitter_primitive_list(char *buf, size_t size, const char *last);
+
+/* ---- emission ---- */
+/* Four uniforms in [0,1). */
+static inline void emitter_sample_ray(const struct scene *s, const emitter *e, const double u[4], emitter_ray *r)
+{
+    e->ops->sample_ray(s, e, u, r);
+}
+
+/* ---- next-event estimation ---- */
+/* A direct-light sample from x with two uniforms; 0 when the emitter cannot light x this way (behind
+ * an area light, outside a spot's cone or a beam, a parallel beam of radius 0). A parallel beam of radius
+ * > 0 connects deterministically from a point inside it (wi = −axis, no 1/dist², docs/emitters.md §4). */
+static inline int emitter_sample_direct(const struct scene *s, const emitter *e, vec3 x, const double u[2],
+                                        emitter_direct *out)
+{
+    *out = (emitter_direct){.denom = 1.0};
+    return e->ops->sample_direct(s, e, x, u, out);
+}
+
+static inline void emitter_sample_point(const struct scene *s, const emitter *e, const double u[2], emitter_point *pt)
+{
+    e->ops->sample_point(s, e, u, pt);
+}
+
 /* The connection from x to the fixed point (value: L_e·|cosθ_y|/(|x−y|²·p_A), or I(ω)/|x−y|²). */
-int emitter_connect_point(const emitter *e, const emitter_point *pt, vec3 x, emitter_direct *out);
+static inline int emitter_connect_point(const emitter *e, const emitter_point *pt, vec3 x, emitter_direct *out)
+{
+    *out = (emitter_direct){.denom = 1.0};
+    return e->ops->connect_point(e, pt, x, out);
+}
 
 /* ---- hits ---- */
 /* The radiance an area light sends back along a ray of direction d that hits it with geometric normal ng:
- * L_e on the front side (d·ng < 0), 0 behind (one-sided, as Tungsten's area lights). */
-vec3 emitter_hit_radiance(const emitter *e, vec3 d, vec3 ng);
+ * L_e on the front side (d·ng < 0), 0 behind (one-sided, as Tungsten's area lights); 0 for an emitter that
+ * cannot be hit. */
+static inline vec3 emitter_hit_radiance(const emitter *e, vec3 d, vec3 ng)
+{
+    return emitter_hittable(e) ? e->ops->hit_radiance(e, d, ng) : v3s(0.0);
+}
 
 /* ---- the parallel beam crossing a camera segment ----
  * The interval [t0, t1] of the ray o + t·d (t in [0, tmax]) inside the beam's half-cylinder; 0 when the ray
- * misses it. */
-int emitter_beam_crossing(const emitter *e, vec3 o, vec3 d, double tmax, double *t0, double *t1);
+ * misses it or the emitter is no parallel beam. */
+static inline int emitter_beam_crossing(const emitter *e, vec3 o, vec3 d, double tmax, double *t0, double *t1)
+{
+    return emitter_is_parallel_beam(e) && e->ops->beam_crossing(e, o, d, tmax, t0, t1);
+}
 
 /* ---- light selection ---- */
 /* The probability of choosing emitter i for a light path or an aimed camera path: in proportion to its flux
@@ -130,7 +220,7 @@ double emitter_selection_pdf(const struct scene *s, int i, int by_power);
 int emitter_select(const struct scene *s, double u, int by_power, double *pdf);
 
 /* ---- set-up (scene loading) ---- */
-/* Φ, the extent and, for area lights, the triangle distribution (needs the scene's world-space
+/* Φ, the extent, the flags and, for area lights, the triangle distribution (needs the scene's world-space
  * triangles); -1 when out of memory. */
 int emitter_prepare(const struct scene *s, emitter *e);
 void emitter_free(emitter *e);

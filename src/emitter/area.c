@@ -22,7 +22,9 @@ static vec3 tri_corners(const scene *s, uint32_t t, vec3 *p0, vec3 *p1, vec3 *p2
     return v3_cross(v3_sub(*p1, *p0), v3_sub(*p2, *p0));
 }
 
-int area_prepare(const scene *s, emitter *e)
+/* the triangle distribution, the area A and the extent (the diagonal of the bounding box); *mid the middle of
+ * the box */
+static int area_distribution(const scene *s, emitter *e, vec3 *mid)
 {
     free(e->tri_cdf);
     e->tri_cdf = malloc(sizeof(double) * (e->tri_count ? e->tri_count : 1));
@@ -43,6 +45,31 @@ int area_prepare(const scene *s, emitter *e)
     if (e->tri_count) e->tri_cdf[e->tri_count - 1] = 1.0;
     e->area = acc;
     e->extent = e->tri_count ? v3_len(v3_sub(hi, lo)) : 0.0;
+    *mid = v3_scale(v3_add(lo, hi), 0.5);
+    return 0;
+}
+
+static int area_prepare(const scene *s, emitter *e)
+{
+    vec3 mid;
+    if (area_distribution(s, e, &mid)) return -1;
+    e->flux = v3_scale(e->value, M_PI * e->area);
+    e->flags = EMITTER_CONNECTABLE | EMITTER_HITTABLE | EMITTER_DIRECT_DRAWS;
+    return 0;
+}
+
+/* no keys of its own: the surface must have an area, `power` is Φ = π·A·L_e, and the point to aim at and to
+ * measure distances from is the middle of its bounding box */
+static int area_parse(const scene *s, emitter *e, const emitter_keys *k)
+{
+    vec3 mid;
+    if (area_distribution(s, e, &mid)) return k->fail(k, NULL, "out of memory");
+    if (!(e->area > 0.0)) {
+        emitter_free(e);
+        return k->fail(k, "emission", "the emissive %s has no area", k->type);
+    }
+    if (k->is_power) e->value = v3_scale(e->value, 1.0 / (M_PI * e->area)); /* L_e = Φ/(π·A) */
+    e->pos = mid;
     return 0;
 }
 
@@ -60,7 +87,7 @@ static uint32_t pick_triangle(const emitter *e, double *u)
     return lo;
 }
 
-void area_sample_point(const scene *s, const emitter *e, const double u[2], emitter_point *pt)
+static void area_sample_point(const scene *s, const emitter *e, const double u[2], emitter_point *pt)
 {
     double u0 = u[0];
     uint32_t k = pick_triangle(e, &u0);
@@ -71,7 +98,7 @@ void area_sample_point(const scene *s, const emitter *e, const double u[2], emit
     pt->pdf_a = 1.0 / e->area;
 }
 
-void area_sample_ray(const scene *s, const emitter *e, const double u[4], emitter_ray *r)
+static void area_sample_ray(const scene *s, const emitter *e, const double u[4], emitter_ray *r)
 {
     emitter_point pt;
     area_sample_point(s, e, u, &pt);
@@ -82,7 +109,7 @@ void area_sample_ray(const scene *s, const emitter *e, const double u[4], emitte
 }
 
 /* L_e·cosθ_y/(|x−y|²·p_A), front side only */
-int area_connect_point(const emitter *e, const emitter_point *pt, vec3 x, emitter_direct *out)
+static int area_connect_point(const emitter *e, const emitter_point *pt, vec3 x, emitter_direct *out)
 {
     if (!emitter_leg(pt->y, x, out)) return 0;
     double cos_y = -v3_dot(out->wi, pt->n);
@@ -91,3 +118,29 @@ int area_connect_point(const emitter *e, const emitter_point *pt, vec3 x, emitte
     out->n = pt->n;
     return 1;
 }
+
+static int area_sample_direct(const scene *s, const emitter *e, vec3 x, const double u[2], emitter_direct *out)
+{
+    emitter_point pt;
+    area_sample_point(s, e, u, &pt);
+    return area_connect_point(e, &pt, x, out);
+}
+
+/* L_e on the front side (d·ng < 0), 0 behind: one-sided, as Tungsten's area lights */
+static vec3 area_hit_radiance(const emitter *e, vec3 d, vec3 ng)
+{
+    return v3_dot(d, ng) < 0.0 ? e->value : v3s(0.0);
+}
+
+const emitter_ops emitter_area_ops = {
+    .name = "area",
+    .primitives = NULL, /* the emitter of any shape with emission or power */
+    .ray_uniforms = 4,
+    .parse = area_parse,
+    .prepare = area_prepare,
+    .sample_ray = area_sample_ray,
+    .sample_point = area_sample_point,
+    .connect_point = area_connect_point,
+    .sample_direct = area_sample_direct,
+    .hit_radiance = area_hit_radiance,
+};

@@ -9,19 +9,58 @@
  *     with intensity Φ·cosθ/(π sin²δ) inside the cone.
  * directional_point (Liu et al. 2022's pencil beam) is the radius-0, divergence-0 case; the loader turns its
  * units into these. */
+#include <string.h>
+
 #include "emitter_internal.h"
+
+#define DEG (M_PI / 180.0)
 
 static double disc_area(const emitter *e) { return M_PI * e->radius * e->radius; }
 static double sin2_div(const emitter *e) { return dp_fmax(0.0, 1.0 - e->cos_div * e->cos_div); }
 
-vec3 collimated_flux(const emitter *e)
+static vec3 collimated_flux(const emitter *e)
 {
     return e->radius > 0.0 ? v3_scale(e->value, disc_area(e)) : e->value;
 }
 
-/* uniform on the disc (concentric radius sqrt(u)), p_A = 1/(πr²); the centre for radius 0 */
-void collimated_sample_point(const emitter *e, const double u[2], emitter_point *pt)
+/* radius (default 0) and divergence (degrees, default 0, at most 89); directional_point reads neither, and its
+ * `emission` is the flux/(4π) (docs/emitters.md §2.3); `power` is the flux Φ = E·πr² (radius 0: Φ itself) */
+static int collimated_parse(const scene *s, emitter *e, const emitter_keys *k)
 {
+    (void)s;
+    if (emitter_beam_frame(e, k)) return -1;
+    double div = 0.0;
+    e->cos_div = 1.0;
+    if (!strcmp(k->type, "directional_point")) {
+        if (!k->is_power) e->value = v3_scale(e->value, 4.0 * M_PI);
+        return 0;
+    }
+    if (k->number(k, "radius", 0.0, 0.0, 0.0, &e->radius) || k->number(k, "divergence", 0.0, 0.0, 89.0, &div))
+        return -1;
+    e->cos_div = div > 0.0 ? cos(div * DEG) : 1.0;
+    if (k->is_power && e->radius > 0.0) e->value = v3_scale(e->value, 1.0 / (M_PI * e->radius * e->radius));
+    return 0;
+}
+
+/* a parallel beam of radius 0 reaches no point by next-event estimation; one of radius > 0 reaches those
+ * inside it along −axis, and camera segments by their crossings (docs/emitters.md §4.1, §4.2) */
+static int collimated_prepare(const scene *s, emitter *e)
+{
+    (void)s;
+    e->flux = collimated_flux(e);
+    e->extent = 2.0 * e->radius;
+    int disc = e->radius > 0.0, diverging = e->cos_div < 1.0;
+    e->flags = 0;
+    if (disc || diverging) e->flags |= EMITTER_CONNECTABLE;
+    if (disc && !diverging) e->flags |= EMITTER_PARALLEL_BEAM;
+    if (disc && diverging) e->flags |= EMITTER_DIRECT_DRAWS | EMITTER_AIM_PER_CONNECTION;
+    return 0;
+}
+
+/* uniform on the disc (concentric radius sqrt(u)), p_A = 1/(πr²); the centre for radius 0 */
+static void collimated_sample_point(const scene *s, const emitter *e, const double u[2], emitter_point *pt)
+{
+    (void)s;
     pt->n = e->axis;
     if (!(e->radius > 0.0)) {
         pt->y = e->pos;
@@ -40,10 +79,10 @@ static vec3 cone_cosine_dir(const emitter *e, double u1, double u2)
     return v3_norm(v3_add(v3_scale(e->axis, c), v3_add(v3_scale(e->e1, s * cos(phi)), v3_scale(e->e2, s * sin(phi)))));
 }
 
-void collimated_sample_ray(const emitter *e, const double u[4], emitter_ray *r)
+static void collimated_sample_ray(const scene *s, const emitter *e, const double u[4], emitter_ray *r)
 {
     emitter_point pt;
-    collimated_sample_point(e, u, &pt);
+    collimated_sample_point(s, e, u, &pt);
     r->p = pt.y;
     r->n = v3s(0.0); /* the disc is not a surface: rays start in the emitter's medium as they are */
     r->d = e->cos_div < 1.0 ? cone_cosine_dir(e, u[2], u[3]) : e->axis;
@@ -68,7 +107,7 @@ static int parallel_beam_direct(const emitter *e, vec3 x, emitter_direct *out)
 
 /* the connection from x to a fixed point y of a diverging beam: L·cosθ_y/(|x−y|²·p_A) with L = E/(π sin²δ)
  * (radius 0: I(θ)/|x−y|² with I = Φ·cosθ/(π sin²δ)), zero outside the cone */
-int collimated_connect_point(const emitter *e, const emitter_point *pt, vec3 x, emitter_direct *out)
+static int collimated_connect_point(const emitter *e, const emitter_point *pt, vec3 x, emitter_direct *out)
 {
     if (!(e->cos_div < 1.0)) return 0; /* parallel rays: a fixed point cannot reach x */
     if (!emitter_leg(pt->y, x, out)) return 0;
@@ -84,14 +123,14 @@ int collimated_connect_point(const emitter *e, const emitter_point *pt, vec3 x, 
  * the other: either way the value L·cosθ_y/(d²·p_A) stays below about E/cos²δ, where a uniform point of the
  * whole disc gives up to E·r²/(s²·sin²δ), unbounded as s → 0 (an estimator of infinite variance next to the
  * disc). Written for this emitter; no library samples it. */
-static int diverging_disc_direct(const emitter *e, vec3 x, const double u[2], emitter_direct *out)
+static int diverging_disc_direct(const scene *sc, const emitter *e, vec3 x, const double u[2], emitter_direct *out)
 {
     double s = v3_dot(v3_sub(x, e->pos), e->axis);
     if (!(s > 0.0)) return 0;
     double tan_div = sqrt(sin2_div(e)) / e->cos_div, rc = s * tan_div;
     if (!(rc < e->radius)) {
         emitter_point pt;
-        collimated_sample_point(e, u, &pt);
+        collimated_sample_point(sc, e, u, &pt);
         return collimated_connect_point(e, &pt, x, out);
     }
     vec3 foot = v3_sub(x, v3_scale(e->axis, s));
@@ -103,18 +142,18 @@ static int diverging_disc_direct(const emitter *e, vec3 x, const double u[2], em
     return collimated_connect_point(e, &pt, x, out);
 }
 
-int collimated_sample_direct(const emitter *e, vec3 x, const double u[2], emitter_direct *out)
+static int collimated_sample_direct(const scene *s, const emitter *e, vec3 x, const double u[2], emitter_direct *out)
 {
     if (!(e->cos_div < 1.0)) return e->radius > 0.0 ? parallel_beam_direct(e, x, out) : 0;
-    if (e->radius > 0.0) return diverging_disc_direct(e, x, u, out);
+    if (e->radius > 0.0) return diverging_disc_direct(s, e, x, u, out);
     emitter_point pt;
-    collimated_sample_point(e, u, &pt);
+    collimated_sample_point(s, e, u, &pt);
     return collimated_connect_point(e, &pt, x, out);
 }
 
 /* The ray o + t·d against the half-cylinder {s > 0, |perp| ≤ r}: the quadratic |w⊥ + t·d⊥|² = r² across
  * the axis, cut by s(t) = w·a + t·d·a > 0 and [0, tmax]. */
-int collimated_beam_crossing(const emitter *e, vec3 o, vec3 d, double tmax, double *t0, double *t1)
+static int collimated_beam_crossing(const emitter *e, vec3 o, vec3 d, double tmax, double *t0, double *t1)
 {
     vec3 a = e->axis, w = v3_sub(o, e->pos);
     double wa = v3_dot(w, a), da = v3_dot(d, a);
@@ -138,3 +177,16 @@ int collimated_beam_crossing(const emitter *e, vec3 o, vec3 d, double tmax, doub
     *t1 = hi;
     return 1;
 }
+
+const emitter_ops emitter_collimated_ops = {
+    .name = "collimated",
+    .primitives = (const char *const[]){"collimated", "directional_point", NULL},
+    .ray_uniforms = 4,
+    .parse = collimated_parse,
+    .prepare = collimated_prepare,
+    .sample_ray = collimated_sample_ray,
+    .sample_point = collimated_sample_point,
+    .connect_point = collimated_connect_point,
+    .sample_direct = collimated_sample_direct,
+    .beam_crossing = collimated_beam_crossing,
+};

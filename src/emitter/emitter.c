@@ -1,72 +1,75 @@
-/* Dispatch to the emitter of each type, light selection and set-up (include/dartspp/emitter.h). */
+/* The table of emitter types, light selection and set-up (include/dartspp/emitter.h). */
+#include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include "emitter_internal.h"
 
-int emitter_connectable(const emitter *e)
+/* The table: one row per emitter type, X(t) naming the emitter_ops emitter_<t>_ops that src/emitter/<t>.c
+ * defines. Its order is the order in which messages list the primitive types. */
+#define EMITTER_TYPES(X) \
+    X(point)             \
+    X(spot)              \
+    X(collimated)        \
+    X(area)
+
+#define DECLARE_OPS(t) extern const emitter_ops emitter_##t##_ops;
+EMITTER_TYPES(DECLARE_OPS)
+#define ROW(t) &emitter_##t##_ops,
+static const emitter_ops *const emitter_table[] = {EMITTER_TYPES(ROW)};
+#define EMITTER_TYPE_COUNT ((int)(sizeof emitter_table / sizeof emitter_table[0]))
+
+const emitter_ops *emitter_ops_find(const char *type)
 {
-    return !(e->type == EMITTER_COLLIMATED && !(e->radius > 0.0) && !(e->cos_div < 1.0));
+    for (int i = 0; i < EMITTER_TYPE_COUNT; i++)
+        for (const char *const *p = emitter_table[i]->primitives; p && *p; p++)
+            if (!strcmp(*p, type)) return emitter_table[i];
+    return NULL;
 }
 
-int emitter_is_parallel_beam(const emitter *e)
+const emitter_ops *emitter_ops_shape(void)
 {
-    return e->type == EMITTER_COLLIMATED && e->radius > 0.0 && !(e->cos_div < 1.0);
+    for (int i = 0; i < EMITTER_TYPE_COUNT; i++)
+        if (!emitter_table[i]->primitives) return emitter_table[i];
+    return NULL;
 }
 
-void emitter_sample_ray(const scene *s, const emitter *e, const double u[4], emitter_ray *r)
+void emitter_primitive_list(char *buf, size_t size, const char *last)
 {
-    switch (e->type) {
-    case EMITTER_POINT: point_sample_ray(e, u, r); break;
-    case EMITTER_SPOT: spot_sample_ray(e, u, r); break;
-    case EMITTER_COLLIMATED: collimated_sample_ray(e, u, r); break;
-    case EMITTER_AREA: area_sample_ray(s, e, u, r); break;
+    const char *names[32];
+    int n = 0;
+    for (int i = 0; i < EMITTER_TYPE_COUNT; i++)
+        for (const char *const *p = emitter_table[i]->primitives; p && *p && n < 32; p++) names[n++] = *p;
+    size_t len = 0;
+    buf[0] = '\0';
+    for (int k = 0; k < n && len < size; k++) {
+        const char *sep = k == 0 ? "" : k == n - 1 ? last : ", ";
+        int w = snprintf(buf + len, size - len, "%s%s", sep, names[k]);
+        if (w < 0) break;
+        len += (size_t)w;
     }
 }
 
-void emitter_sample_point(const scene *s, const emitter *e, const double u[2], emitter_point *pt)
+int emitter_beam_frame(emitter *e, const emitter_keys *k)
 {
-    switch (e->type) {
-    case EMITTER_POINT:
-    case EMITTER_SPOT: *pt = (emitter_point){.y = e->pos, .pdf_a = 1.0}; break;
-    case EMITTER_COLLIMATED: collimated_sample_point(e, u, pt); break;
-    case EMITTER_AREA: area_sample_point(s, e, u, pt); break;
+    if (!(v3_len(k->z) > 0.0)) return k->fail(k, "transform", "gives no direction (set look_at away from position)");
+    e->axis = v3_norm(k->z);
+    vec3 up = v3_len(k->y) > 0.0 ? k->y : v3(0, 1, 0);
+    vec3 e1 = v3_cross(up, e->axis);
+    if (!(v3_len(e1) > 1e-12)) {
+        vec3 a, b;
+        v3_basis(e->axis, &a, &b);
+        e1 = a;
     }
-}
-
-int emitter_direct_draws(const emitter *e)
-{
-    return e->type == EMITTER_AREA || (e->type == EMITTER_COLLIMATED && e->radius > 0.0 && e->cos_div < 1.0);
-}
-
-int emitter_connect_point(const emitter *e, const emitter_point *pt, vec3 x, emitter_direct *out)
-{
-    *out = (emitter_direct){.denom = 1.0};
-    switch (e->type) {
-    case EMITTER_POINT: return point_connect(e, x, out);
-    case EMITTER_SPOT: return spot_connect(e, x, out);
-    case EMITTER_COLLIMATED: return collimated_connect_point(e, pt, x, out);
-    case EMITTER_AREA: return area_connect_point(e, pt, x, out);
-    }
+    e->e1 = v3_norm(e1);
+    e->e2 = v3_norm(v3_cross(e->axis, e->e1));
     return 0;
 }
 
-int emitter_sample_direct(const scene *s, const emitter *e, vec3 x, const double u[2], emitter_direct *out)
+void emitter_point_at_pos(const scene *s, const emitter *e, const double u[2], emitter_point *pt)
 {
-    *out = (emitter_direct){.denom = 1.0};
-    if (e->type == EMITTER_COLLIMATED) return collimated_sample_direct(e, x, u, out);
-    emitter_point pt;
-    emitter_sample_point(s, e, u, &pt);
-    return emitter_connect_point(e, &pt, x, out);
-}
-
-vec3 emitter_hit_radiance(const emitter *e, vec3 d, vec3 ng)
-{
-    return e->type == EMITTER_AREA && v3_dot(d, ng) < 0.0 ? e->value : v3s(0.0);
-}
-
-int emitter_beam_crossing(const emitter *e, vec3 o, vec3 d, double tmax, double *t0, double *t1)
-{
-    return emitter_is_parallel_beam(e) && collimated_beam_crossing(e, o, d, tmax, t0, t1);
+    (void)s, (void)u;
+    *pt = (emitter_point){.y = e->pos, .pdf_a = 1.0};
 }
 
 static double selection_weight(const emitter *e, int by_power)
@@ -110,19 +113,8 @@ int emitter_select(const scene *s, double u, int by_power, double *pdf)
 int emitter_prepare(const scene *s, emitter *e)
 {
     e->extent = 0.0;
-    switch (e->type) {
-    case EMITTER_POINT: e->flux = point_flux(e); break;
-    case EMITTER_SPOT: e->flux = spot_flux(e); break;
-    case EMITTER_COLLIMATED:
-        e->flux = collimated_flux(e);
-        e->extent = 2.0 * e->radius;
-        break;
-    case EMITTER_AREA:
-        if (area_prepare(s, e)) return -1;
-        e->flux = v3_scale(e->value, M_PI * e->area);
-        break;
-    }
-    return 0;
+    e->flags = 0;
+    return e->ops->prepare(s, e);
 }
 
 void emitter_free(emitter *e)

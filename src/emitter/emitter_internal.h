@@ -1,4 +1,5 @@
-/* The emitter module's per-type functions (one file per emitter), dispatched by emitter.c. */
+/* The emitter module's helpers shared by the types' files (one file per emitter type, each defining its row
+ * of the table in emitter.c). */
 #ifndef DARTSPP_EMITTER_INTERNAL_H
 #define DARTSPP_EMITTER_INTERNAL_H
 
@@ -20,31 +21,11 @@ static inline int emitter_leg(vec3 y, vec3 x, emitter_direct *out)
     return 1;
 }
 
-/* point.c */
-void point_sample_ray(const emitter *e, const double u[4], emitter_ray *r);
-int point_connect(const emitter *e, vec3 x, emitter_direct *out);
-vec3 point_flux(const emitter *e);
+/* A beam's axis (the transform's local +z: toward look_at) and the unit axes across it, e1 = up × axis,
+ * e2 = axis × e1 (spot, collimated); -1 with the loader's message when the transform gives no direction. */
+int emitter_beam_frame(emitter *e, const emitter_keys *k);
 
-/* spot.c */
-double spot_falloff(const emitter *e, double cos_theta);
-void spot_sample_ray(const emitter *e, const double u[4], emitter_ray *r);
-int spot_connect(const emitter *e, vec3 x, emitter_direct *out);
-vec3 spot_flux(const emitter *e);
-/* the smoothstep ring's cosθ from a uniform (inverse of 2t³ − t⁴), exposed for the tests through spot_sample_ray */
-double spot_ring_t(double u);
-
-/* collimated.c */
-void collimated_sample_point(const emitter *e, const double u[2], emitter_point *pt);
-void collimated_sample_ray(const emitter *e, const double u[4], emitter_ray *r);
-int collimated_sample_direct(const emitter *e, vec3 x, const double u[2], emitter_direct *out);
-int collimated_connect_point(const emitter *e, const emitter_point *pt, vec3 x, emitter_direct *out);
-int collimated_beam_crossing(const emitter *e, vec3 o, vec3 d, double tmax, double *t0, double *t1);
-vec3 collimated_flux(const emitter *e);
-
-/* area.c */
-int area_prepare(const scene *s, emitter *e);
-void area_sample_point(const scene *s, const emitter *e, const double u[2], emitter_point *pt);
-void area_sample_ray(const scene *s, const emitter *e, const double u[4], emitter_ray *r);
-int area_connect_point(const emitter *e, const emitter_point *pt, vec3 x, emitter_direct *out);
+/* The position itself as the emitter's point (point, spot: pdf_a 1). */
+void emitter_point_at_pos(const scene *s, const emitter *e, const double u[2], emitter_point *pt);
 
 #endif

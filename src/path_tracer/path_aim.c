@@ -114,7 +114,7 @@ void pt_aim_connect(pixel_ctx *c, const path_state *ps, vec3 x, const phase_func
     if (emitter_is_parallel_beam(L)) { /* surfaces only: medium vertices reach a beam by its crossings */
         const double none[2] = {0.0, 0.0};
         ok = !pf && emitter_sample_direct(s, L, x, none, &ed);
-    } else if (L->type == EMITTER_COLLIMATED && L->radius > 0.0) {
+    } else if (L->flags & EMITTER_AIM_PER_CONNECTION) {
         /* a diverging beam's disc: a fixed point of it lights only a narrow cone, so each connection draws its
          * own point where x can see it (docs/emitters.md §4) */
         double u[2] = {rng_uniform(c->rng), rng_uniform(c->rng)};

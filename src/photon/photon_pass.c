@@ -256,9 +256,9 @@ void trace_light_path(const scene *s, const photon_pass_input *in, int volume_op
      * point draws only its direction, after the bin (the draws of a scene of point lights are unchanged) */
     emitter_ray er;
     double u[4] = {0.0, 0.0, 0.0, 0.0};
-    int fixed = L->type == EMITTER_POINT || L->type == EMITTER_SPOT;
+    int fixed = (L->flags & EMITTER_STARTS_AT_POS) != 0, n = L->ops->ray_uniforms;
     if (!fixed) {
-        for (int k = 0; k < 4; k++) u[k] = rng_uniform(rng);
+        for (int k = 0; k < n; k++) u[k] = rng_uniform(rng);
         emitter_sample_ray(s, L, u, &er);
     }
     vec3 start = fixed ? L->pos : er.p;
@@ -269,7 +269,6 @@ void trace_light_path(const scene *s, const photon_pass_input *in, int volume_op
     lp.reach = lp.bin; /* the early exit keeps every path whose surface photons could still count */
     lp.reach.end += in->surface_slack;
     if (fixed) {
-        int n = L->type == EMITTER_POINT ? 2 : 3;
         for (int k = 0; k < n; k++) u[k] = rng_uniform(rng);
         emitter_sample_ray(s, L, u, &er);
     }

@@ -1,15 +1,15 @@
 /* Emitters of the scene file (docs/emitters.md §1): `point`, `spot`, `collimated`, `directional_point`
  * primitives, and any quad, disk, sphere, cube or mesh with `emission` or `power` (an area light). The
  * keys every emitter reads: `emission` or `power` (not both), `pulse_start`, `pulse_width`, `pulse_shape`,
- * `ext_medium`, `name`. Each type converts its `emission` into the emitter's value and its `power` (the total
- * flux Φ) as its own file in src/emitter says. */
+ * `ext_medium`, `name`. The rest is the type's: its row of the table of emitter types (emitter_ops, one file
+ * per type in src/emitter) parses its own keys and converts its `emission` into the emitter's value and its
+ * `power` (the total flux Φ). */
+#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "scene_internal.h"
-
-#define DEG (M_PI / 180.0)
 
 /* emission (or power, then *is_power) as an RGB triple >= 0; a texture is refused with its reason */
 static int read_emission(json_ctx *c, const cJSON *v, const char *where, const char *kind, vec3 *out, int *is_power)
@@ -67,107 +67,62 @@ static int push_light(json_ctx *c, scene *s, const char *where, emitter *L)
     return 0;
 }
 
-/* the beam's axis (local +z: toward look_at) and the unit axes across it: e1 = up × axis, e2 = axis × e1 */
-static int beam_frame(json_ctx *c, const char *where, const xform *T, emitter *L)
+/* The reader a type's parse (emitter_ops) reads its own keys with: the loader's context, the primitive's
+ * object and its path, so that its messages are the loader's. */
+typedef struct {
+    json_ctx *c;
+    const cJSON *v;
+    const char *where;
+} key_ctx;
+
+static int keys_number(const emitter_keys *k, const char *key, double def, double lo, double hi, double *out)
 {
-    if (!(v3_len(T->z) > 0.0)) return jfail(c, where, "transform", "gives no direction (set look_at away from position)");
-    L->axis = v3_norm(T->z);
-    vec3 up = v3_len(T->y) > 0.0 ? T->y : v3(0, 1, 0);
-    vec3 e1 = v3_cross(up, L->axis);
-    if (!(v3_len(e1) > 1e-12)) {
-        vec3 a, b;
-        v3_basis(L->axis, &a, &b);
-        e1 = a;
-    }
-    L->e1 = v3_norm(e1);
-    L->e2 = v3_norm(v3_cross(L->axis, L->e1));
-    return 0;
+    const key_ctx *kc = k->ctx;
+    return jget_number_range(kc->c, kc->v, kc->where, key, def, lo, hi, out);
 }
 
-static int parse_spot(json_ctx *c, const cJSON *v, const char *where, emitter *L, int is_power)
+static int keys_fail(const emitter_keys *k, const char *key, const char *fmt, ...)
 {
-    double cone, delta;
-    if (jget_number_range(c, v, where, "coneangle", 30.0, 0.0, 180.0, &cone) ||
-        jget_number_range(c, v, where, "conedeltaangle", 5.0, 0.0, 180.0, &delta))
-        return -1;
-    if (!(cone > 0.0)) return jfail(c, where, "coneangle", "must be > 0 degrees");
-    if (delta > cone) return jfail(c, where, "conedeltaangle", "must be <= coneangle (%g; got %g)", cone, delta);
-    L->cos_end = cos(cone * DEG);
-    L->cos_start = cos((cone - delta) * DEG);
-    if (is_power) { /* Φ = 2π·I·[(1 − cos_start) + (cos_start − cos_end)/2] (pbrt-v4) */
-        double k = 2.0 * M_PI * ((1.0 - L->cos_start) + 0.5 * (L->cos_start - L->cos_end));
-        L->value = v3_scale(L->value, 1.0 / k);
-    }
-    return 0;
+    const key_ctx *kc = k->ctx;
+    char reason[512]; /* jfail's own limit */
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(reason, sizeof reason, fmt, ap);
+    va_end(ap);
+    return jfail(kc->c, kc->where, key, "%s", reason);
 }
 
-static int parse_collimated(json_ctx *c, const cJSON *v, const char *where, emitter *L, int is_power, int pencil)
+/* The common keys, then the type's own (its parse). An emissive shape's emitter takes its medium and its
+ * triangles from the surface sf; a primitive's its axes from the transform T. */
+static int parse_emitter(json_ctx *c, scene *s, const cJSON *v, const char *where, const char *type, const xform *T,
+                         const surface *sf, emitter *L)
 {
-    double div = 0.0;
-    L->cos_div = 1.0;
-    if (pencil) { /* directional_point: `power` is the flux, `emission` the flux/(4π) (docs/emitters.md §2.3) */
-        if (!is_power) L->value = v3_scale(L->value, 4.0 * M_PI);
-        return 0;
+    if (read_common(c, s, v, where, type, L)) return -1;
+    key_ctx kc = {c, v, where};
+    emitter_keys k = {.ctx = &kc, .type = type, .number = keys_number, .fail = keys_fail};
+    if (T) k.z = T->z, k.y = T->y;
+    char what[64];
+    snprintf(what, sizeof what, sf ? "an emissive %s" : "a %s light", type);
+    if (read_emission(c, v, where, what, &L->value, &k.is_power)) return -1;
+    if (sf) {
+        if (sf->overrides_media) L->medium = sf->ext_medium; /* the medium its light leaves into: the front side's */
+        L->surface = s->surface_count;
+        L->first_tri = sf->first_tri;
+        L->tri_count = sf->tri_count;
     }
-    if (jget_number_range(c, v, where, "radius", 0.0, 0.0, 0.0, &L->radius) ||
-        jget_number_range(c, v, where, "divergence", 0.0, 0.0, 89.0, &div))
-        return -1;
-    L->cos_div = div > 0.0 ? cos(div * DEG) : 1.0;
-    if (is_power && L->radius > 0.0) L->value = v3_scale(L->value, 1.0 / (M_PI * L->radius * L->radius));
-    return 0;
+    return L->ops->parse(s, L, &k);
 }
 
 int light_parse(json_ctx *c, scene *s, const cJSON *v, const char *where, const char *type, const xform *T)
 {
-    emitter L = {0};
-    if (read_common(c, s, v, where, type, &L)) return -1;
-    int is_power;
-    char kind[64];
-    snprintf(kind, sizeof kind, "a %s light", type);
-    if (read_emission(c, v, where, kind, &L.value, &is_power)) return -1;
-    L.pos = T->pos;
-    int rc = 0;
-    if (!strcmp(type, "point")) {
-        L.type = EMITTER_POINT;
-        if (is_power) L.value = v3_scale(L.value, DP_INV_4PI);
-    } else if (!strcmp(type, "spot")) {
-        L.type = EMITTER_SPOT;
-        rc = beam_frame(c, where, T, &L) || parse_spot(c, v, where, &L, is_power);
-    } else {
-        L.type = EMITTER_COLLIMATED;
-        rc = beam_frame(c, where, T, &L) || parse_collimated(c, v, where, &L, is_power, !strcmp(type, "directional_point"));
-    }
-    return rc ? -1 : push_light(c, s, where, &L);
+    emitter L = {.ops = emitter_ops_find(type), .pos = T->pos};
+    return parse_emitter(c, s, v, where, type, T, NULL, &L) ? -1 : push_light(c, s, where, &L);
 }
 
 int light_parse_area(json_ctx *c, scene *s, const cJSON *v, const char *where, const char *type, surface *sf)
 {
-    emitter L = {0};
-    if (read_common(c, s, v, where, type, &L)) return -1;
-    L.type = EMITTER_AREA;
-    int is_power;
-    char kind[64];
-    snprintf(kind, sizeof kind, "an emissive %s", type);
-    if (read_emission(c, v, where, kind, &L.value, &is_power)) return -1;
-    /* the emitter's medium is the one its light leaves into: the front side's */
-    if (sf->overrides_media) L.medium = sf->ext_medium;
-    L.surface = s->surface_count;
-    L.first_tri = sf->first_tri;
-    L.tri_count = sf->tri_count;
-    if (emitter_prepare(s, &L)) return jfail(c, where, NULL, "out of memory");
-    if (!(L.area > 0.0)) {
-        emitter_free(&L);
-        return jfail(c, where, "emission", "the emissive %s has no area", type);
-    }
-    if (is_power) L.value = v3_scale(L.value, 1.0 / (M_PI * L.area)); /* L_e = Φ/(π·A) */
-    /* a point to aim at and to measure distances from: the middle of its bounding box */
-    vec3 lo = v3s(INFINITY), hi = v3s(-INFINITY);
-    for (uint32_t k = 0; k < 3 * L.tri_count; k++) {
-        const float *p = &s->verts[3 * (size_t)s->tris[3 * (size_t)L.first_tri + k]];
-        lo = v3(dp_fmin(lo.x, p[0]), dp_fmin(lo.y, p[1]), dp_fmin(lo.z, p[2]));
-        hi = v3(dp_fmax(hi.x, p[0]), dp_fmax(hi.y, p[1]), dp_fmax(hi.z, p[2]));
-    }
-    L.pos = v3_scale(v3_add(lo, hi), 0.5);
+    emitter L = {.ops = emitter_ops_shape()};
+    if (parse_emitter(c, s, v, where, type, NULL, sf, &L)) return -1;
     sf->emitter = s->light_count;
     return push_light(c, s, where, &L);
 }

@@ -84,7 +84,8 @@ void scene_release_embree(scene *s);
 /* ---- media and emitters (scene_load.c, light_load.c) ---- */
 /* A medium reference: a name, null or "" (vacuum), or an inline object (appended to s->media). */
 int medium_ref(json_ctx *c, scene *s, const cJSON *v, const char *where, const char *key, int *out);
-/* A point, spot, collimated or directional_point primitive, appended to s->lights. */
+/* A primitive of an emitter type (emitter_ops_find: point, spot, collimated, directional_point), appended to
+ * s->lights. */
 int light_parse(json_ctx *c, scene *s, const cJSON *v, const char *where, const char *type, const xform *T);
 /* The emission of surface sf (its triangles appended, not yet in s->surfaces): an area light appended to
  * s->lights, sf->emitter set. */

@@ -402,6 +402,15 @@ static int parse_surface(json_ctx *c, scene *s, const cJSON *names, const cJSON 
     return 0;
 }
 
+/* the message names every primitive type: the shapes, then the emitters' in the order of their table */
+static int unsupported_primitive(json_ctx *c, const char *where, const char *type)
+{
+    char lights[256];
+    emitter_primitive_list(lights, sizeof lights, ", ");
+    return jfail(c, where, "type", "unsupported primitive '%s' (supported: mesh, quad, disk, sphere, cube, %s)", type,
+                 lights);
+}
+
 static int parse_primitives(json_ctx *c, const cJSON *root, scene *s, const cJSON *names)
 {
     const cJSON *arr = jget_item(c, root, "primitives");
@@ -418,14 +427,12 @@ static int parse_primitives(json_ctx *c, const cJSON *root, scene *s, const cJSO
         xform T;
         if (xform_parse(c, jget_item(c, v, "transform"), w, &T)) return -1;
         int rc;
-        if (!strcmp(type, "point") || !strcmp(type, "spot") || !strcmp(type, "collimated") ||
-            !strcmp(type, "directional_point"))
+        if (emitter_ops_find(type))
             rc = light_parse(c, s, v, w, type, &T);
         else if (!strcmp(type, "mesh") || !strcmp(type, "quad") || !strcmp(type, "cube") || !strcmp(type, "disk") ||
                  !strcmp(type, "sphere"))
             rc = parse_surface(c, s, names, v, w, type, &T);
-        else rc = jfail(c, w, "type", "unsupported primitive '%s' (supported: mesh, quad, disk, sphere, cube, point, spot, "
-                        "collimated, directional_point)", type);
+        else rc = unsupported_primitive(c, w, type);
         if (rc) return rc;
         jnote_unread_keys(c, v, w, mark);
     }
@@ -498,8 +505,10 @@ static void set_dir(scene *s, const char *path)
 static void warn_dark_scene(json_ctx *c, const scene *s)
 {
     if (s->light_count == 0) {
-        jwarn(c, "primitives: the scene has no light (a point, spot, collimated or directional_point primitive, or a "
-                 "shape with emission or power): the image will be black");
+        char lights[256];
+        emitter_primitive_list(lights, sizeof lights, " or ");
+        jwarn(c, "primitives: the scene has no light (a %s primitive, or a shape with emission or power): the image "
+                 "will be black", lights);
         return;
     }
     int lit = 0;
