@@ -103,6 +103,7 @@ typedef struct {
 /* What one photon pass needs, taken from the render plan by photon_pass_input_init. */
 typedef struct {
     double light_paths;             /* light paths traced (photon_count) */
+    light_selection_choice light_selection; /* how a path picks its light */
     double volume_budget, surface_budget; /* photons kept per map */
     int max_bounces;                /* path segments; photons of longer paths cannot count */
     double t_end;                   /* the window's end (INFINITY: steady state) */

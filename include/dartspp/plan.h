@@ -41,6 +41,7 @@ typedef struct render_plan {
     char type_name[64];
     time_window window;              /* the time keys resolved; camera_unwarp is here only */
     bounce_limits bounces;
+    light_selection_choice light_selection; /* how a light path (or an aimed camera path) picks its light */
     surface_shading shading;         /* two-sided shading, consistency checks, the photon-points glossy rule */
     /* photon points */
     double photon_count;             /* light paths per iteration, and the surface photon budget */

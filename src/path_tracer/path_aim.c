@@ -56,7 +56,7 @@ int pt_pass_aim_init(pt_pass *pp, dp_error *err)
     double acc = 0.0;
     for (int i = 0; i < n; i++) {
         guide_for_light(p, s->lights[i].pos, &pp->guide[i]);
-        if (emitter_connectable(&s->lights[i])) acc += emitter_selection_pdf(s, i, s->integrator.light_selection == LIGHT_SELECTION_POWER);
+        if (emitter_connectable(&s->lights[i])) acc += emitter_selection_pdf(s, i, p->light_selection == LIGHT_SELECTION_POWER);
         pp->light_cdf[i] = acc;
     }
     for (int i = 0; i < n; i++) pp->light_cdf[i] = acc > 0.0 ? pp->light_cdf[i] / acc : (i + 1.0) / n;

@@ -249,7 +249,7 @@ void trace_light_path(const scene *s, const photon_pass_input *in, int volume_op
 {
     const darts_guide *g = &in->guide;
     double sel_pdf = 1.0;
-    int li = emitter_select(s, rng_uniform(rng), s->integrator.light_selection == LIGHT_SELECTION_POWER, &sel_pdf);
+    int li = emitter_select(s, rng_uniform(rng), in->light_selection == LIGHT_SELECTION_POWER, &sel_pdf);
     const emitter *L = &s->lights[li];
     double tau0 = path_time_offset(s, L, rng); /* the path's time starts at its emission */
     /* the start: a light with a position of its own draws it first, so that the bin is drawn from it; a
@@ -339,7 +339,8 @@ void photon_pass_input_init(photon_pass_input *in, const scene *s, const render_
                             uint64_t seed, long iteration, const dp_stop_flag *stop)
 {
     *in = (photon_pass_input){.light_paths = p->photon_count, .volume_budget = p->volume_photon_count,
-                              .surface_budget = p->photon_count, .max_bounces = p->bounces.max,
+                              .surface_budget = p->photon_count, .light_selection = p->light_selection,
+                              .max_bounces = p->bounces.max,
                               .t_end = p->window.gated ? time_window_end(&p->window) : INFINITY,
                               .include_surfaces = p->include_surfaces, .low_order_scattering = p->low_order_scattering,
                               .surface_chains = p->surface_chains,

@@ -50,6 +50,7 @@ int plan_resolve(const scene *s, render_plan *p, dp_error *err)
     snprintf(p->type_name, sizeof p->type_name, "%s", in->type_name);
     p->window = in->window;
     p->bounces = (bounce_limits){(int)in->min_bounces, (int)in->max_bounces};
+    p->light_selection = in->light_selection;
     p->shading = (surface_shading){in->enable_two_sided_shading, in->enable_consistency_checks, in->glossy_gather_alpha};
     resolve_photon_points(in, p);
     p->enable_rr = in->enable_rr;

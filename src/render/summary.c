@@ -122,7 +122,7 @@ const char *summary_path_tracer_light(const emitter *e, const render_plan *p)
  * integrator reaches it. */
 static void print_lights(const scene *s, const render_plan *p)
 {
-    int by_power = s->integrator.light_selection == LIGHT_SELECTION_POWER;
+    int by_power = p->light_selection == LIGHT_SELECTION_POWER;
     printf("lights (selected %s):", by_power ? "in proportion to flux" : "uniformly");
     for (int i = 0; i < s->light_count; i++) {
         const emitter *e = &s->lights[i];
