@@ -14,6 +14,8 @@ here=$(cd "$(dirname "$0")/.." && pwd)
 work=$(mktemp -d); trap 'rm -rf "$work"' EXIT
 common="--spp 3 --seed 11 --threads 2 --quiet --set resolution=48"
 baseline="--set enable_guiding=false --set enable_elliptical=false --set strict_time_width=false"
+# every sensor output: frames and their cube, scattering-order layers, ground truth, the sensor's jitter and tail
+sensor="--set frame_num=4 --set transient_time_width=0.5 --set start_time=5 --set bounce_orders=3 --set ground_truth=true --set sensor_jitter_fwhm=0.2 --set sensor_jitter_tail=0.1"
 eda="--set eda=true --set eda_shape=[16,16,32] --set eda_table_dir=$work/tables"
 paper=${DARTSPP_PAPER_SCENES:-$here/../shared/scenes}
 # One scene per emitter type (gen:NAME): the demo fog box with its point light replaced, as in
@@ -54,8 +56,17 @@ while IFS='|' read -r name scene args; do
     "$bin" render "$scene" $common $args --output "$work/$which/$name.pfm" >/dev/null 2>"$work/$which-$name.err" ||
       { echo "$name: $which binary failed: $(tail -1 "$work/$which-$name.err")"; bad=1; continue 2; }
   done
+  # the sensor-output cases: also the photon counts of the cube (a SPAD with pile-up and the Coates correction)
+  if [ -e "$work/old/${name}_cube.npy" ] && [ "${name#sensor}" != "$name" ]; then
+    for which in old new; do
+      "${!which}" counts "$work/$which/${name}_cube.npy" --output "$work/$which/${name}_counts.npy" --pulses 1000 \
+        --scale 50 --dark-rate 0.01 --dead-time 100 --coates --seed 5 >/dev/null 2>&1 ||
+        { echo "$name: $which binary's counts failed"; bad=1; }
+    done
+  fi
   same=1
-  for f in "$work/old/$name".pfm "$work/old/$name"_*.pfm; do
+  # every image, frame, ground-truth image, cube, order layer and counts file the render wrote
+  for f in "$work/old/$name".pfm "$work/old/$name"_*.pfm "$work/old/$name"_*.npy "$work/old/$name"_*.csv; do
     [ -e "$f" ] || continue
     cmp -s "$f" "$work/new/${f#"$work/old/"}" || same=0
   done
@@ -92,6 +103,9 @@ sphere-darts|gen:sphere|
 pulses-path-tracer|scenes/fogbox/two-pulses.json|--set type=path_tracer --set enable_guiding=false --set enable_elliptical=false
 pulses-darts-pt|scenes/fogbox/two-pulses.json|--set type=path_tracer
 pulses-darts|scenes/fogbox/two-pulses.json|
+sensor-outputs-darts|scenes/fogbox/two-pulses.json|$sensor
+sensor-outputs-path-tracer|scenes/fogbox/two-pulses.json|$sensor --set type=path_tracer --set enable_guiding=false --set enable_elliptical=false
+sensor-outputs-darts-pt|scenes/fogbox/two-pulses.json|$sensor --set type=path_tracer
 dragon-darts-chains|paper:dragon/scene-points-darts-short.json|--set resolution=64 --set surface_chains=true
 CASES
 exit $bad
