@@ -3,9 +3,10 @@
 # (`make test`, `make check`), or every test_* program in a folder and its module folders (default
 # build/san/tests). A folder named tests/python is the Python package's pytest suite, run with $PYTHON (default
 # /usr/bin/python3) against the package built in build/python, and counted alike.
-# DARTSPP_TEST_JOBS programs (default 2) run at once, started in the order named; each program's line (passed,
-# failed, skipped, seconds) is printed when it ends, with its skip reasons and, when it failed, the end of its
-# output. A skipped test (cmocka's skip(): e.g. the paper's scenes are not beside the checkout) is named with the
+# DARTSPP_TEST_JOBS programs (default 2) run at once, the longest first by the seconds each took last time
+# (kept in $DARTSPP_TEST_TIMES, default build/.test-times; before the first run, tests/test-times: the
+# seconds of a `make test` on 2 cores; a program timed in neither starts first, else the order named); each program's line (passed, failed, skipped, seconds) is printed when it ends, with its skip
+# reasons and, when it failed, the end of its output. A skipped test (cmocka's skip(): e.g. the paper's scenes are not beside the checkout) is named with the
 # reason it printed and is not a failure. Exit status 0 iff nothing failed and something passed.
 set -u
 if [ $# -eq 0 ] || { [ $# -eq 1 ] && [ -d "$1" ] && [ "${1%python}" = "$1" ]; }; then
@@ -16,6 +17,14 @@ export ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=0}
 export UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}
 export CMOCKA_MESSAGE_OUTPUT=stdout
 jobs_max=${DARTSPP_TEST_JOBS:-2}
+times=${DARTSPP_TEST_TIMES:-build/.test-times}
+known=$(cat "$times" tests/test-times 2>/dev/null) # "seconds path" lines, the newest first
+if [ -n "$known" ] && [ $# -gt 1 ]; then # longest first: "seconds position path", sorted, path kept
+  mapfile -t order < <(i=0; for t in "$@"; do i=$((i + 1))
+                         s=$(printf '%s\n' "$known" | awk -v p="$t" '$2 == p { print $1; f = 1; exit } END { if (!f) print 1e9 }')
+                         printf '%s %d %s\n' "$s" "$i" "$t"; done | sort -k1,1gr -k2,2n | cut -d' ' -f3-)
+  set -- "${order[@]}"
+fi
 [ "$jobs_max" -ge 1 ] 2>/dev/null || jobs_max=1
 res=$(mktemp -d)
 trap 'rm -rf "$res"' EXIT
@@ -36,7 +45,7 @@ run_pytest() { # i folder
     printf '%s\n' "$out" | grep '^SKIPPED' | sed 's/^/  /'
     if [ "$bad" -ne 0 ]; then printf '%s\n' "$out" | tail -60; fi
   } > "$res/$1.txt"
-  echo "$ok $bad $sk pytest:$2" > "$res/$1.tmp" && mv "$res/$1.tmp" "$res/$1.res"
+  echo "$ok $bad $sk $(( $(date +%s) - t0 )) $2 pytest:$2" > "$res/$1.tmp" && mv "$res/$1.tmp" "$res/$1.res"
 }
 run_program() { # i program
   local t=$2 name t0 out rc ok skip_names sk total bad s why
@@ -60,18 +69,19 @@ run_program() { # i program
     done
     if [ "$bad" -ne 0 ]; then printf '%s\n' "$out" | tail -40; fi
   } > "$res/$1.txt"
-  echo "$ok $bad $sk $name" > "$res/$1.tmp" && mv "$res/$1.tmp" "$res/$1.res"
+  echo "$ok $bad $sk $(( $(date +%s) - t0 )) $t $name" > "$res/$1.tmp" && mv "$res/$1.tmp" "$res/$1.res"
 }
 passed=0; failed=0; skipped=0; broken=""; n=0; shown=0; running=0
 declare -A seen=()
 report() { # prints and counts every finished job not yet shown
-  local f i ok bad sk name
+  local f i ok bad sk secs path name
   for f in "$res"/*.res; do
     [ -e "$f" ] || continue
     i=$(basename "$f" .res)
     [ -n "${seen[$i]:-}" ] && continue
     seen[$i]=1; shown=$((shown + 1)); running=$((running - 1))
-    read -r ok bad sk name < "$f"
+    read -r ok bad sk secs path name < "$f"
+    echo "$secs $path" >> "$res/times"
     cat "$res/$i.txt"
     passed=$((passed + ok)); failed=$((failed + bad)); skipped=$((skipped + sk))
     [ "$bad" -ne 0 ] && broken="$broken $name"
@@ -93,6 +103,9 @@ wait
 report
 if [ "$shown" -lt "$n" ]; then # a job that wrote no result (its shell was killed)
   echo "$((n - shown)) test program(s) ended without a result"; failed=$((failed + n - shown)); broken="$broken (lost)"
+fi
+if [ -s "$res/times" ] && mkdir -p "$(dirname "$times")" 2>/dev/null; then # this run's seconds, then the older ones
+  { cat "$res/times"; [ -f "$times" ] && cat "$times"; } | awk '!seen[$2]++' > "$times.tmp" && mv "$times.tmp" "$times"
 fi
 echo "tests took $(( $(date +%s) - start )) s"
 [ -n "$broken" ] && echo "failing:$broken"

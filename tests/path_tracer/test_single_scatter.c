@@ -10,6 +10,9 @@
 
 #include "dartspp/render.h"
 
+/* compiled twice (main at the end): each program leaves the other's cases unused */
+#pragma GCC diagnostic ignored "-Wunused-function"
+
 #define SEEDS 16 /* the plain path tracer's cases; check_against_quadrature_seeds takes others */
 
 /* 8-point Gauss–Legendre nodes and weights on [-1, 1]. */
@@ -356,14 +359,30 @@ static void test_unwarped_early_gate(void **state)
 #define DARTS_PT "\"enable_guiding\": true, \"enable_elliptical\": true"
 #define UNIFORM_PT "\"time_sampling\": \"uniform\""
 
+/* The isotropic gate, one case per method (the quick tier's consistency render of each). */
+static void test_darts_pt_gate(void **state)
+{
+    (void)state;
+    check_against_quadrature_seeds("{\"type\": \"isotropic\"}", 0.0, 1.0,
+                                   "\"transient_time_center\": 3.25, \"transient_time_width\": 0.5, " DARTS_PT, 1, 3.0, 3.5,
+                                   300, (time_mode){0, 0, 0, 0, 0, 0}, 32);
+}
+
+static void test_uniform_time_gate(void **state)
+{
+    (void)state;
+    check_against_quadrature_seeds("{\"type\": \"isotropic\"}", 0.0, 1.0,
+                                   "\"transient_time_center\": 3.25, \"transient_time_width\": 0.5, " UNIFORM_PT, 1, 3.0,
+                                   3.5, 300, (time_mode){0, 0, 0, 0, 0, 0}, 32);
+}
+
+/* HG with η = 4/3 for both methods, a box pulse and camera-unwarped time for the DARTS path tracer. */
 static void test_darts_and_uniform_time(void **state)
 {
     (void)state;
     const char *methods[2] = {DARTS_PT, UNIFORM_PT};
     char w[512];
     for (int m = 0; m < 2; m++) {
-        snprintf(w, sizeof w, "\"transient_time_center\": 3.25, \"transient_time_width\": 0.5, %s", methods[m]);
-        check_against_quadrature_seeds("{\"type\": \"isotropic\"}", 0.0, 1.0, w, 1, 3.0, 3.5, 300, (time_mode){0, 0, 0, 0, 0, 0}, 32);
         snprintf(w, sizeof w, "\"transient_time_center\": 4.3, \"transient_time_width\": 0.6, %s", methods[m]);
         check_against_quadrature_seeds("{\"type\": \"henyey_greenstein\", \"g\": 0.4}", 0.4, 0.75, w, 1, 4.0, 4.6, 300,
                                        (time_mode){0, 0, 0, 0, 0, 0}, 32);
@@ -408,17 +427,27 @@ static void test_sensor_response(void **state)
     check_against_quadrature_seeds("{\"type\": \"henyey_greenstein\", \"g\": 0.4}", 0.4, 0.75, w, 1, 4.0, 4.6, 300, tm, 32);
 }
 
+/* Two programs from this file: test_single_scatter (quick tier) holds the plain path tracer's gate, refractive
+ * and steady cases and one gate case of the DARTS and of the uniform-time path tracer; test_single_scatter_modes
+ * (tests/path_tracer/test_single_scatter_modes.c, `make test`) includes this file with SINGLE_SCATTER_MODES for
+ * the other cases: both methods under HG with η = 4/3, box pulses, unwarped time, the sensor response and the
+ * order-1 layer. */
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_darts_and_uniform_time),
+#ifndef SINGLE_SCATTER_MODES
         cmocka_unit_test(test_gate_isotropic),
         cmocka_unit_test(test_gate_hg_refractive),
         cmocka_unit_test(test_steady_hg_backward),
+        cmocka_unit_test(test_darts_pt_gate),
+        cmocka_unit_test(test_uniform_time_gate),
+#else
+        cmocka_unit_test(test_darts_and_uniform_time),
         cmocka_unit_test(test_box_pulse),
         cmocka_unit_test(test_unwarped_early_gate),
         cmocka_unit_test(test_sensor_response),
         cmocka_unit_test(test_order_one_layer),
+#endif
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

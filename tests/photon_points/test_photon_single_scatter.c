@@ -6,6 +6,9 @@
  * run of this code. */
 #include "render_fixtures.h"
 
+/* compiled twice (main at the end): each program leaves the other's cases unused */
+#pragma GCC diagnostic ignored "-Wunused-function"
+
 typedef struct {
     const camera *cam;
     vec3 light, I, ss, st;
@@ -331,12 +334,18 @@ static void test_darts_single_scatter_total(void **state)
     tmp_scene_remove(&t);
 }
 
+/* Two programs from this file: test_photon_single_scatter (quick tier) holds the gated totals of baseline and
+ * DARTS photon points; test_photon_single_scatter_modes (tests/photon_points/test_photon_single_scatter_modes.c,
+ * `make test`) includes this file with SINGLE_SCATTER_MODES for camera-unwarped time. */
 int main(void)
 {
     const struct CMUnitTest tests[] = {
+#ifndef SINGLE_SCATTER_MODES
         cmocka_unit_test(test_single_scatter_total),
-        cmocka_unit_test(test_unwarped_single_scatter_total),
         cmocka_unit_test(test_darts_single_scatter_total),
+#else
+        cmocka_unit_test(test_unwarped_single_scatter_total),
+#endif
     };
     /* DARTSPP_TEST_FILTER=name (cmocka wildcards) runs only the matching tests */
     if (getenv("DARTSPP_TEST_FILTER")) cmocka_set_test_filter(getenv("DARTSPP_TEST_FILTER"));
