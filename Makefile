@@ -160,7 +160,7 @@ STRESS_TESTS = $(STRESS_SRC:tests/%.c=build/san/tests/%)
 stress: build/san/dartspp $(STRESS_TESTS)
 	@DARTSPP_STRESS=full tests/run_tests.sh $(STRESS_TESTS)
 
-# docs/keys.md between its markers is the output of `dartspp keys --markdown` (tests/test_keys.c checks it).
+# docs/keys.md between its markers is the output of `dartspp keys --markdown` (tests/scene/test_keys.c checks it).
 docs-keys: build/dartspp
 	@{ sed '/^<!-- begin: dartspp keys --markdown -->$$/q' docs/keys.md; ./build/dartspp keys --markdown; \
 	   sed -n '/^<!-- end: dartspp keys --markdown -->$$/,$$p' docs/keys.md; } > docs/keys.md.tmp && mv docs/keys.md.tmp docs/keys.md

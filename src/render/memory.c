@@ -3,7 +3,7 @@
  * iteration is alive at once during the sensor pass (the photon sets' arrays at their capacity, both maps,
  * the primary lines and the splat's scratch, film, tables, geometry), so the peak is the sum. How many
  * photons a light path stores depends on the scene (the DARTS time tests drop most surface photons), so a
- * pilot batch of light paths measures it; the budgets cap the extrapolation. tests/test_cli.c checks the
+ * pilot batch of light paths measures it; the budgets cap the extrapolation. tests/cli/test_cli.c checks the
  * estimate against the measured peak. Written by hand: no library estimates this. */
 #include "dartspp/darts.h"
 #include "dartspp/photon.h"
