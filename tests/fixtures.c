@@ -317,6 +317,12 @@ char *tmpdir_with_cbox_fog(int res)
     return dir;
 }
 
+int stress_full(void)
+{
+    const char *v = getenv("DARTSPP_STRESS");
+    return v && !strcmp(v, "full");
+}
+
 char *cbox_dir;
 
 int setup_cbox_fog40(void **state)

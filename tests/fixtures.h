@@ -49,6 +49,14 @@ long state_passes(const char *path);
 void write_cbox_fog(const char *path, int res);
 /* A fresh temp folder holding that box as box.json (the MPI tests' scene); NULL when none can be made. */
 char *tmpdir_with_cbox_fog(int res);
+/* Whether DARTSPP_STRESS=full (`make stress`): the programs with the stress tag line then run their whole
+ * matrix and their long statistical cases (tests/README.md, Stress matrix); `make test` runs a fast subset. */
+int stress_full(void);
+/* cmocka's group run of the cases `make test` runs, then, under DARTSPP_STRESS=full only, the long ones. */
+#define RUN_TESTS_AND_STRESS(tests, stress_tests)                                                              \
+    (cmocka_run_group_tests_name("tests", tests, NULL, NULL) +                                                \
+     (stress_full() ? cmocka_run_group_tests_name("stress", stress_tests, NULL, NULL) : 0))
+
 /* A group's setup and teardown around it: our fog Cornell box at 40×40 pixels in the folder cbox_dir (the MPI
  * tests), removed with the folder by the teardown. */
 extern char *cbox_dir;

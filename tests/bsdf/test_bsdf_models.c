@@ -3,7 +3,7 @@
  * under total internal reflection, the hemispherical Fresnel averages, microfacet normalisation and Smith
  * masking by quadrature, the named metals, the reference's defaults, the checks of bsdf_prepare, and the
  * delta lobes' outcomes. Sampling-against-pdf, furnace and reciprocity tests over the public API are in
- * tests/test_bsdf.c. */
+ * tests/bsdf/test_bsdf.c. */
 #include "test_util.h"
 
 #include "dartspp/bsdf.h"

@@ -56,6 +56,7 @@
  *     (channel 2 total -29.1 %; 17 of 19 checks fail). The other half of (4), the photon pass without the
  *     adjoint shading-normal correction, cannot show here: quads and cubes have shading normal = geometric
  *     normal, where the correction is exactly 1. */
+#include "fixtures.h"
 #include "render_fixtures.h"
 
 #include <time.h>
@@ -315,12 +316,6 @@ static double now_s(void)
 /* Kernel-bias budget per tile, relative to the path tracer's tile value (see the comment at the top). */
 #define BIAS_BUDGET 0.02
 
-static int full_matrix(void)
-{
-    const char *e = getenv("DARTSPP_STRESS");
-    return e && !strcmp(e, "full");
-}
-
 /* Whether the panel's BSDF scatters at all (the plastics may be stubs while src/bsdf is being finished):
  * a note in the output, not a failure — both integrators then render the material black. */
 static void note_stub(const scene *s, const char *name)
@@ -437,12 +432,12 @@ int main(void)
     void *states[NCASES];
     int n = 0;
     for (int i = 0; i < NCASES; i++) {
-        if (!CASES[i].fast && !full_matrix()) continue;
+        if (!CASES[i].fast && !stress_full()) continue;
         states[n] = (void *)&CASES[i];
         tests[n] = (struct CMUnitTest){.name = CASES[i].name, .test_func = test_material, .initial_state = states[n]};
         n++;
     }
-    print_message("material matrix: %s (%d of %d cases)\n", full_matrix() ? "full" : "fast subset, DARTSPP_STRESS=full for all",
+    print_message("material matrix: %s (%d of %d cases)\n", stress_full() ? "full" : "fast subset, DARTSPP_STRESS=full for all",
                   n, NCASES);
     /* DARTSPP_TEST_FILTER=name (cmocka wildcards) runs only the matching tests */
     if (getenv("DARTSPP_TEST_FILTER")) cmocka_set_test_filter(getenv("DARTSPP_TEST_FILTER"));

@@ -2,7 +2,7 @@
  * the fog Cornell box at 40×40; the job ends non-zero saying that a rank was lost, the checkpoint state of
  * the last periodic reduction (--reduce-every) is on disk and the watchdog wrote its images with that pass
  * count; `--resume` of that state with 3 ranks, and with one process, completes to K passes and equals a
- * one-process render of K passes within the bound of tests/test_mpi.c (the gate image's sums are doubles
+ * one-process render of K passes within the bound of tests/cluster/test_mpi.c (the gate image's sums are doubles
  * added in another order: 2 float ulps); a one-process state with frames resumes under 3 ranks the same
  * way (frames within 2K ulps); a rank killed before the first reduction leaves nothing and the message says
  * so. Rank 0 exits with status 4 in both (each rank runs in a shell that prints its status: mpirun reports

@@ -13,7 +13,7 @@
  *  5. darts_can_reach against its closed form, edges included;
  *  6. sections 1 and 2 on extreme media, anisotropy and gates (fast subset; all with DARTSPP_STRESS=full).
  * Monte Carlo checks use |z| < 4 with the standard error from the sample variance. */
-#include "test_util.h"
+#include "fixtures.h"
 
 #include "dartspp/darts.h"
 
@@ -745,12 +745,6 @@ static void test_can_reach(void **state)
  * free paths into the tail (where Φ underflows by e^{−3000}); finite and infinite tmax. Every case checks the
  * same quadrature and the same invariants as sections 1 and 2 (weights finite and >= 0, fallbacks only where
  * nothing is reachable). A fast subset runs by default; DARTSPP_STRESS=full (make stress) runs all of it. */
-static int stress_full(void)
-{
-    const char *v = getenv("DARTSPP_STRESS");
-    return v && strcmp(v, "full") == 0;
-}
-
 typedef struct {
     const char *name;
     double start, end; /* for C = 1, τ = 0, with st the mean extinction */

@@ -5,7 +5,7 @@
  * quadrature: E[W·h(ω)] = ∫ f·h dω for test functions h, for several g. No expected value comes from an
  * earlier run of this code: the references are the table's own CDF (for the χ²) and quadrature of the
  * phase function (for the combined sampler). */
-#include "test_util.h"
+#include "fixtures.h"
 
 #include <omp.h>
 #include <unistd.h>
@@ -237,12 +237,6 @@ static void test_combined_sampler_unbiased(void **state)
  * CDF; the combined sampler's weights finite and >= 0 and unbiased against closed forms that hold for any
  * g: ∫ f dω = 1 and ∫ f·(ω·a) dω = g·(ω_in·a) (the mean cosine of Henyey–Greenstein is g).
  * Fast subset by default, the full cross product with DARTSPP_STRESS=full (make stress). */
-static int stress_full(void)
-{
-    const char *v = getenv("DARTSPP_STRESS");
-    return v && strcmp(v, "full") == 0;
-}
-
 static int check_extreme_case(double ss, double sa, double g, long n)
 {
     eda_table t;

@@ -28,7 +28,7 @@
  *      camera-light time (degenerate first ellipses), light on the central camera ray, the radii of
  *      iteration 1e5.
  *   6. transient frames with DARTS: every frame finite and >= 0, frames entirely before the earliest arrival
- *      exactly zero (the frames' values: tests/test_photon_frames.c, DARTS frames against the path tracer).
+ *      exactly zero (the frames' values: tests/photon_points/test_photon_frames.c, DARTS frames against the path tracer).
  * No expected value comes from an earlier run of this code: exact zeros follow from causality, the scale
  * test's tolerance from the spread over seeds measured here. */
 #include "test_util.h"
