@@ -1,3 +1,4 @@
+/* tier: stress */
 /* DARTS behind mirrors and glossy surfaces (darts_mirrors, issue 18).
  *
  * 1. test_cv_techniques_chi2: the multi-focus control-vertex sampler (cv_techniques_sample: the straight
@@ -16,7 +17,7 @@
  *    spread of per-pass tile totals, |z| < 4.0 (Bonferroni over 16 tiles × 2 walls at p ≈ 0.002) for
  *    darts_mirrors "full"; the same check must FAIL for "straight" (the authors' behaviour), which is what
  *    shows it can. */
-#include "test_util.h"
+#include "fixtures.h"
 
 #include "dartspp/darts.h"
 #include "dartspp/plan.h"
@@ -362,7 +363,10 @@ int main(void)
         cmocka_unit_test(test_cv_techniques_chi2),
         cmocka_unit_test(test_bit_identical_without_mirrors),
         cmocka_unit_test(test_mirror_agrees_with_baseline),
+    };
+    /* the long statistical cases: `make stress` (tests/README.md) */
+    const struct CMUnitTest stress_tests[] = {
         cmocka_unit_test(test_glossy_agrees_with_baseline),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return RUN_TESTS_AND_STRESS(tests, stress_tests);
 }

@@ -1,9 +1,11 @@
+/* tier: stress */
 /* DARTS photon points against baseline photon points on scenes where both estimate the same kernel-smoothed
  * image: the in-gate band of a narrow gate on the walls (the photon pass's surface time test widened for the
  * gather radius), and refractive index 4/3 (strict time mode, and control vertices turned off when the regions
  * do not share one η). Every tolerance below is derived from a noise estimate measured in the same test
  * (spread over independent seeds or passes) plus a stated bias budget; no expected value comes from an earlier
  * run of this code. */
+#include "fixtures.h"
 #include "render_fixtures.h"
 
 /* DARTS tests the time of a surface photon at the photon; the gather tests it again at the gather point, up
@@ -130,7 +132,7 @@ static void darts_vs_baseline(const char *label, const char *darts_text, const c
  *     off that ellipsoid got no photons: -45 % (z = -32, -33, -31). The photon pass now turns control
  *     vertices off when the regions of the scene do not share one η (DA distance sampling stays on), and
  *     the command line says so. */
-static void test_darts_refractive_index(void **state)
+static void test_darts_refractive_index_totals(void **state)
 {
     (void)state;
     char darts[8192], base[8192];
@@ -143,6 +145,17 @@ static void test_darts_refractive_index(void **state)
     slab_scene_text(darts, sizeof darts, 0.75, "progressive_transient_photon_map", gate, DARTS_KEYS);
     slab_scene_text(base, sizeof base, 0.75, "progressive_transient_photon_map", gate, BASELINE_KEYS);
     darts_vs_baseline("camera in vacuum, fog eta 4/3", darts, base, 4, 64);
+}
+
+/* (2) without the renders: the guide turns control vertices off for the slab of η 4/3 seen from vacuum and
+ * keeps them for one medium everywhere, and the command line says so (`make test`; the totals above are in
+ * `make stress`). */
+static void test_darts_refractive_index(void **state)
+{
+    (void)state;
+    char darts[8192];
+    const char *gate = "\"transient_time_center\": 4.0, \"transient_time_width\": 1.0";
+    slab_scene_text(darts, sizeof darts, 0.75, "progressive_transient_photon_map", gate, DARTS_KEYS);
 
     /* the guide's decision, and the command line's warning about it */
     tmp_scene t;
@@ -180,7 +193,11 @@ int main(void)
         cmocka_unit_test(test_darts_surface_band_edges),
         cmocka_unit_test(test_darts_refractive_index),
     };
+    /* the long statistical cases: `make stress` (tests/README.md) */
+    const struct CMUnitTest stress_tests[] = {
+        cmocka_unit_test(test_darts_refractive_index_totals),
+    };
     /* DARTSPP_TEST_FILTER=name (cmocka wildcards) runs only the matching tests */
     if (getenv("DARTSPP_TEST_FILTER")) cmocka_set_test_filter(getenv("DARTSPP_TEST_FILTER"));
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return RUN_TESTS_AND_STRESS(tests, stress_tests);
 }
