@@ -16,9 +16,6 @@ fi
 export ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=0}
 export UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}
 export CMOCKA_MESSAGE_OUTPUT=stdout
-# Two programs of two OpenMP threads each share 2 cores: a thread waiting at a barrier sleeps instead of
-# spinning on the core the other program needs (the images do not depend on it).
-export OMP_WAIT_POLICY=${OMP_WAIT_POLICY:-passive}
 jobs_max=${DARTSPP_TEST_JOBS:-2}
 times=${DARTSPP_TEST_TIMES:-build/.test-times}
 known=$(cat "$times" tests/test-times 2>/dev/null) # "seconds path" lines, the newest first
