@@ -20,10 +20,11 @@ LIB_SRC  = $(filter-out src/cli/main.c src/cluster/%,$(wildcard src/*/*.c))
 MPI_SRC  = src/cluster/cluster_mpi.c
 MPICC   ?= mpicc
 CLI_SRC  = src/cli/main.c
-# tests/test_*.c are the test programs, one binary each; the other tests/*.c are the fixtures they share,
-# compiled once and linked into every test program.
-TEST_SRC = $(wildcard tests/test_*.c)
-FIX_SRC  = $(filter-out $(TEST_SRC),$(wildcard tests/*.c))
+# tests/<module>/test_*.c are the test programs, one binary each (build/san/tests/<module>/test_*), in a folder
+# per module; the tests/*.c beside the folders are the fixtures they share, compiled once and linked into every
+# test program (their headers are found by -Itests).
+TEST_SRC = $(sort $(wildcard tests/*/test_*.c))
+FIX_SRC  = $(wildcard tests/*.c)
 # Header dependencies: every compile writes the headers it read into a .d file beside its output (-MMD -MP),
 # which this Makefile includes at the end, so a header edit rebuilds exactly what includes it.
 DEPFLAGS = -MMD -MP
@@ -37,16 +38,14 @@ TEST_OBJ = $(TEST_SRC:tests/%.c=build/san/test-obj/%.o)
 FIX_OBJ  = $(FIX_SRC:tests/%.c=build/san/test-obj/%.o)
 TEST_BIN = $(TEST_SRC:tests/%.c=build/san/tests/%)
 
-# The quick tier (`make check`, for the edit-test loop), declared here and nowhere else: the unit tests (a new
-# unit-test program belongs in the first lines), then one small consistency render per integrator, each against an
-# independent reference: the path tracer (test_single_scatter: every pixel against quadrature) and baseline and
-# DARTS photon points (test_photon_single_scatter: image totals against quadrature), with the path tracer's end to
-# end checks (test_render). `make test` runs every test program, these included. Its time: tests/README.md.
-QUICK_TESTS = test_bsdf test_bsdf_models test_sensor test_darts test_time_angular test_eda test_free_flight test_replay test_radius_schedule test_emitters \
-              test_surface_map test_volume_map test_plan test_transform_mesh test_texture test_paper_scenes \
-              test_scene_values test_scene_errors test_fuzz_readers test_exr test_image_files test_metrics \
-              test_atomic_writes test_cube test_keys test_docs test_errors \
-              test_render test_single_scatter test_photon_single_scatter
+# The tiers are read from the test programs' own tag lines, not listed here. The quick tier (`make check`, for
+# the edit-test loop) is every program with the line `/* tier: quick */`: the unit tests and one small
+# consistency render per integrator against an independent reference. `make stress` runs every program with the
+# line `/* tier: stress */` (those with a DARTSPP_STRESS=full matrix). `make test` runs every test program, the
+# quick ones included. The programs, tiers and times: tests/README.md.
+QUICK_SRC   = $(if $(TEST_SRC),$(shell grep -l '^/\* tier: quick \*/$$' $(TEST_SRC)))
+STRESS_SRC  = $(if $(TEST_SRC),$(shell grep -l '^/\* tier: stress \*/$$' $(TEST_SRC)))
+QUICK_TESTS = $(QUICK_SRC:tests/%.c=%)
 QUICK_BIN   = $(QUICK_TESTS:%=build/san/tests/%)
 
 .PHONY: all deps test check run clean stress reference bench-quick docs-keys python python-build
@@ -95,7 +94,7 @@ build/san/dartspp: $(CLI_SRC) build/san/libdartspp.a
 # Test programs and fixtures are compiled to objects, then linked: a library edit relinks the programs.
 build/san/test-obj/%.o: tests/%.c build/san/test-obj/%.d | $(DEPS_STAMP)
 	@mkdir -p $(dir $@)
-	$(CC) $(CFLAGS) $(SAN_FLAGS) $(DEPFLAGS) -c $< -o $@
+	$(CC) $(CFLAGS) $(SAN_FLAGS) $(DEPFLAGS) -Itests -c $< -o $@
 	@touch $@
 
 build/san/tests/%: build/san/test-obj/%.o $(FIX_OBJ) build/san/libdartspp.a
@@ -152,16 +151,16 @@ test: build/dartspp build/dartspp-mpi build/san/dartspp $(TEST_BIN) $(PY_BUILD)
 check: build/dartspp build/san/dartspp $(QUICK_BIN) $(PY_BUILD)
 	@PYTHON=$(PYTHON) tests/run_tests.sh $(QUICK_BIN) tests/python
 
-# The whole stress matrix (extreme media, anisotropy, gates, scales, geometry): the estimator-level cases of
-# tests/test_darts.c and tests/test_eda.c, the renders of tests/test_stress.c and all 18 material cases of
-# tests/test_materials.c, and ten times the fuzz cases of tests/test_fuzz_renders.c, under ASan (its time:
-# tests/README.md). `make test` runs a fast subset of each. DARTSPP_STRESS_ONLY=text picks render cases by name.
-STRESS_TESTS = build/san/tests/test_darts build/san/tests/test_eda build/san/tests/test_stress build/san/tests/test_materials \
-               build/san/tests/test_fuzz_renders
+# The whole stress matrix (extreme media, anisotropy, gates, scales, geometry) and the long statistical cases
+# that `make test` leaves out: every program tagged `/* tier: stress */` (tests/darts/test_darts.c,
+# tests/darts/test_eda.c, tests/render/test_stress.c, tests/bsdf/test_materials.c, tests/render/test_fuzz_renders.c,
+# ...) run with DARTSPP_STRESS=full, under ASan (what each adds and its time: tests/README.md). `make test` runs a
+# fast subset of each. DARTSPP_STRESS_ONLY=text picks render cases by name.
+STRESS_TESTS = $(STRESS_SRC:tests/%.c=build/san/tests/%)
 stress: build/san/dartspp $(STRESS_TESTS)
 	@DARTSPP_STRESS=full tests/run_tests.sh $(STRESS_TESTS)
 
-# docs/keys.md between its markers is the output of `dartspp keys --markdown` (tests/test_keys.c checks it).
+# docs/keys.md between its markers is the output of `dartspp keys --markdown` (tests/scene/test_keys.c checks it).
 docs-keys: build/dartspp
 	@{ sed '/^<!-- begin: dartspp keys --markdown -->$$/q' docs/keys.md; ./build/dartspp keys --markdown; \
 	   sed -n '/^<!-- end: dartspp keys --markdown -->$$/,$$p' docs/keys.md; } > docs/keys.md.tmp && mv docs/keys.md.tmp docs/keys.md

@@ -135,7 +135,10 @@ scene *fx_load(const char *path, const scene_load_options *opt)
 scene *fx_load_text(const char *name, const char *text, const scene_load_options *opt, dp_error *err)
 {
     scene *s = fx_slot();
-    if (load_text(fx_dir(), name, text, strlen(text), opt, s, err)) return NULL;
+    if (load_text(fx_dir(), name, text, strlen(text), opt, s, err)) {
+        if (!err->msg[0]) fail_msg("scene_load failed without a message");
+        return NULL;
+    }
     fx_mark(s, 1);
     return s;
 }
@@ -312,4 +315,47 @@ char *tmpdir_with_cbox_fog(int res)
     snprintf(path, sizeof path, "%s/box.json", dir);
     write_cbox_fog(path, res);
     return dir;
+}
+
+int stress_full(void)
+{
+    const char *v = getenv("DARTSPP_STRESS");
+    return v && !strcmp(v, "full");
+}
+
+char *cbox_dir;
+
+int setup_cbox_fog40(void **state)
+{
+    (void)state;
+    cbox_dir = tmpdir_with_cbox_fog(40); /* our fog Cornell box at 40×40 pixels */
+    return cbox_dir ? 0 : -1;
+}
+
+int teardown_cbox_fog(void **state)
+{
+    (void)state;
+    test_rmtree(cbox_dir);
+    cbox_dir = NULL;
+    return 0;
+}
+
+/* Largest |a − b| / (|b| + tiny) over two image files of the same size (the MPI tests). */
+double image_max_rel_diff(const char *a_path, const char *b_path)
+{
+    image_rgb a = {0}, b = {0};
+    dp_error err;
+    if (image_read(a_path, &a, &err) || image_read(b_path, &b, &err)) fail_msg("%s", err.msg);
+    assert_int_equal(a.width, b.width);
+    assert_int_equal(a.height, b.height);
+    double m = 0.0, total = 0.0;
+    for (size_t i = 0; i < (size_t)a.width * a.height * 3; i++) {
+        assert_true(isfinite(a.rgb[i]) && isfinite(b.rgb[i]));
+        m = fmax(m, fabs((double)a.rgb[i] - b.rgb[i]) / (fabs((double)b.rgb[i]) + 1e-30));
+        total += b.rgb[i];
+    }
+    assert_true(total > 0.0); /* the comparison saw light */
+    image_free(&a);
+    image_free(&b);
+    return m;
 }

@@ -49,6 +49,21 @@ long state_passes(const char *path);
 void write_cbox_fog(const char *path, int res);
 /* A fresh temp folder holding that box as box.json (the MPI tests' scene); NULL when none can be made. */
 char *tmpdir_with_cbox_fog(int res);
+/* Whether DARTSPP_STRESS=full (`make stress`): the programs with the stress tag line then run their whole
+ * matrix and their long statistical cases (tests/README.md, Stress matrix); `make test` runs a fast subset. */
+int stress_full(void);
+/* cmocka's group run of the cases `make test` runs, then, under DARTSPP_STRESS=full only, the long ones. */
+#define RUN_TESTS_AND_STRESS(tests, stress_tests)                                                              \
+    (cmocka_run_group_tests_name("tests", tests, NULL, NULL) +                                                \
+     (stress_full() ? cmocka_run_group_tests_name("stress", stress_tests, NULL, NULL) : 0))
+
+/* A group's setup and teardown around it: our fog Cornell box at 40×40 pixels in the folder cbox_dir (the MPI
+ * tests), removed with the folder by the teardown. */
+extern char *cbox_dir;
+int setup_cbox_fog40(void **state);
+int teardown_cbox_fog(void **state);
+/* Largest |a − b| / (|b| + tiny) over two image files of the same size, both finite, b lit (fails otherwise). */
+double image_max_rel_diff(const char *a_path, const char *b_path);
 
 /* ---- the per-test fixture: scenes, buffers and one temp folder ---- */
 
@@ -79,7 +94,8 @@ int load_text(const char *dir, const char *name, const char *text, size_t len, c
               dp_error *err);
 /* Loads a scene file into a fixture slot (freed by the teardown); fails the test with the message. */
 scene *fx_load(const char *path, const scene_load_options *opt);
-/* Writes text to <fixture dir>/name and loads it into a fixture slot; returns the scene or NULL (err set). */
+/* Writes text to <fixture dir>/name and loads it into a fixture slot; returns the scene, or NULL with err set
+ * (a failure without a message fails the test). */
 scene *fx_load_text(const char *name, const char *text, const scene_load_options *opt, dp_error *err);
 
 /* The field of view of the paper's Cornell box camera (and of scenes/cbox-fog), in degrees. */

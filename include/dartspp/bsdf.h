@@ -106,6 +106,32 @@ double bsdf_adjoint_scale(const bsdf *b, vec3 wi, vec3 wo);
  * surface, no selected lobe, a failed microfacet sample): the path ends. */
 int bsdf_sample_wo(const bsdf *b, vec3 albedo, vec3 wi, const double u[3], unsigned lobes, bsdf_sample *s);
 
+/* ---- the building blocks of the models: Fresnel terms (src/bsdf/fresnel.c) and microfacet distributions
+ * (src/bsdf/microfacet.c). Public for the closed-form tests (tests/bsdf/test_bsdf_models.c) and for code
+ * outside src/bsdf that needs a Fresnel or microfacet term; the models use them through bsdf_eval etc. ---- */
+/* Unpolarised reflectance of a smooth boundary between two dielectrics. eta = η(back) / η(front), the
+ * index behind the boundary (z < 0) over the index in front; cos_i = cos θ of the incident direction
+ * against +z, either sign (cos_i < 0: arriving from the back, the ratio is inverted). Writes |cos θt|
+ * (0 under total internal reflection, where 1 is returned) when cos_t is not NULL. */
+double bsdf_fresnel_dielectric(double eta, double cos_i, double *cos_t);
+/* Reflectance of a conductor of complex index eta + i k (relative to the outside), for |cos_i|. */
+double bsdf_fresnel_conductor(double eta, double k, double cos_i);
+vec3 bsdf_fresnel_conductor3(vec3 eta, vec3 k, double cos_i);
+/* Cosine-weighted hemispherical average 2∫ F(μ) μ dμ of bsdf_fresnel_dielectric(eta, μ) over μ in (0, 1]. */
+double bsdf_fresnel_average(double eta);
+
+/* Microfacet distributions: isotropic, about +z, parameter alpha (bsdf.alpha). Normals are sampled from
+ * D(m)·cos θm (the full distribution, as the reference); bsdf_mf_pdf is that density of m. */
+double bsdf_mf_alpha(microfacet_distribution d, double roughness);
+double bsdf_mf_D(microfacet_distribution d, double alpha, vec3 m);
+/* Smith masking of direction v for microfacet normal m (0 when v is on the wrong side of m or of +z). */
+double bsdf_mf_G1(microfacet_distribution d, double alpha, vec3 v, vec3 m);
+/* Shadowing-masking for the pair: the separable product G1·G1 (ggx, beckmann) or the height-correlated
+ * 1 / (1 + Λ(wi) + Λ(wo)) (pbrt-ggx). */
+double bsdf_mf_G(microfacet_distribution d, double alpha, vec3 wi, vec3 wo, vec3 m);
+vec3 bsdf_mf_sample(microfacet_distribution d, double alpha, double u1, double u2);
+double bsdf_mf_pdf(microfacet_distribution d, double alpha, vec3 m);
+
 /* ---- the shading frame at a hit (world ↔ local) ---- */
 typedef struct {
     vec3 s, t, n;   /* n: shading normal, flipped to the arriving side for two-sided shading */

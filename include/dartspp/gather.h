@@ -37,6 +37,11 @@ typedef struct {
  * Returns the rays traced; non-finite contributions are dropped and counted in f->nonfinite. */
 double gather_pass(const scene *s, const gather_input *g, film *f, uint64_t seed, long iteration);
 
+/* Whether the photon-by-photon volume gather (volume_gather "splat", src/gather/volume_splat.c) serves the
+ * primary lines of a pass over s with g: volume photons in g and a camera with an orthonormal frame; otherwise the sensor pass gathers every segment by beam queries. Public so that a caller (and
+ * tests/photon_points/test_volume_splat.c) can tell which of the two ways a pass takes. */
+int volume_splat_applies(const scene *s, const gather_input *g);
+
 /* Bytes the sensor pass allocates when the scene has a volume map: its primary lines and, with the splat
  * (volume_gather "splat"), the splat's scratch for `photons` volume photons at radius r, estimated from a
  * sample of n of them (the memory guard). */

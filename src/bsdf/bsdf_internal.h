@@ -25,30 +25,7 @@ BSDF_MODEL_DECLARE(pbrt_plastic);
 BSDF_MODEL_DECLARE(dielectric);
 BSDF_MODEL_DECLARE(rough_dielectric);
 
-/* ---- Fresnel (fresnel.c) ---- */
-/* Unpolarised reflectance of a smooth boundary between two dielectrics. eta = η(back) / η(front), the
- * index behind the boundary (z < 0) over the index in front; cos_i = cos θ of the incident direction
- * against +z, either sign (cos_i < 0: arriving from the back, the ratio is inverted). Writes |cos θt|
- * (0 under total internal reflection, where 1 is returned) when cos_t is not NULL. */
-double bsdf_fresnel_dielectric(double eta, double cos_i, double *cos_t);
-/* Reflectance of a conductor of complex index eta + i k (relative to the outside), for |cos_i|. */
-double bsdf_fresnel_conductor(double eta, double k, double cos_i);
-vec3 bsdf_fresnel_conductor3(vec3 eta, vec3 k, double cos_i);
-/* Cosine-weighted hemispherical average 2∫ F(μ) μ dμ of bsdf_fresnel_dielectric(eta, μ) over μ in (0, 1]. */
-double bsdf_fresnel_average(double eta);
-
-/* ---- microfacet distributions (microfacet.c) ----
- * Isotropic, about +z, parameter alpha (bsdf.alpha). Normals are sampled from D(m)·cos θm (the full
- * distribution, as the reference); bsdf_mf_pdf is that density of m. */
-double bsdf_mf_alpha(microfacet_distribution d, double roughness);
-double bsdf_mf_D(microfacet_distribution d, double alpha, vec3 m);
-/* Smith masking of direction v for microfacet normal m (0 when v is on the wrong side of m or of +z). */
-double bsdf_mf_G1(microfacet_distribution d, double alpha, vec3 v, vec3 m);
-/* Shadowing-masking for the pair: the separable product G1·G1 (ggx, beckmann) or the height-correlated
- * 1 / (1 + Λ(wi) + Λ(wo)) (pbrt-ggx). */
-double bsdf_mf_G(microfacet_distribution d, double alpha, vec3 wi, vec3 wo, vec3 m);
-vec3 bsdf_mf_sample(microfacet_distribution d, double alpha, double u1, double u2);
-double bsdf_mf_pdf(microfacet_distribution d, double alpha, vec3 m);
+/* ---- Fresnel (fresnel.c) and microfacet distributions (microfacet.c): include/dartspp/bsdf.h ---- */
 
 /* ---- the dielectric microfacet boundary shared by rough_dielectric and the rough coats (rough_dielectric.c) ----
  * A rough boundary of relative index ior (inside / outside) with parameter alpha; sample_alpha is the

@@ -6,7 +6,7 @@
  *
  * Energy (our one change to the reference's model): the base is weighted by the smooth coat's 1 − F(θ), but a
  * rough coat reflects R(θ) = Ks·∫ f_coat cos θo dωo, which can exceed F(θ), and then the sum gains energy
- * (0.3 % at beckmann, roughness 0.2, 45°, measured by tests/test_bsdf.c). The base term is multiplied by
+ * (0.3 % at beckmann, roughness 0.2, 45°, measured by tests/bsdf/test_bsdf.c). The base term is multiplied by
  * s(μi)·s(μo), s(μ) = min(1, (1 − R(μ)) / (1 − F(μ))): symmetric, 1 wherever the reference conserves energy,
  * and the total at albedo 1 is at most R(μi) + (1 − F(μi))·s(μi) ≤ 1. R is tabulated per BSDF in
  * bsdf_prepare (33 values of μ, 4096 stratified samples of the coat's own sampler each). */

@@ -34,7 +34,7 @@ static void usage(FILE *f)
  * this). The peak resident size stays that of one pass (dragon 480², 25 passes: 179 MiB), since the next
  * pass reuses the same blocks — as long as nothing asks the heap for aligned huge-page blocks: the volume map
  * once did (2 MiB-aligned arrays with MADV_HUGEPAGE), and the peak then grew pass after pass to 610 MiB
- * (tests/test_cli.c checks the peak against the memory guard's estimate). Set here, by the program that owns
+ * (tests/cli/test_cli.c checks the peak against the memory guard's estimate). Set here, by the program that owns
  * the process, not by the library. */
 static void keep_freed_memory(void)
 {

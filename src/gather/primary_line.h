@@ -23,9 +23,7 @@ typedef struct {
     line_segment seg[PRIMARY_SEGMENTS];
 } primary_line;
 
-/* Whether the photon-by-photon gather can serve this pass (a pinhole with an orthonormal frame and a
- * volume map); otherwise the walk gathers every segment by beam queries. */
-int volume_splat_applies(const scene *s, const gather_input *g);
+/* volume_splat_applies: include/dartspp/gather.h */
 
 /* Bytes of the per-pass buffers for a w × h image (the memory guard's estimate). */
 size_t volume_splat_bytes(int width, int height);

@@ -2,7 +2,7 @@
  * and what the machine can give (MemAvailable, and the cgroup limit when there is one). Everything of one
  * pass is alive at once, so the peak is the sum: here the runtime, the geometry, textures, the film and the
  * output images; the integrator's own items come from its row of the table (integrators.h; photon points:
- * src/photon_points/photon_points_memory.c). tests/test_cli.c checks the estimate against the measured peak.
+ * src/photon_points/photon_points_memory.c). tests/cli/test_cli.c checks the estimate against the measured peak.
  * Written by hand: no library estimates this. */
 #include "dartspp/io.h"
 #include "dartspp/render.h"
