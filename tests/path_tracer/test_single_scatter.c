@@ -427,21 +427,21 @@ static void test_sensor_response(void **state)
     check_against_quadrature_seeds("{\"type\": \"henyey_greenstein\", \"g\": 0.4}", 0.4, 0.75, w, 1, 4.0, 4.6, 300, tm, 32);
 }
 
-/* Two programs from this file: test_single_scatter (quick tier) holds the plain path tracer's gate, refractive
- * and steady cases and one gate case of the DARTS and of the uniform-time path tracer; test_single_scatter_modes
+/* Two programs from this file: test_single_scatter (quick tier) holds the plain path tracer's isotropic gate
+ * case and one gate case of the DARTS and of the uniform-time path tracer; test_single_scatter_modes
  * (tests/path_tracer/test_single_scatter_modes.c, `make test`) includes this file with SINGLE_SCATTER_MODES for
- * the other cases: both methods under HG with η = 4/3, box pulses, unwarped time, the sensor response and the
- * order-1 layer. */
+ * the other cases: the plain path tracer's refractive (HG, η = 4/3) and steady cases, both methods under HG with
+ * η = 4/3, box pulses, unwarped time, the sensor response and the order-1 layer. */
 int main(void)
 {
     const struct CMUnitTest tests[] = {
 #ifndef SINGLE_SCATTER_MODES
         cmocka_unit_test(test_gate_isotropic),
-        cmocka_unit_test(test_gate_hg_refractive),
-        cmocka_unit_test(test_steady_hg_backward),
         cmocka_unit_test(test_darts_pt_gate),
         cmocka_unit_test(test_uniform_time_gate),
 #else
+        cmocka_unit_test(test_gate_hg_refractive),
+        cmocka_unit_test(test_steady_hg_backward),
         cmocka_unit_test(test_darts_and_uniform_time),
         cmocka_unit_test(test_box_pulse),
         cmocka_unit_test(test_unwarped_early_gate),
