@@ -1,5 +1,6 @@
 /* tier: quick */
-/* Every section a comment cites resolves inside a clone (issue 31). The test lists each "§" in the text files
+/* Every source file is named in its module's README (issue 47): a newcomer finds a file through that table.
+ * Every section a comment cites resolves inside a clone (issue 31). The test lists each "§" in the text files
  * of src/, include/, tests/, bench/ and in README.md, and checks it (the rules are also in docs/README.md):
  * - `docs/time.md §2.2`: a path from the repository root ending in .md, then the section number. The file
  *   must exist and have a Markdown heading whose text begins with that number (`### 2.2 Unwarped ...`;
@@ -11,6 +12,7 @@
  *   file:line and the citation: it refers to nothing a clone of the repository has.
  * This file itself is not scanned: its examples are broken on purpose. Run from the repository root, as
  * tests/run_tests.sh does. */
+#include "child_process.h"
 #include "test_util.h"
 
 #include <ctype.h>
@@ -260,9 +262,89 @@ static void test_every_citation_resolves(void **state)
     assert_int_equal(cc.failures, 0);
 }
 
+/* The .c and .h files of each module folder under root (root/<module>/) whose name its README.md does not
+ * contain, each printed; a folder without a README counts all its files. */
+static int unlisted_sources(const char *root, int *modules)
+{
+    DIR *d = opendir(root);
+    assert_non_null(d);
+    int unlisted = 0;
+    struct dirent *e;
+    while ((e = readdir(d))) {
+        char dir[4096], readme[4200];
+        struct stat st;
+        snprintf(dir, sizeof dir, "%s/%s", root, e->d_name);
+        if (e->d_name[0] == '.' || stat(dir, &st) || !S_ISDIR(st.st_mode)) continue;
+        snprintf(readme, sizeof readme, "%s/README.md", dir);
+        char *text = read_text(readme); /* "" when there is no README */
+        (*modules)++;
+        DIR *m = opendir(dir);
+        assert_non_null(m);
+        struct dirent *f;
+        while ((f = readdir(m))) {
+            size_t n = strlen(f->d_name);
+            if (!(ends_with(f->d_name, n, ".c") || ends_with(f->d_name, n, ".h"))) continue;
+            if (strstr(text, f->d_name)) continue;
+            print_message("  %s/%s is not named in %s\n", dir, f->d_name, readme);
+            unlisted++;
+        }
+        closedir(m);
+        free(text);
+    }
+    closedir(d);
+    return unlisted;
+}
+
+/* The check on a made-up tree: a module whose README names one of its two files, and one without a README. */
+static void test_readme_checker_on_a_known_tree(void **state)
+{
+    (void)state;
+    char *root = test_tmpdir();
+    assert_non_null(root);
+    char path[4096];
+    const char *files[][2] = {{"a/README.md", "| `one.c` | the first |\n"}, {"a/one.c", ""}, {"a/two.h", ""},
+                              {"b/three.c", ""}};
+    snprintf(path, sizeof path, "%s/a", root);
+    assert_int_equal(mkdir(path, 0755), 0);
+    snprintf(path, sizeof path, "%s/b", root);
+    assert_int_equal(mkdir(path, 0755), 0);
+    for (size_t i = 0; i < sizeof files / sizeof *files; i++) {
+        snprintf(path, sizeof path, "%s/%s", root, files[i][0]);
+        FILE *f = fopen(path, "w");
+        assert_non_null(f);
+        fputs(files[i][1], f);
+        fclose(f);
+    }
+    int modules = 0;
+    assert_int_equal(unlisted_sources(root, &modules), 2); /* two.h, and three.c of the folder without README */
+    assert_int_equal(modules, 2);
+    for (size_t i = 0; i < sizeof files / sizeof *files; i++) {
+        snprintf(path, sizeof path, "%s/%s", root, files[i][0]);
+        unlink(path);
+    }
+    snprintf(path, sizeof path, "%s/a", root);
+    rmdir(path);
+    snprintf(path, sizeof path, "%s/b", root);
+    rmdir(path);
+    rmdir(root);
+    free(root);
+}
+
+static void test_every_source_file_in_its_readme(void **state)
+{
+    (void)state;
+    int modules = 0;
+    int unlisted = unlisted_sources("src", &modules);
+    print_message("  %d module folders in src/, %d source files not named in their README\n", modules, unlisted);
+    assert_true(modules >= 15); /* the scan saw the tree */
+    assert_int_equal(unlisted, 0);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_readme_checker_on_a_known_tree),
+        cmocka_unit_test(test_every_source_file_in_its_readme),
         cmocka_unit_test(test_checker_on_known_lines),
         cmocka_unit_test(test_every_citation_resolves),
     };
