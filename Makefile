@@ -46,6 +46,9 @@ TEST_BIN = $(TEST_SRC:tests/%.c=build/san/tests/%)
 QUICK_SRC   = $(if $(TEST_SRC),$(shell grep -l '^/\* tier: quick \*/$$' $(TEST_SRC)))
 STRESS_SRC  = $(if $(TEST_SRC),$(shell grep -l '^/\* tier: stress \*/$$' $(TEST_SRC)))
 QUICK_TESTS = $(QUICK_SRC:tests/%.c=%)
+# Programs that run with the machine to themselves (interrupt timings, peak memory): the line `/* run: alone */`.
+ALONE_SRC   = $(if $(TEST_SRC),$(shell grep -l '^/\* run: alone \*/$$' $(TEST_SRC)))
+ALONE_BIN   = $(ALONE_SRC:tests/%.c=build/san/tests/%)
 QUICK_BIN   = $(QUICK_TESTS:%=build/san/tests/%)
 
 .PHONY: all deps test check run clean stress reference bench-quick docs-keys python python-build
@@ -145,11 +148,11 @@ python: python-build
 # The README's test command. Unit, estimator and end-to-end tests, all under ASan + UBSan, and the Python
 # package's tests (pytest, tests/python).
 test: build/dartspp build/dartspp-mpi build/san/dartspp $(TEST_BIN) $(PY_BUILD)
-	@PYTHON=$(PYTHON) tests/run_tests.sh $(TEST_BIN) tests/python
+	@PYTHON=$(PYTHON) DARTSPP_TEST_ALONE="$(ALONE_BIN)" tests/run_tests.sh $(TEST_BIN) tests/python
 
 # The quick tier (QUICK_TESTS above, and the Python package's tests), with the same closing line as `make test`.
 check: build/dartspp build/san/dartspp $(QUICK_BIN) $(PY_BUILD)
-	@PYTHON=$(PYTHON) tests/run_tests.sh $(QUICK_BIN) tests/python
+	@PYTHON=$(PYTHON) DARTSPP_TEST_ALONE="$(ALONE_BIN)" tests/run_tests.sh $(QUICK_BIN) tests/python
 
 # The whole stress matrix (extreme media, anisotropy, gates, scales, geometry) and the long statistical cases
 # that `make test` leaves out: every program tagged `/* tier: stress */` (tests/darts/test_darts.c,
@@ -158,7 +161,7 @@ check: build/dartspp build/san/dartspp $(QUICK_BIN) $(PY_BUILD)
 # fast subset of each. DARTSPP_STRESS_ONLY=text picks render cases by name.
 STRESS_TESTS = $(STRESS_SRC:tests/%.c=build/san/tests/%)
 stress: build/san/dartspp $(STRESS_TESTS)
-	@DARTSPP_STRESS=full tests/run_tests.sh $(STRESS_TESTS)
+	@DARTSPP_STRESS=full DARTSPP_TEST_ALONE="$(ALONE_BIN)" tests/run_tests.sh $(STRESS_TESTS)
 
 # docs/keys.md between its markers is the output of `dartspp keys --markdown` (tests/scene/test_keys.c checks it).
 docs-keys: build/dartspp

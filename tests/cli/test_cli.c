@@ -1,3 +1,4 @@
+/* run: alone */
 /* The command line as a user meets it when things go wrong: outputs refused before any work, the memory
  * guard, interrupts that end a render within a second and keep exactly the completed passes, the rescue
  * folder when the final write fails, and error exits without leaks (the sanitized binary runs with

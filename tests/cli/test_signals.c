@@ -1,3 +1,4 @@
+/* run: alone */
 /* Signals and files (issue 32, item 7): the real `dartspp render` on the demo scene, killed or limited the
  * ways a user's run is. A dropped terminal (SIGHUP) keeps the completed passes as SIGTERM does; a file-size
  * limit (`ulimit -f`) ends the run with a message naming the limit, the rescue attempt and no temporary file
