@@ -81,7 +81,9 @@ int scene_rt_add_mesh(scene *s, int surf, uint32_t first, const tri_mesh *m, con
 int scene_build_embree(scene *s, dp_error *err);
 void scene_release_embree(scene *s);
 
-/* ---- media and emitters (scene_load.c, light_load.c) ---- */
+/* ---- media and emitters (media_load.c, light_load.c) ---- */
+/* The scene file's `media` array into s->media. 0, or -1 with the error in c. */
+int parse_media(json_ctx *c, const cJSON *root, scene *s);
 /* A medium reference: a name, null or "" (vacuum), or an inline object (appended to s->media). */
 int medium_ref(json_ctx *c, scene *s, const cJSON *v, const char *where, const char *key, int *out);
 /* A primitive of an emitter type (emitter_ops_find: point, spot, collimated, directional_point), appended to
