@@ -18,6 +18,10 @@
 int photon_points_pass(const scene *s, const render_plan *p, const eda_set *eda, film *f, uint64_t seed,
                        long iteration, const dp_stop_flag *stop, render_stats *st, dp_error *err);
 
+/* The radii of the last of `passes` passes into st->r_vol and st->r_surf (the schedules depend on the pass index
+ * only: the driver sets them once the ranks' figures are summed). */
+void photon_points_last_radii(const render_plan *p, long passes, render_stats *st);
+
 /* The memory of a pass at its peak (the memory guard): EDA tables, photon arrays at their budgets (capped by
  * a pilot batch's yield), their maps, the sensor pass's primary lines and splat, the batch buffers. */
 void photon_points_memory(const scene *s, const render_plan *p, memory_estimate *m);

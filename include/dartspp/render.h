@@ -1,5 +1,6 @@
 /* dartspp render: the render command (scene file to images), the progressive driver (passes, time budget,
- * progress, interruption), the integrators, the memory guard and the outputs. */
+ * progress, interruption) with its table of integrators (src/path_tracer, src/photon_points), the memory guard
+ * and the outputs. */
 #ifndef DARTSPP_RENDER_H
 #define DARTSPP_RENDER_H
 

@@ -3,6 +3,13 @@
 #include "dartspp/gather.h"
 #include "dartspp/photon_points.h"
 
+void photon_points_last_radii(const render_plan *p, long passes, render_stats *st)
+{
+    if (passes <= 0) return;
+    st->r_vol = schedule_radius(&p->r_vol, passes - 1);
+    st->r_surf = schedule_radius(&p->r_surf, passes - 1);
+}
+
 int photon_points_pass(const scene *s, const render_plan *p, const eda_set *eda, film *f, uint64_t seed,
                        long iteration, const dp_stop_flag *stop, render_stats *st, dp_error *err)
 {

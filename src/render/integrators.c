@@ -3,14 +3,6 @@
 #include "dartspp/photon_points.h"
 #include "integrators.h"
 
-/* The radii of the last pass (the schedules depend on the pass index only). */
-static void photon_points_radii(const render_plan *p, long passes, render_stats *st)
-{
-    if (passes <= 0) return;
-    st->r_vol = schedule_radius(&p->r_vol, passes - 1);
-    st->r_surf = schedule_radius(&p->r_surf, passes - 1);
-}
-
 static const integrator_entry table[INTEGRATOR_COUNT] = {
     [INTEGRATOR_PATH_TRACER] = {.type = INTEGRATOR_PATH_TRACER,
                                 .pass = path_tracer_pass,
@@ -19,7 +11,7 @@ static const integrator_entry table[INTEGRATOR_COUNT] = {
                                 .warn = warn_path_tracer},
     [INTEGRATOR_PHOTON_POINTS] = {.type = INTEGRATOR_PHOTON_POINTS,
                                   .pass = photon_points_pass,
-                                  .last_pass_figures = photon_points_radii,
+                                  .last_pass_figures = photon_points_last_radii,
                                   .memory = photon_points_memory,
                                   .print_method = summary_print_photon_pass,
                                   .light_technique = summary_photon_points_light,
