@@ -167,7 +167,7 @@ int darts_sample_bin(const darts_guide *g, vec3 x_light, double tau0, double u, 
  * At a vertex x with elapsed time τ: the admissible residual geometric length S ∈ [S_lo, S_hi] with
  * S_hi = (bin end − τ)/η and S_lo = max((bin start − τ)/η, C), C = |cam − x|, and one sampled residual T
  * shared by the samplers of the vertex. `valid` iff S_hi > C (up to a relative 1e-9). */
-/* residual_sampling (plan.h): RESIDUAL_UNIFORM or RESIDUAL_EXPONENTIAL. */
+/* residual_sampling (above): RESIDUAL_UNIFORM or RESIDUAL_EXPONENTIAL. */
 
 typedef struct {
     int valid;
@@ -229,7 +229,7 @@ int sphere_control_vertex(double tau, double eta, const darts_bin *b, double tma
 /* Its density at t (0 outside the interval). */
 double sphere_control_vertex_pdf(double tau, double eta, const darts_bin *b, double tmax, double sigma, double t);
 
-/* ---- control vertices behind mirrors (ours; plan.h camera_side_scan, issue 18) ----
+/* ---- control vertices behind mirrors (ours; camera_side_scan above, issue 18) ----
  * One-sample MIS over the techniques of one medium segment: the control vertex of the record with focus
  * the camera (rec[0]), of each record with focus a mirror image of the camera (rec[1..n-1]: there a camera
  * path through that mirror has exactly the bin's time), and a defensive free flight, a σ-exponential in t

@@ -59,7 +59,6 @@ int render_run_refused(const render_cluster *cluster, int status);
  * rank r of N renders iterations r, r + N, r + 2N, ... ("rounds": in round k every rank renders iteration
  * kN + r), rank 0 decides after each round whether the render goes on, and the films are summed onto rank 0,
  * which alone writes. */
-struct render_stats;
 
 struct render_cluster {
     int rank, size;          /* this process, and how many render together */

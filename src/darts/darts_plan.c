@@ -5,17 +5,23 @@
 
 #include "dartspp/darts.h"
 
+/* Whether the samplers serve this integrator at all: photon points, or the path tracer's DARTS method (its
+ * uniform-time method, time_sampling "uniform", runs no DARTS sampler). */
+static int darts_integrator(const integrator_settings *in, integrator_type type)
+{
+    return type == INTEGRATOR_PHOTON_POINTS ||
+           (type == INTEGRATOR_PATH_TRACER && in->time_sampling != TIME_SAMPLING_UNIFORM);
+}
+
 /* A medium uses EDA when the window is gated and it asks for it (phase "ida"), or the integrator does and
  * the medium scatters (there is no direction to pick where nothing scatters). */
 static void resolve_eda(const scene *s, integrator_type type, darts_plan *d)
 {
     const integrator_settings *in = &s->integrator;
-    int uniform_time_asked = in->time_sampling == TIME_SAMPLING_UNIFORM;
     for (int i = 0; i < s->medium_count; i++) {
         const medium *m = &s->media[i];
         eda_plan *e = &d->eda[i];
-        e->on = in->window.gated && (m->eda || (in->eda && medium_scatters(m))) &&
-                (type == INTEGRATOR_PHOTON_POINTS || (type == INTEGRATOR_PATH_TRACER && !uniform_time_asked));
+        e->on = in->window.gated && (m->eda || (in->eda && medium_scatters(m))) && darts_integrator(in, type);
         /* photon points: EDA aims at the camera's equal-time ellipsoid, which unwarped time does not have (the
          * path tracer aims at the light, whose leg always counts) */
         e->asked_unwarped = e->on && in->window.camera_unwarp && type == INTEGRATOR_PHOTON_POINTS;
@@ -35,11 +41,10 @@ static void resolve_samplers(const scene *s, integrator_type type, darts_plan *d
 {
     const integrator_settings *in = &s->integrator;
     int pt = type == INTEGRATOR_PATH_TRACER, unwarped = in->window.camera_unwarp;
-    int uniform_time_asked = in->time_sampling == TIME_SAMPLING_UNIFORM;
     int asked = in->enable_guiding || in->enable_elliptical || in->eda;
     for (int i = 0; i < s->medium_count; i++) asked |= s->media[i].eda;
     int gated_medium = in->window.gated && s->medium_count > 0 && (!pt || s->light_count > 0);
-    d->active = gated_medium && asked && (type == INTEGRATOR_PHOTON_POINTS || (pt && !uniform_time_asked));
+    d->active = gated_medium && asked && darts_integrator(in, type);
     /* photon points: DA distance sampling aims at diffusion towards the camera within the residual time of
      * the camera's ellipsoid: unwarped time has none, so it is off (free flight, unbiased); control vertices
      * become sphere_control_vertex, which needs no η along a camera leg. The path tracer aims at the light,
