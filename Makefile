@@ -31,8 +31,9 @@ DEPFLAGS = -MMD -MP
 
 # release build
 OBJ      = $(LIB_SRC:src/%.c=build/obj/%.o)
-# sanitizer build: the tests and a sanitized dartspp run under ASan + UBSan
-SAN_FLAGS = -O1 -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=undefined
+# sanitizer build: the tests and a sanitized dartspp run under ASan + UBSan, at -O2 (the suite's renders 1.25×
+# faster than at -O1: test_single_scatter_modes 69 s against 87 s, 2026-11-28)
+SAN_FLAGS = -O2 -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=undefined
 SAN_OBJ  = $(LIB_SRC:src/%.c=build/san/obj/%.o)
 TEST_OBJ = $(TEST_SRC:tests/%.c=build/san/test-obj/%.o)
 FIX_OBJ  = $(FIX_SRC:tests/%.c=build/san/test-obj/%.o)

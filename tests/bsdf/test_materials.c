@@ -261,7 +261,7 @@ static const mat_case CASES[] = {
     {"rough_conductor_smooth_direct",
      "\"type\": \"rough_conductor\", \"material\": \"Ag\", \"distribution\": \"ggx\", \"roughness\": 0.05", PANEL_QUAD, 1, 0},
     {"conductor", "\"type\": \"conductor\", \"material\": \"Au\"", PANEL_QUAD, 0, 0},
-    {"mirror", "\"type\": \"mirror\", \"albedo\": 0.9", PANEL_QUAD, 0, 1},
+    {"mirror", "\"type\": \"mirror\", \"albedo\": 0.9", PANEL_QUAD, 0, 0},
     {"plastic", "\"type\": \"plastic\", \"albedo\": [0.6, 0.3, 0.2], \"ior\": 1.5", PANEL_QUAD, 0, 0},
     {"rough_plastic", "\"type\": \"rough_plastic\", \"albedo\": [0.6, 0.3, 0.2], \"ior\": 1.5, \"roughness\": 0.2",
      PANEL_QUAD, 0, 0},

@@ -1,3 +1,4 @@
+/* tier: stress */
 /* Emitters in whole renders (issue 34; docs/emitters.md):
  *   - a collimated beam of finite radius in an infinite homogeneous medium, single scattering: every pixel of
  *     the plain and the DARTS path tracer against a quadrature written here (the beam-crossing estimator,
@@ -12,6 +13,7 @@
  *     unchanged, and our path tracer and photon points agree on the transmitted pulse (the mean time and the
  *     width of the curve of the central patch over the frames).
  * Broken variants these checks were shown failing on are listed at each test. */
+#include "fixtures.h"
 #include "render_fixtures.h"
 
 #define Z_MAX 4.2 /* |z| per tile: Bonferroni over 16 tiles, two-sided p ≈ 4e-4 per comparison */
@@ -515,12 +517,17 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_beam_single_scatter),
         cmocka_unit_test(test_area_and_spot),
-        cmocka_unit_test(test_area_and_spot_unwarped),
-        cmocka_unit_test(test_gate_on_the_panel),
-        cmocka_unit_test(test_beam_in_box),
         cmocka_unit_test(test_sphere_disk_diverging_beam),
         cmocka_unit_test(test_pencil_beam),
         cmocka_unit_test(test_collimated_slabs),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    /* make stress only (130 s of the 260 s of this program on 2 cores): the same lights camera-unwarped, the
+     * narrow gate on the panel's direct view, the collimated beam in the box (the beam's single scattering
+     * above checks its connection against quadrature in make test) */
+    const struct CMUnitTest stress[] = {
+        cmocka_unit_test(test_area_and_spot_unwarped),
+        cmocka_unit_test(test_gate_on_the_panel),
+        cmocka_unit_test(test_beam_in_box),
+    };
+    return RUN_TESTS_AND_STRESS(tests, stress);
 }

@@ -1,3 +1,4 @@
+/* tier: stress */
 /* The path tracer's methods against the plain path tracer, per image tile: the DARTS path tracer (DA distance
  * sampling, elliptical control vertices, both, with EDA, in frame mode, camera-unwarped, with two pulsed
  * lights, behind a glass-free box of Lambertian walls) and the uniform-time path tracer. Every method is an
@@ -8,6 +9,7 @@
  * per tile, 4e-4 per method). The plain reference is rendered once per scene variant.
  * Broken variants these checks were shown failing on are listed in tests/README.md ("Figures") and the
  * header of each case. */
+#include "fixtures.h"
 #include "render_fixtures.h"
 
 /* The fog box (render_fixtures.c) at 16² with the path tracer, a gate or frames (`time`), and the method's
@@ -146,7 +148,11 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_gate),
         cmocka_unit_test(test_frames),
+    };
+    /* make stress only (45 s on 2 cores): camera-unwarped time and two pulsed lights per tile (make test checks
+     * both against quadrature: test_single_scatter_modes' unwarped early gate and box pulse) */
+    const struct CMUnitTest stress[] = {
         cmocka_unit_test(test_unwarped_and_pulsed_lights),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return RUN_TESTS_AND_STRESS(tests, stress);
 }

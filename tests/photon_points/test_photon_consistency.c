@@ -1,8 +1,10 @@
+/* tier: stress */
 /* Photon points against the reference path tracer on a small gated fog box: per-pixel error (NMSE against the
  * measured noise, falling with the iterations) and per-channel image totals, for baseline photon points, DARTS
  * photon points and DARTS with EDA (HG g = 0.3; EDA also at g = 0.5 and −0.3). Every tolerance below is
  * derived from a noise estimate measured in the same test (spread over independent seeds or passes) plus a
  * stated bias budget; no expected value comes from an earlier run of this code. */
+#include "fixtures.h"
 #include "render_fixtures.h"
 
 #define CO_RES 24
@@ -223,9 +225,13 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_consistency_vs_path_tracer),
+    };
+    /* make stress only (130 s on 2 cores): EDA at g = 0.5 and -0.3, each against its own path-traced
+     * reference; make test checks EDA end to end at g = 0.3 above */
+    const struct CMUnitTest stress[] = {
         cmocka_unit_test(test_eda_consistency_anisotropic),
     };
     /* DARTSPP_TEST_FILTER=name (cmocka wildcards) runs only the matching tests */
     if (getenv("DARTSPP_TEST_FILTER")) cmocka_set_test_filter(getenv("DARTSPP_TEST_FILTER"));
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return RUN_TESTS_AND_STRESS(tests, stress);
 }
