@@ -266,7 +266,7 @@ static const mat_case CASES[] = {
     {"rough_plastic", "\"type\": \"rough_plastic\", \"albedo\": [0.6, 0.3, 0.2], \"ior\": 1.5, \"roughness\": 0.2",
      PANEL_QUAD, 0, 0},
     {"rough_plastic_smooth", "\"type\": \"rough_plastic\", \"albedo\": [0.6, 0.3, 0.2], \"ior\": 1.5, \"roughness\": 0.05",
-     PANEL_QUAD, 0, 1},
+     PANEL_QUAD, 0, 0},
     {"pbrt_plastic", "\"type\": \"pbrt_plastic\", \"albedo\": [0.6, 0.3, 0.2], \"ior\": 1.5, \"roughness\": 0.2", PANEL_QUAD, 0, 0},
     {"dielectric_no_refraction", "\"type\": \"dielectric\", \"ior\": 1.5, \"enable_refraction\": false", PANEL_QUAD, 0, 0},
     {"dielectric_glass_cube", "\"type\": \"dielectric\", \"ior\": 1.5", GLASS_CUBE, 0, 1},

@@ -320,11 +320,20 @@ static void test_area_and_spot(void **state)
     (void)state;
     const tile_case tc[] = {
         {"DARTS path tracer", "\"enable_guiding\": true, \"enable_elliptical\": true", 3000, 0, 0},
-        {"DARTS path tracer, uniform selection",
-         "\"enable_guiding\": true, \"enable_elliptical\": true, \"light_selection\": \"uniform\"", 1500, 0, 0},
         {"uniform-time path tracer", "\"time_sampling\": \"uniform\"", 1500, 0, 0},
         {"baseline photon points vs path tracer", "\"enable_guiding\": false", 300, 0, PP_BIAS},
         {"DARTS photon points", "\"enable_guiding\": true, \"enable_elliptical\": true", 300, 1, 0},
+    };
+    check_tiles(PANEL_AND_SPOT, GATE, tc, (int)(sizeof tc / sizeof tc[0]), 6000, 300);
+}
+
+/* The same lights with uniform light selection instead of selection by power (make stress). */
+static void test_area_and_spot_uniform_selection(void **state)
+{
+    (void)state;
+    const tile_case tc[] = {
+        {"DARTS path tracer, uniform selection",
+         "\"enable_guiding\": true, \"enable_elliptical\": true, \"light_selection\": \"uniform\"", 1500, 0, 0},
         {"photon points, uniform selection", "\"light_selection\": \"uniform\"", 300, 1, 0},
     };
     check_tiles(PANEL_AND_SPOT, GATE, tc, (int)(sizeof tc / sizeof tc[0]), 6000, 300);
@@ -519,12 +528,14 @@ int main(void)
         cmocka_unit_test(test_area_and_spot),
         cmocka_unit_test(test_sphere_disk_diverging_beam),
         cmocka_unit_test(test_pencil_beam),
-        cmocka_unit_test(test_collimated_slabs),
     };
-    /* make stress only (130 s of the 260 s of this program on 2 cores): the same lights camera-unwarped, the
-     * narrow gate on the panel's direct view, the collimated beam in the box (the beam's single scattering
-     * above checks its connection against quadrature in make test) */
+    /* make stress only (190 s of the 260 s of this program on 2 cores): uniform light selection, the same
+     * lights camera-unwarped, the narrow gate on the panel's direct view, the collimated beam in the box (the
+     * beam's single scattering above checks its connection against quadrature in make test), the DARTS
+     * authors' slab files (../shared) */
     const struct CMUnitTest stress[] = {
+        cmocka_unit_test(test_area_and_spot_uniform_selection),
+        cmocka_unit_test(test_collimated_slabs),
         cmocka_unit_test(test_area_and_spot_unwarped),
         cmocka_unit_test(test_gate_on_the_panel),
         cmocka_unit_test(test_beam_in_box),

@@ -147,11 +147,12 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_gate),
-        cmocka_unit_test(test_frames),
     };
-    /* make stress only (45 s on 2 cores): camera-unwarped time and two pulsed lights per tile (make test checks
-     * both against quadrature: test_single_scatter_modes' unwarped early gate and box pulse) */
+    /* make stress only (85 s on 2 cores): frame mode, camera-unwarped time and two pulsed lights per tile (make
+     * test checks the path tracer's frames as the reference of test_photon_frames, unwarped time and pulses
+     * against quadrature: test_single_scatter_modes' unwarped early gate and box pulse) */
     const struct CMUnitTest stress[] = {
+        cmocka_unit_test(test_frames),
         cmocka_unit_test(test_unwarped_and_pulsed_lights),
     };
     return RUN_TESTS_AND_STRESS(tests, stress);

@@ -6,6 +6,7 @@
  * render's own measured standard error (16 independent seeds). The pulse and time-mode cases (issue 21)
  * use a second quadrature along the ray, written for them: camera-unwarped time (the camera leg left out)
  * and a box pulse, as the average of delta pulses over the pulse's emission times, taken in closed form. */
+#include "fixtures.h"
 #include "test_util.h"
 
 #include "dartspp/render.h"
@@ -442,12 +443,20 @@ int main(void)
 #else
         cmocka_unit_test(test_gate_hg_refractive),
         cmocka_unit_test(test_steady_hg_backward),
-        cmocka_unit_test(test_darts_and_uniform_time),
         cmocka_unit_test(test_box_pulse),
         cmocka_unit_test(test_unwarped_early_gate),
         cmocka_unit_test(test_sensor_response),
-        cmocka_unit_test(test_order_one_layer),
 #endif
     };
+#ifdef SINGLE_SCATTER_MODES
+    /* make stress only (32 s on 2 cores): the DARTS and uniform-time path tracers under HG with η = 4/3 (the
+     * quick tier checks both, isotropic) and the order-1 layer of bounce_orders */
+    const struct CMUnitTest stress[] = {
+        cmocka_unit_test(test_darts_and_uniform_time),
+        cmocka_unit_test(test_order_one_layer),
+    };
+    return RUN_TESTS_AND_STRESS(tests, stress);
+#else
     return cmocka_run_group_tests(tests, NULL, NULL);
+#endif
 }

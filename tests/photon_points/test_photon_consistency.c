@@ -210,7 +210,15 @@ static void consistency_suite(double g, co_method first, co_method last)
 static void test_consistency_vs_path_tracer(void **state)
 {
     (void)state;
-    consistency_suite(0.3, CO_BASELINE, CO_DARTS_EDA);
+    consistency_suite(0.3, CO_DARTS, CO_DARTS_EDA);
+}
+
+/* Baseline photon points on the same box (make stress; make test checks the baseline against the path tracer
+ * per tile in tests/emitters/test_emitters_render.c and against quadrature in test_photon_single_scatter). */
+static void test_baseline_consistency(void **state)
+{
+    (void)state;
+    consistency_suite(0.3, CO_BASELINE, CO_BASELINE);
 }
 
 /* EDA with anisotropic fog, forward and backward scattering (issue: EDA direction sampling, end to end) */
@@ -226,9 +234,10 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_consistency_vs_path_tracer),
     };
-    /* make stress only (130 s on 2 cores): EDA at g = 0.5 and -0.3, each against its own path-traced
-     * reference; make test checks EDA end to end at g = 0.3 above */
+    /* make stress only (160 s on 2 cores): the baseline, and EDA at g = 0.5 and -0.3, each against its own
+     * path-traced reference; make test checks DARTS and EDA end to end at g = 0.3 above */
     const struct CMUnitTest stress[] = {
+        cmocka_unit_test(test_baseline_consistency),
         cmocka_unit_test(test_eda_consistency_anisotropic),
     };
     /* DARTSPP_TEST_FILTER=name (cmocka wildcards) runs only the matching tests */

@@ -1,8 +1,10 @@
+/* tier: stress */
 /* The photon pass of photon points: the same photons and images for any thread count, the surface map
  * unchanged once the volume budget is full (the fast path) and with surface chains, and the DARTS early exit
  * losing no photon. Every tolerance below is derived from a noise estimate measured in the same test (spread
  * over independent seeds or passes) plus a stated bias budget; no expected value comes from an earlier run of
  * this code. */
+#include "fixtures.h"
 #include "render_fixtures.h"
 
 #include <omp.h>
@@ -349,11 +351,14 @@ int main(void)
         cmocka_unit_test(test_threads_bit_identical),
         cmocka_unit_test(test_cache_aligned_storage),
         cmocka_unit_test(test_surface_photons_after_volume_budget_full),
-        cmocka_unit_test(test_surface_photons_after_volume_budget_full_grey),
         cmocka_unit_test(test_surface_chains_keep_the_surface_map),
         cmocka_unit_test(test_early_exit_keeps_every_photon),
     };
     /* DARTSPP_TEST_FILTER=name (cmocka wildcards) runs only the matching tests */
     if (getenv("DARTSPP_TEST_FILTER")) cmocka_set_test_filter(getenv("DARTSPP_TEST_FILTER"));
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    /* make stress only (14 s on 2 cores): the same with grey media and albedos */
+    const struct CMUnitTest stress[] = {
+        cmocka_unit_test(test_surface_photons_after_volume_budget_full_grey),
+    };
+    return RUN_TESTS_AND_STRESS(tests, stress);
 }
