@@ -117,14 +117,14 @@ def _sets(set):
     return out
 
 
-def _budget(value, name, integer):
+def _option(name, value, absent):
+    """An option through the command line's own parser and range check (`dartspp render --threads`,
+    src/render/options_check.c): the values the command line refuses are refused here with its message.
+    The value is given as the text a user would type: a float by its repr ('nan', 'inf', '1e+30'), anything
+    else by str() (True is "True", not a number)."""
     if value is None:
-        return -1
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or (integer and not isinstance(value, int)):
-        raise SceneError("%s: expected %s, not %r" % (name, "a whole number" if integer else "seconds", value))
-    if value < 0 or value != value:
-        raise SceneError("%s: expected a number >= 0, not %r" % (name, value))
-    return value
+        return absent
+    return _dartspp.check_option(name, repr(value) if isinstance(value, float) else str(value))
 
 
 def render(scene, *, time=None, spp=None, seed=1, threads=None, set=None, reference=None, progress=None,
@@ -136,14 +136,17 @@ def render(scene, *, time=None, spp=None, seed=1, threads=None, set=None, refere
     time       seconds; spp: passes. One alone is the only limit, both: whichever comes first, neither: as
                the scene says (its timeout and spp), exactly as `dartspp render --time --spp`
     seed       the random seed (the same seed and passes give the CLI's image, float for float)
-    threads    None: all cores
+    threads    None or 0: all cores
     set        overrides of integrator and renderer keys, as `--set`: {"photon_count": 1e5} or
                ["photon_count=1e5"]
     reference  an image (path, or (height, width, 3) array) to log the error against, every log_every
                seconds and at the end (Result.log)
     progress   called after every pass as progress(passes, seconds, (r_vol, r_surf)); a true return value
                stops the render after that pass (Result.interrupted), an exception stops it and propagates
-    max_memory bytes the render may plan for (None: what the machine has available)
+    max_memory bytes the render may plan for (None: what the machine has available), or a size as
+               `--max-memory` takes it ("8G")
+    The options are parsed and range-checked by the command line's own code: a value `dartspp render`
+    refuses raises SceneError with the same message.
 
     Raises SceneError (bad input, before any work; names the file or key), Error (a failure while rendering),
     Interrupted (Ctrl-C, a KeyboardInterrupt carrying the completed passes as .result). Nothing is printed:
@@ -162,12 +165,9 @@ def render(scene, *, time=None, spp=None, seed=1, threads=None, set=None, refere
             raise SceneError("base_dir: only for a dict scene (a scene file's paths resolve against its folder)")
     else:
         raise SceneError("scene: expected a path or a dict in the scene format, not %s" % type(scene).__name__)
-    if threads is None:
-        threads = 0
-    elif isinstance(threads, bool) or not isinstance(threads, int) or threads < 1:
-        raise SceneError("threads: expected a whole number >= 1 (None: all cores), not %r" % (threads,))
-    if isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed < 2 ** 64:
-        raise SceneError("seed: expected an integer from 0 to 2^64 - 1, not %r" % (seed,))
+    threads, seed = _option("threads", threads, 0), _option("seed", seed, 1)
+    spp, time = _option("spp", spp, -1), _option("time", time, -1.0)
+    max_memory, log_every = _option("max_memory", max_memory, 0.0), _option("log_every", log_every, 1.0)
     ref_path = ref_array = None
     if reference is not None:
         if isinstance(reference, (str, os.PathLike)):
@@ -178,9 +178,8 @@ def render(scene, *, time=None, spp=None, seed=1, threads=None, set=None, refere
         raise SceneError("progress: expected a callable, not %s" % type(progress).__name__)
     catch = threading.current_thread() is threading.main_thread() and \
         signal.getsignal(signal.SIGINT) is signal.default_int_handler
-    d = _dartspp.render(path, text, name, base_dir, _sets(set), seed, _budget(spp, "spp", True),
-                        float(_budget(time, "time", False)), threads, float(max_memory or 0), ref_path, ref_array,
-                        float(log_every), progress, catch)
+    d = _dartspp.render(path, text, name, base_dir, _sets(set), seed, spp, float(time), threads, float(max_memory),
+                        ref_path, ref_array, float(log_every), progress, catch)
     result = Result(d)
     for w in result.warnings:
         warnings.warn(w, SceneWarning, stacklevel=2)
