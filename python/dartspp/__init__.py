@@ -11,6 +11,8 @@ docs/scene-format.md and docs/keys.md, the same as for the command line.
 """
 
 import json
+import math
+import numbers
 import os
 import signal
 import threading
@@ -117,6 +119,35 @@ def _sets(set):
     return out
 
 
+def _scene_text(scene):
+    """A dict scene as JSON text. JSON has no NaN or Inf (json.dumps would write them anyway, and the loader could
+    then only say "malformed JSON" at a column of text the user never wrote), so a non-finite number is refused
+    here by its key path; NumPy numbers and arrays are written as the numbers they hold."""
+    def walk(v, where):
+        if isinstance(v, dict):
+            for k, x in v.items():
+                walk(x, "%s.%s" % (where, k) if where else str(k))
+        elif isinstance(v, np.ndarray) and v.ndim == 0:
+            walk(v.item(), where)
+        elif isinstance(v, (list, tuple, np.ndarray)):
+            for i, x in enumerate(v):
+                walk(x, "%s[%d]" % (where, i))
+        elif isinstance(v, numbers.Real) and not isinstance(v, (bool, np.bool_)) and not math.isfinite(v):
+            raise SceneError("<dict scene>: %s: %r is not a number a scene may hold (JSON has no NaN or Inf)"
+                             % (where or "(the scene)", float(v)))
+
+    def plain(v):
+        if isinstance(v, np.ndarray):
+            return v.tolist()
+        if isinstance(v, np.generic):
+            return v.item()
+        raise SceneError("<dict scene>: a %s is not a value a scene may hold (numbers, strings, booleans, None, "
+                         "lists and dicts)" % type(v).__name__)
+
+    walk(scene, "")
+    return json.dumps(scene, allow_nan=False, default=plain)
+
+
 def _option(name, value, absent):
     """An option through the command line's own parser and range check (`dartspp render --threads`,
     src/render/options_check.c): the values the command line refuses are refused here with its message.
@@ -156,7 +187,7 @@ def render(scene, *, time=None, spp=None, seed=1, threads=None, set=None, refere
     text = name = None
     path = None
     if isinstance(scene, dict):
-        text = json.dumps(scene)
+        text = _scene_text(scene)
         name = "<dict scene>"
         base_dir = os.path.abspath(os.fspath(base_dir)) if base_dir is not None else os.getcwd()
     elif isinstance(scene, (str, os.PathLike)):

@@ -121,3 +121,26 @@ def test_options_refused_alike(cli, fogbox, tmp_path, name, value):
 def test_options_accepted_alike(fogbox):
     """The edges of the ranges are accepted by Python as by the command line (tests/cli/test_cli.c)."""
     assert dartspp.render(fogbox, spp=1, threads=0, max_memory="8G", seed=2 ** 64 - 1, log_every=0).passes == 1
+
+
+# Issue 48: NaN or Inf in a dict scene gave "<dict scene>:1:62: malformed JSON", naming neither key nor reason.
+@pytest.mark.parametrize("change, where, value", [
+    (lambda s: s["media"][0].update(sigma_s=float("nan")), "media[0].sigma_s", "nan"),
+    (lambda s: s["camera"].update(fov=float("inf")), "camera.fov", "inf"),
+    (lambda s: s["media"][0].update(sigma_a=[0.1, np.float32("-inf"), 0.1]), "media[0].sigma_a[1]", "-inf"),
+    (lambda s: s["integrator"].update(photon_count=float("nan")), "integrator.photon_count", "nan"),
+], ids=["medium", "camera", "numpy-in-list", "integrator"])
+def test_dict_scene_nonfinite_names_the_key(fogbox, change, where, value):
+    change(fogbox)
+    with pytest.raises(dartspp.SceneError) as e:
+        dartspp.render(fogbox, spp=1)
+    assert str(e.value) == "<dict scene>: %s: %s is not a number a scene may hold (JSON has no NaN or Inf)" % (
+        where, value)
+
+
+def test_dict_scene_numpy_numbers(fogbox):
+    """NumPy numbers and arrays in a dict scene are the numbers they hold (json.dumps refused them)."""
+    plain = dartspp.render(fogbox, spp=1, seed=3).image
+    fogbox["camera"]["fov"] = np.float32(fogbox["camera"]["fov"])
+    fogbox["media"][0]["sigma_s"] = np.asarray(fogbox["media"][0]["sigma_s"], np.float64)
+    assert np.array_equal(dartspp.render(fogbox, spp=1, seed=3).image, plain)
