@@ -205,6 +205,19 @@ static int key_at_default(const scene_key *k, scene *s)
     }
 }
 
+/* A key of no table row but a few edits from one of its section ("photon_cont"): the warning naming that row
+ * (key_suggest.c). 1 when warned. */
+static int misspelt_key(json_ctx *c, const char *key, scene_key_section section, const char *where)
+{
+    int count;
+    const scene_key *keys = scene_keys(&count);
+    key_near n = {0};
+    for (int i = 0; i < count; i++)
+        if (keys[i].section == section) key_near_consider(&n, key, keys[i].name);
+    jwarn_unknown_key(c, where, key, &n);
+    return n.best != NULL;
+}
+
 /* Keys of a section that nothing will read: not in the table, written by the format and never read, or not
  * read by the chosen integrator. A key set away from its default that the integrator ignores is a warning
  * (the user asked for something that will not happen); the rest are notes with --verbose. */
@@ -219,6 +232,7 @@ static void note_unread_keys(json_ctx *c, const cJSON *obj, scene_key_section se
         if (k && k->read_by && !key_at_default(k, s))
             jwarn(c, "%s.%s: the %s integrator does not read this key; its value has no effect", where, k->name,
                   s->integrator.type_name);
+        else if (!k && misspelt_key(c, it->string, section, where)) continue;
         else if (c->verbose && c->notes && !k)
             strbuf_addf(c->notes, "ignored key: %s.%s (not a key of dartspp)", where, it->string);
         else if (c->verbose && c->notes && !k->read_by)
