@@ -554,6 +554,52 @@ static void test_cli_light_medium_warning(void **state)
     if (failures) fail_msg("%d cases not as required", failures);
 }
 
+/* Issue 48: a response's offsets are added to arrival times; at 1e200 the sum keeps nothing of the arrival (a
+ * table at 1e200 gave half the undelayed image). Offsets that round arrival times by more than a millionth of the
+ * window's width are refused, naming the key; a table within that bound and the same huge table in steady state
+ * (no window to miss) load. Fails on the binary of 2026-11-28 (everything loads). */
+static void test_response_precision(void **state)
+{
+    (void)state;
+    const char *dir = fx_dir();
+    char far[1100], near[1100];
+    snprintf(far, sizeof far, "%s/resp_far.csv", dir);
+    snprintf(near, sizeof near, "%s/resp_near.csv", dir);
+    write_bytes(far, "time,value\n1e200,1\n1.0000000000001e200,1\n", 42);
+    write_bytes(near, "time,value\n0,1\n1000,1\n", 23);
+    static const char at[] = "\"max_bounces\": 4,";
+    struct {
+        char to[1300];
+        const char *key; /* NULL: loads */
+    } cases[6];
+    snprintf(cases[0].to, sizeof cases[0].to, "%s \"sensor_response_file\": \"%s\",", at, far);
+    cases[0].key = "sensor_response_file";
+    snprintf(cases[1].to, sizeof cases[1].to, "%s \"sensor_jitter_fwhm\": 1e12,", at);
+    cases[1].key = "sensor_jitter_fwhm";
+    snprintf(cases[2].to, sizeof cases[2].to, "%s \"sensor_jitter_tail\": 1e200,", at);
+    cases[2].key = "sensor_jitter_tail";
+    snprintf(cases[3].to, sizeof cases[3].to, "%s \"sensor_response_file\": \"%s\",", at, near);
+    cases[3].key = NULL;
+    snprintf(cases[4].to, sizeof cases[4].to, "%s \"sensor_jitter_fwhm\": 0.5, \"sensor_jitter_tail\": 2,", at);
+    cases[4].key = NULL;
+    snprintf(cases[5].to, sizeof cases[5].to, "\"max_bounces\": 4, \"sensor_response_file\": \"%s\"}, \"x\": {", far);
+    cases[5].key = NULL; /* the time keys moved out of the integrator: steady state */
+    int failures = 0;
+    for (int i = 0; i < 6; i++) {
+        char *text = replace1(BASE_SCENE, at, cases[i].to);
+        dp_error err;
+        scene *s = fx_load_text("resp.json", text, NULL, &err);
+        free(text);
+        int ok = cases[i].key ? !s && strstr(err.msg, cases[i].key) && strstr(err.msg, "resp.json") &&
+                                    strstr(err.msg, "width 0.5")
+                              : s != NULL;
+        print_message("[%d] %s%s\n", i, ok ? "" : "NOT AS REQUIRED: ", s ? "loaded" : err.msg);
+        if (s) fx_drop(s);
+        if (!ok) failures++;
+    }
+    if (failures) fail_msg("%d cases not as required", failures);
+}
+
 #define T(f) cmocka_unit_test_teardown(f, teardown_fx)
 
 int main(void)
@@ -564,6 +610,7 @@ int main(void)
         T(test_cli_camera_medium_warning),
         T(test_cli_light_medium_warning),
         T(test_misspelt_keys),
+        T(test_response_precision),
         T(test_bad_values_in_process),
         T(test_derived_coefficients_stay_finite),
         T(test_bsdf_key_errors),
