@@ -172,6 +172,31 @@ static void warn_light_medium(FILE *out, const scene *s)
     }
 }
 
+/* A collimated beam far wider than the scene (issue 48: radius 1e4 around a scene of a few units): photon points
+ * start its light paths uniformly on the whole disc, so all but a share (R/r)² of them pass beside the geometry
+ * and the camera (R: the half-diagonal of the box around the geometry and the camera), and at 1e5 paths a pass
+ * stores no photon that counts: a black image. The path tracer connects to the beam where its camera segments
+ * cross it and renders it. Warned about with the scene's extent and the radius that covers it. */
+static void warn_wide_beams(FILE *out, const scene *s)
+{
+    vec3 lo = s->cam.pos, hi = s->cam.pos;
+    for (uint32_t v = 0; v < s->vert_count; v++) {
+        vec3 q = v3(s->verts[3 * (size_t)v], s->verts[3 * (size_t)v + 1], s->verts[3 * (size_t)v + 2]);
+        lo = v3(dp_fmin(lo.x, q.x), dp_fmin(lo.y, q.y), dp_fmin(lo.z, q.z));
+        hi = v3(dp_fmax(hi.x, q.x), dp_fmax(hi.y, q.y), dp_fmax(hi.z, q.z));
+    }
+    double R = 0.5 * v3_len(v3_sub(hi, lo));
+    for (int i = 0; i < s->light_count; i++) {
+        const emitter *L = &s->lights[i];
+        if (!(L->radius > 0.0) || !(L->radius > 30.0 * R)) continue;
+        fprintf(out, "warning: %s: light '%s' (%s): radius %g is %.3g times the scene's extent (the geometry and the "
+                "camera lie within %g of their centre): photon points start its light paths on the whole disc, so at "
+                "most %.2g of them can reach the scene and the image is black or noise; the path tracer renders it, "
+                "or give a radius of about %.3g (with the flux per area, emission, unchanged)\n", s->path, L->name,
+                L->type_name, L->radius, L->radius / R, R, (R / L->radius) * (R / L->radius), 2.0 * R);
+    }
+}
+
 void render_warn(FILE *out, const scene *s, const render_plan *p)
 {
     warn_camera_medium(out, s);
@@ -189,8 +214,10 @@ void warn_path_tracer(FILE *out, const scene *s, const render_plan *p)
     warn_caustics(out, s);
 }
 
-/* Photon points' warnings: DARTS assuming straight camera legs where the camera sees mirrors. */
+/* Photon points' warnings: DARTS assuming straight camera legs where the camera sees mirrors; beams far wider than
+ * the scene. */
 void warn_photon_points(FILE *out, const scene *s, const render_plan *p)
 {
     warn_straight_mirrors(out, s, p);
+    warn_wide_beams(out, s);
 }

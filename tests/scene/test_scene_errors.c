@@ -600,6 +600,44 @@ static void test_response_precision(void **state)
     if (failures) fail_msg("%d cases not as required", failures);
 }
 
+/* Issue 48: a collimated beam of radius 1e4 around a scene of a few units rendered black with photon points, exit
+ * 0, "0 photons stored", while the path tracer renders it: photon points start its paths on the whole disc, and
+ * a share (R/r)^2 ~ 1e-7 of them can reach the scene. Warned about (photon points) naming the light, the radius
+ * and the scene's extent; a beam of radius 3 is silent. Fails on the binary of 2026-11-28 (no warning). */
+static void test_cli_wide_beam_warning(void **state)
+{
+    (void)state;
+    const char *dir = fx_dir();
+    char *out = fx_keep(malloc(16384));
+    int failures = 0;
+    for (int wide = 0; wide < 2; wide++) {
+        char beam[600];
+        snprintf(beam, sizeof beam, "{\"name\": \"beam\", \"type\": \"collimated\", \"transform\": {\"position\": [0, 3, 0], "
+                 "\"look_at\": [0, 0, 0], \"up\": [0, 0, 1]}, \"power\": 100, \"radius\": %s, \"ext_medium\": \"fog\"}",
+                 wide ? "1e4" : "3");
+        char *a = replace1(BASE_SCENE, "{\"name\": \"light\", \"type\": \"point\", \"transform\": {\"position\": [0, 2, 0]}, "
+                           "\"power\": 100,\n     \"ext_medium\": \"fog\"}", beam);
+        char *text = replace1(a, "\"type\": \"path_tracer\", \"max_bounces\": 4,",
+                              "\"type\": \"progressive_transient_photon_map\", \"photon_count\": 1000, "
+                              "\"volume_photon_count\": 1000, \"volume_gather_radius\": 0.05, \"max_bounces\": 4,");
+        free(a);
+        char path[1100], exr[1100], cmd[3000];
+        snprintf(path, sizeof path, "%s/beam_%d.json", dir, wide);
+        snprintf(exr, sizeof exr, "%s/beam_%d.exr", dir, wide);
+        write_bytes(path, text, strlen(text));
+        free(text);
+        snprintf(cmd, sizeof cmd, "%s render '%s' --spp 1 --quiet --output '%s'", DARTSPP_BIN, path, exr);
+        int rc = test_run(cmd, out, 16384);
+        int warned = strstr(out, "light 'beam' (collimated): radius 10000 is") && strstr(out, "photon points");
+        print_message("[radius %s] exit %d, warned %d\n", wide ? "1e4" : "3", rc, warned);
+        if (rc != 0 || warned != wide) {
+            failures++;
+            print_tail(out);
+        }
+    }
+    if (failures) fail_msg("%d cases not as required", failures);
+}
+
 #define T(f) cmocka_unit_test_teardown(f, teardown_fx)
 
 int main(void)
@@ -611,6 +649,7 @@ int main(void)
         T(test_cli_light_medium_warning),
         T(test_misspelt_keys),
         T(test_response_precision),
+        T(test_cli_wide_beam_warning),
         T(test_bad_values_in_process),
         T(test_derived_coefficients_stay_finite),
         T(test_bsdf_key_errors),
