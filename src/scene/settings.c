@@ -3,6 +3,7 @@
  * read (docs/scene-format.md §2.8). */
 #include "settings.h"
 
+#include <float.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -242,6 +243,23 @@ static void note_unread_keys(json_ctx *c, const cJSON *obj, scene_key_section se
     }
 }
 
+/* A window narrower than the rounding of its own times: its start and end, and every arrival time compared with
+ * them, carry a relative error of 2^-52, so a width below a thousand times that rounding at the window's end (where
+ * the rounding would move a thousandth of the gate's detections in or out) (a gate of
+ * 1e-300 at 6 is [6, 6); one of 0.5 centred at 1e200 starts and ends at 1e200) holds nothing, or whatever the
+ * rounding puts in it: the image is black or wrong (issue 48). Refused, naming the width key. */
+static int window_precision(json_ctx *c, const time_window *tw)
+{
+    if (!tw->gated) return 0;
+    double end = tw->start + tw->width * (tw->frame_count > 0 ? tw->frame_count : 1);
+    double scale = dp_fmax(fabs(tw->start), fabs(end));
+    if (tw->width >= 1e3 * DBL_EPSILON * scale && end > tw->start) return 0;
+    return jfail(c, "integrator", "transient_time_width", "%g is below the precision of the window's times (%s at "
+                 "%g: arrival times there are rounded by up to %g); a %s needs a width of at least %g there",
+                 tw->width, tw->frame_count > 0 ? "frames starting" : "a gate starting", tw->start, scale * DBL_EPSILON,
+                 tw->frame_count > 0 ? "frame" : "gate", 1e3 * DBL_EPSILON * scale);
+}
+
 /* The time window from the time keys: no time key at all is steady state (as the reference path tracer). */
 static int resolve_window(json_ctx *c, const cJSON *v, integrator_settings *in)
 {
@@ -262,7 +280,7 @@ static int resolve_window(json_ctx *c, const cJSON *v, integrator_settings *in)
         tw->gated = width > 0;
         tw->start = width > 0 ? in->transient_time_center - 0.5 * width : 0.0;
     }
-    return 0;
+    return window_precision(c, tw);
 }
 
 /* Rules between integrator keys, after every key is read. */

@@ -184,6 +184,10 @@ static void test_bad_values_in_process(void **state)
         {"\"power\": 100", "\"power\": 100, \"pulse_width\": 1e999", "pulse_width"},
         {"\"power\": 100", "\"power\": 100, \"pulse_width\": \"short\"", "pulse_width"},
         {"\"max_bounces\": 4,", "\"max_bounces\": 4, \"camera_unwarp\": \"yes\",", "camera_unwarp"},
+        /* issue 48: a window narrower than the rounding of its own times ([6, 6); a gate at 1e200) was black */
+        {"\"transient_time_width\": 0.5", "\"transient_time_width\": 1e-300", "transient_time_width"},
+        {"\"transient_time_center\": 6", "\"transient_time_center\": 1e200", "transient_time_width"},
+        {"\"transient_time_center\": 6", "\"start_time\": 1e15, \"frame_num\": 3", "transient_time_width"},
     };
     int failures = 0;
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
