@@ -135,6 +135,9 @@ def _scene_text(scene):
         elif isinstance(v, numbers.Real) and not isinstance(v, (bool, np.bool_)) and not math.isfinite(v):
             raise SceneError("<dict scene>: %s: %r is not a number a scene may hold (JSON has no NaN or Inf)"
                              % (where or "(the scene)", float(v)))
+        elif not isinstance(v, (str, numbers.Real, np.bool_, type(None))):
+            raise SceneError("<dict scene>: %s: a %s is not a value a scene may hold (numbers, strings, booleans, "
+                             "None, lists and dicts)" % (where or "(the scene)", type(v).__name__))
 
     def plain(v):
         if isinstance(v, np.ndarray):

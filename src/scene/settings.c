@@ -52,9 +52,16 @@ int settings_apply_overrides(json_ctx *c, cJSON *root, const char *const *sets, 
             continue;
         }
         const scene_key *k = scene_key_find(key);
-        if (!k)
-            return dp_fail(c->err, "%s: --set %s: unknown integrator or renderer key '%s' (dartspp keys lists them)",
-                           c->file, sets[i], key);
+        if (!k) {
+            int count;
+            const scene_key *keys = scene_keys(&count);
+            key_near near = {0};
+            for (int j = 0; j < count; j++) key_near_consider(&near, key, keys[j].name);
+            char hint[128] = "";
+            if (near.best) snprintf(hint, sizeof hint, "; did you mean '%s'?", near.best);
+            return dp_fail(c->err, "%s: --set %s: unknown integrator or renderer key '%s' (dartspp keys lists them%s)",
+                           c->file, sets[i], key, hint);
+        }
         const char *section = scene_key_section_name(k->section);
         cJSON *obj = cJSON_GetObjectItemCaseSensitive(root, section);
         if (!obj) obj = cJSON_AddObjectToObject(root, section);
