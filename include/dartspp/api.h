@@ -76,6 +76,12 @@ typedef struct {
 int dp_render(const dp_render_request *rq, dp_render_result *res, dp_error *err);
 void dp_render_result_free(dp_render_result *res);
 
+/* One option of a render as the user wrote it ("max_memory", "8G"), parsed and range-checked by the command
+ * line's own table (`dartspp render --max-memory 8G`), so that both refuse the same values with the same message.
+ * name: the keyword (threads, seed, spp, time, log_every, max_memory, ...). 0 with *value (and *exact, the exact
+ * value of a whole-number option), or -1 with err (DP_ERROR_INPUT). */
+int dp_option_parse(const char *name, const char *text, double *value, uint64_t *exact, int *whole, dp_error *err);
+
 /* ---- images ---- */
 /* `dartspp compare`'s metrics of img against ref (same size; a NaN or Inf pixel in either is refused). */
 int dp_compare(const image_rgb *img, const image_rgb *ref, image_error *e, dp_error *err);

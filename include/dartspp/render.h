@@ -41,6 +41,25 @@ typedef struct {
                                   * alone: unused */
 } render_request;
 
+/* ---- the options of a render, as a user gives them ----
+ * One table (src/render/options_check.c) for `dartspp render`'s flags and the embedding API's keywords, so that
+ * both refuse the same values with the same message: "<name> (<flag>) <text>: <reason>". */
+typedef enum {
+    RENDER_OPT_THREADS, RENDER_OPT_SEED, RENDER_OPT_SPP, RENDER_OPT_TIME, RENDER_OPT_CHECKPOINT, RENDER_OPT_LOG_EVERY,
+    RENDER_OPT_REDUCE_EVERY, RENDER_OPT_MAX_MEMORY, RENDER_OPT_COUNT
+} render_opt;
+typedef struct {
+    double d;   /* the value (sizes in bytes) */
+    uint64_t u; /* whole-number options: the exact value */
+} render_opt_value;
+/* The option named by its keyword ("max_memory") or flag ("--max-memory"), or -1. */
+int render_opt_find(const char *name);
+/* Parses an option's text as the user wrote it ("8G", "1e9", "4") and checks its range: 0 with *out, or -1
+ * with the message in err (kind input). */
+int render_opt_parse(render_opt o, const char *text, render_opt_value *out, dp_error *err);
+/* The same range check of a value already held as a number (text: as written, or NULL to print v). */
+int render_opt_check(render_opt o, double v, const char *text, dp_error *err);
+
 typedef struct render_cluster render_cluster;
 
 /* Runs the request on this process alone (cluster NULL or of one rank) or shared by the ranks of a cluster:

@@ -11,6 +11,8 @@ docs/scene-format.md and docs/keys.md, the same as for the command line.
 """
 
 import json
+import math
+import numbers
 import os
 import signal
 import threading
@@ -117,14 +119,46 @@ def _sets(set):
     return out
 
 
-def _budget(value, name, integer):
+def _scene_text(scene):
+    """A dict scene as JSON text. JSON has no NaN or Inf (json.dumps would write them anyway, and the loader could
+    then only say "malformed JSON" at a column of text the user never wrote), so a non-finite number is refused
+    here by its key path; NumPy numbers and arrays are written as the numbers they hold."""
+    def walk(v, where):
+        if isinstance(v, dict):
+            for k, x in v.items():
+                walk(x, "%s.%s" % (where, k) if where else str(k))
+        elif isinstance(v, np.ndarray) and v.ndim == 0:
+            walk(v.item(), where)
+        elif isinstance(v, (list, tuple, np.ndarray)):
+            for i, x in enumerate(v):
+                walk(x, "%s[%d]" % (where, i))
+        elif isinstance(v, numbers.Real) and not isinstance(v, (bool, np.bool_)) and not math.isfinite(v):
+            raise SceneError("<dict scene>: %s: %r is not a number a scene may hold (JSON has no NaN or Inf)"
+                             % (where or "(the scene)", float(v)))
+        elif not isinstance(v, (str, numbers.Real, np.bool_, type(None))):
+            raise SceneError("<dict scene>: %s: a %s is not a value a scene may hold (numbers, strings, booleans, "
+                             "None, lists and dicts)" % (where or "(the scene)", type(v).__name__))
+
+    def plain(v):
+        if isinstance(v, np.ndarray):
+            return v.tolist()
+        if isinstance(v, np.generic):
+            return v.item()
+        raise SceneError("<dict scene>: a %s is not a value a scene may hold (numbers, strings, booleans, None, "
+                         "lists and dicts)" % type(v).__name__)
+
+    walk(scene, "")
+    return json.dumps(scene, allow_nan=False, default=plain)
+
+
+def _option(name, value, absent):
+    """An option through the command line's own parser and range check (`dartspp render --threads`,
+    src/render/options_check.c): the values the command line refuses are refused here with its message.
+    The value is given as the text a user would type: a float by its repr ('nan', 'inf', '1e+30'), anything
+    else by str() (True is "True", not a number)."""
     if value is None:
-        return -1
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or (integer and not isinstance(value, int)):
-        raise SceneError("%s: expected %s, not %r" % (name, "a whole number" if integer else "seconds", value))
-    if value < 0 or value != value:
-        raise SceneError("%s: expected a number >= 0, not %r" % (name, value))
-    return value
+        return absent
+    return _dartspp.check_option(name, repr(value) if isinstance(value, float) else str(value))
 
 
 def render(scene, *, time=None, spp=None, seed=1, threads=None, set=None, reference=None, progress=None,
@@ -136,14 +170,17 @@ def render(scene, *, time=None, spp=None, seed=1, threads=None, set=None, refere
     time       seconds; spp: passes. One alone is the only limit, both: whichever comes first, neither: as
                the scene says (its timeout and spp), exactly as `dartspp render --time --spp`
     seed       the random seed (the same seed and passes give the CLI's image, float for float)
-    threads    None: all cores
+    threads    None or 0: all cores
     set        overrides of integrator and renderer keys, as `--set`: {"photon_count": 1e5} or
                ["photon_count=1e5"]
     reference  an image (path, or (height, width, 3) array) to log the error against, every log_every
                seconds and at the end (Result.log)
     progress   called after every pass as progress(passes, seconds, (r_vol, r_surf)); a true return value
                stops the render after that pass (Result.interrupted), an exception stops it and propagates
-    max_memory bytes the render may plan for (None: what the machine has available)
+    max_memory bytes the render may plan for (None: what the machine has available), or a size as
+               `--max-memory` takes it ("8G")
+    The options are parsed and range-checked by the command line's own code: a value `dartspp render`
+    refuses raises SceneError with the same message.
 
     Raises SceneError (bad input, before any work; names the file or key), Error (a failure while rendering),
     Interrupted (Ctrl-C, a KeyboardInterrupt carrying the completed passes as .result). Nothing is printed:
@@ -153,7 +190,7 @@ def render(scene, *, time=None, spp=None, seed=1, threads=None, set=None, refere
     text = name = None
     path = None
     if isinstance(scene, dict):
-        text = json.dumps(scene)
+        text = _scene_text(scene)
         name = "<dict scene>"
         base_dir = os.path.abspath(os.fspath(base_dir)) if base_dir is not None else os.getcwd()
     elif isinstance(scene, (str, os.PathLike)):
@@ -162,12 +199,9 @@ def render(scene, *, time=None, spp=None, seed=1, threads=None, set=None, refere
             raise SceneError("base_dir: only for a dict scene (a scene file's paths resolve against its folder)")
     else:
         raise SceneError("scene: expected a path or a dict in the scene format, not %s" % type(scene).__name__)
-    if threads is None:
-        threads = 0
-    elif isinstance(threads, bool) or not isinstance(threads, int) or threads < 1:
-        raise SceneError("threads: expected a whole number >= 1 (None: all cores), not %r" % (threads,))
-    if isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed < 2 ** 64:
-        raise SceneError("seed: expected an integer from 0 to 2^64 - 1, not %r" % (seed,))
+    threads, seed = _option("threads", threads, 0), _option("seed", seed, 1)
+    spp, time = _option("spp", spp, -1), _option("time", time, -1.0)
+    max_memory, log_every = _option("max_memory", max_memory, 0.0), _option("log_every", log_every, 1.0)
     ref_path = ref_array = None
     if reference is not None:
         if isinstance(reference, (str, os.PathLike)):
@@ -178,9 +212,8 @@ def render(scene, *, time=None, spp=None, seed=1, threads=None, set=None, refere
         raise SceneError("progress: expected a callable, not %s" % type(progress).__name__)
     catch = threading.current_thread() is threading.main_thread() and \
         signal.getsignal(signal.SIGINT) is signal.default_int_handler
-    d = _dartspp.render(path, text, name, base_dir, _sets(set), seed, _budget(spp, "spp", True),
-                        float(_budget(time, "time", False)), threads, float(max_memory or 0), ref_path, ref_array,
-                        float(log_every), progress, catch)
+    d = _dartspp.render(path, text, name, base_dir, _sets(set), seed, spp, float(time), threads, float(max_memory),
+                        ref_path, ref_array, float(log_every), progress, catch)
     result = Result(d)
     for w in result.warnings:
         warnings.warn(w, SceneWarning, stacklevel=2)

@@ -219,6 +219,20 @@ static PyObject *py_render(PyObject *self, PyObject *args, PyObject *kw)
     return out;
 }
 
+/* check_option(name, text): dp_option_parse; an int for whole-number options, else a float. */
+static PyObject *py_check_option(PyObject *self, PyObject *args)
+{
+    (void)self;
+    const char *name, *text;
+    if (!PyArg_ParseTuple(args, "ss", &name, &text)) return NULL;
+    double v = 0;
+    uint64_t u = 0;
+    int whole = 0;
+    dp_error err;
+    if (dp_option_parse(name, text, &v, &u, &whole, &err)) return raise_error(&err);
+    return whole ? PyLong_FromUnsignedLongLong(u) : PyFloat_FromDouble(v);
+}
+
 static PyObject *py_compare(PyObject *self, PyObject *args)
 {
     (void)self;
@@ -307,6 +321,7 @@ static PyObject *py_keys(PyObject *self, PyObject *noargs)
 
 static PyMethodDef methods[] = {
     {"render", (PyCFunction)(void (*)(void))py_render, METH_VARARGS | METH_KEYWORDS, "dp_render (see __init__.render)"},
+    {"check_option", py_check_option, METH_VARARGS, "dp_option_parse: an option's text parsed and range-checked"},
     {"compare", py_compare, METH_VARARGS, "dp_compare (see __init__.compare)"},
     {"read_image", py_read_image, METH_VARARGS, "an EXR or PFM image as a (height, width, 3) float32 array"},
     {"write_image", py_write_image, METH_VARARGS, "dp_write_image (see Result.write_exr)"},

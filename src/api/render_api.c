@@ -201,9 +201,34 @@ static int run(api_run *r, scene *s, render_plan *p, dp_error *err)
     return rc;
 }
 
+int dp_option_parse(const char *name, const char *text, double *value, uint64_t *exact, int *whole, dp_error *err)
+{
+    int o = render_opt_find(name);
+    if (o < 0 || (name && name[0] == '-')) return dp_fail(err, "%s: not an option of a render", name ? name : "(none)");
+    render_opt_value v;
+    if (render_opt_parse((render_opt)o, text, &v, err)) return -1;
+    *value = v.d;
+    *exact = v.u;
+    *whole = o == RENDER_OPT_THREADS || o == RENDER_OPT_SEED || o == RENDER_OPT_SPP;
+    return 0;
+}
+
+/* The options through the command line's table and check (render.h), so that a value `dartspp render` refuses is
+ * refused here with the same message; the sentinels (spp and time < 0: as the scene says; max_memory 0: what the
+ * machine has) are the API's own. */
+static int check_options(const dp_render_request *rq, dp_error *err)
+{
+    return render_opt_check(RENDER_OPT_THREADS, rq->threads, NULL, err) ||
+           (rq->spp >= 0 && render_opt_check(RENDER_OPT_SPP, (double)rq->spp, NULL, err)) ||
+           (!(rq->time_limit < 0) && render_opt_check(RENDER_OPT_TIME, rq->time_limit, NULL, err)) ||
+           (rq->max_memory != 0 && render_opt_check(RENDER_OPT_MAX_MEMORY, rq->max_memory, NULL, err)) ||
+           render_opt_check(RENDER_OPT_LOG_EVERY, rq->log_every, NULL, err);
+}
+
 int dp_render(const dp_render_request *rq, dp_render_result *res, dp_error *err)
 {
     memset(res, 0, sizeof *res);
+    if (check_options(rq, err)) return -1;
     dp_stop_flag own_stop = 0;
     api_run r = {.rq = rq, .res = res, .stop = rq->stop ? rq->stop : &own_stop, .last_row = -1e300};
     scene s;

@@ -8,36 +8,7 @@
 
 #include "dartspp/cli.h"
 
-/* "8G", "512M", "100000K", "1e9": bytes (binary suffixes), or -1. */
-static double parse_bytes(const char *v)
-{
-    char *end;
-    errno = 0;
-    double d = v ? strtod(v, &end) : -1;
-    if (!v || end == v || errno || !(d > 0) || !isfinite(d)) return -1;
-    const char *units = "KMGT";
-    const char *u = *end ? strchr(units, *end) : NULL;
-    if (*end && (!u || end[1])) return -1;
-    for (const char *p = units; u && p <= u; p++) d *= 1024.0;
-    return d;
-}
-
-/* An exact unsigned decimal integer (digits only, no sign, fraction or exponent) up to max; 0 or -1. */
-static int parse_uint(const char *val, unsigned long long max, unsigned long long *out)
-{
-    if (!val || !*val) return -1;
-    for (const char *p = val; *p; p++)
-        if (*p < '0' || *p > '9') return -1;
-    char *end;
-    errno = 0;
-    unsigned long long u = strtoull(val, &end, 10);
-    if (*end || errno == ERANGE || u > max) return -1;
-    *out = u;
-    return 0;
-}
-
-/* The most threads a render accepts: more than this are no speed-up on any machine this runs on, only
- * memory (per-thread buffers) and scheduling overhead. */
+/* The most threads a render accepts (the table of options, src/render/options_check.c, holds the check). */
 #define MAX_THREADS 1024
 
 static void render_usage(FILE *f)
@@ -58,15 +29,14 @@ static int bad_arg(const char *opt, const char *val, const char *why)
     return dp_exit_status(DP_ERROR_INPUT);
 }
 
-static int parse_number(const char *opt, const char *val, double lo, double *out)
+/* An option of the table shared with the embedding API (render.h): parsed and range-checked there, so that
+ * `dartspp render` and `dartspp.render()` refuse the same values with the same message. */
+static int option(const char *o, const char *v, render_opt_value *out)
 {
-    char *end;
-    errno = 0;
-    double d = val ? strtod(val, &end) : 0;
-    if (!val || end == val || *end || errno || !isfinite(d) || d < lo) return -1;
-    (void)opt;
-    *out = d;
-    return 0;
+    dp_error err;
+    if (!render_opt_parse((render_opt)render_opt_find(o), v, out, &err)) return 0;
+    fprintf(stderr, "dartspp render: %s\n", err.msg);
+    return dp_exit_status(DP_ERROR_INPUT);
 }
 
 /* The flags into rq; sets (argc entries) receives the --set values. 0, or the exit status of bad input with
@@ -77,45 +47,26 @@ static int parse_args(int argc, char **argv, render_request *rq, const char **se
                           .sets = sets};
     for (int i = 0; i < argc; i++) {
         const char *o = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
-        double d;
         if (!strcmp(o, "--verbose")) rq->verbose = 1;
         else if (!strcmp(o, "--quiet")) rq->quiet = 1;
         else if (!strcmp(o, "--no-cube")) rq->skip |= RENDER_SKIP_CUBE;
         else if (!strcmp(o, "--no-viewer")) rq->skip |= RENDER_SKIP_VIEWER;
         else if (!strcmp(o, "--resume")) rq->resume = 1;
         else if (!strcmp(o, "--overwrite")) rq->overwrite = 1;
-        else if (!strcmp(o, "--seed") || !strcmp(o, "--threads")) {
-            unsigned long long u;
-            int seed = !strcmp(o, "--seed");
-            if (parse_uint(v, seed ? UINT64_MAX : (unsigned long long)MAX_THREADS, &u)) {
-                if (seed) return bad_arg(o, v, "expected an integer from 0 to 18446744073709551615 (2^64 - 1)");
-                char why[160];
-                snprintf(why, sizeof why, "expected a whole number of threads from 0 (all cores) to %d", MAX_THREADS);
-                return bad_arg(o, v, why);
+        else if (render_opt_find(o) >= 0) {
+            render_opt_value x;
+            int rc = option(o, v, &x);
+            if (rc) return rc;
+            switch (render_opt_find(o)) {
+            case RENDER_OPT_THREADS: rq->threads = (int)x.u; break;
+            case RENDER_OPT_SEED: rq->seed = x.u; break;
+            case RENDER_OPT_SPP: rq->spp = (long)x.u; break;
+            case RENDER_OPT_TIME: rq->time_limit = x.d; break;
+            case RENDER_OPT_CHECKPOINT: rq->checkpoint = x.d; break;
+            case RENDER_OPT_LOG_EVERY: rq->log_every = x.d; break;
+            case RENDER_OPT_REDUCE_EVERY: rq->reduce_every = x.d; break;
+            default: rq->max_memory = x.d; break;
             }
-            if (seed) rq->seed = (uint64_t)u;
-            else rq->threads = (int)u;
-            i++;
-        } else if (!strcmp(o, "--spp")) {
-            unsigned long long u;
-            if (parse_uint(v, (unsigned long long)LONG_MAX, &u)) return bad_arg(o, v, "expected a whole number of passes");
-            rq->spp = (long)u;
-            i++;
-        } else if (!strcmp(o, "--time")) {
-            if (parse_number(o, v, 0, &d)) return bad_arg(o, v, "expected a non-negative number");
-            rq->time_limit = d;
-            i++;
-        } else if (!strcmp(o, "--checkpoint")) {
-            if (parse_number(o, v, 0, &rq->checkpoint)) return bad_arg(o, v, "expected seconds (0: no checkpoints)");
-            i++;
-        } else if (!strcmp(o, "--reduce-every")) {
-            if (parse_number(o, v, 0, &rq->reduce_every)) return bad_arg(o, v, "expected seconds (0: no periodic reductions)");
-            i++;
-        } else if (!strcmp(o, "--max-memory")) {
-            if ((rq->max_memory = parse_bytes(v)) < 0) return bad_arg(o, v, "expected a size such as 8G, 512M or 1e9");
-            i++;
-        } else if (!strcmp(o, "--log-every")) {
-            if (parse_number(o, v, 0, &rq->log_every)) return bad_arg(o, v, "expected seconds (0: every pass)");
             i++;
         } else if (!strcmp(o, "--reference") || !strcmp(o, "--log")) {
             if (!v) return bad_arg(o, v, "expected a path");

@@ -150,10 +150,10 @@ int jget_string(json_ctx *c, const cJSON *obj, const char *where, const char *ke
 const cJSON *jget_item(json_ctx *c, const cJSON *obj, const char *key)
 {
     const cJSON *v = cJSON_GetObjectItemCaseSensitive(obj, key);
-    if (!v || c->read_lost) return v;
+    if (!obj || c->read_lost) return v;
     if (c->read_len == c->read_cap) {
         size_t cap = c->read_cap ? 2 * c->read_cap : 64;
-        const cJSON **grown = realloc(c->read, cap * sizeof *grown);
+        struct json_asked *grown = realloc(c->read, cap * sizeof *grown);
         if (!grown) {
             c->read_lost = 1;
             return v;
@@ -161,7 +161,7 @@ const cJSON *jget_item(json_ctx *c, const cJSON *obj, const char *key)
         c->read = grown;
         c->read_cap = cap;
     }
-    c->read[c->read_len++] = v;
+    c->read[c->read_len++] = (struct json_asked){key, v};
     return v;
 }
 
@@ -173,10 +173,14 @@ size_t jread_mark(const json_ctx *c)
 void jnote_unread_keys(json_ctx *c, const cJSON *obj, const char *where, size_t mark)
 {
     if (mark > c->read_len) mark = c->read_len;
-    for (const cJSON *it = cJSON_IsObject(obj) ? obj->child : NULL; it && c->verbose && c->notes && !c->read_lost; it = it->next) {
+    for (const cJSON *it = cJSON_IsObject(obj) ? obj->child : NULL; it && c->notes && !c->read_lost; it = it->next) {
         int read = 0;
-        for (size_t i = mark; i < c->read_len && !read; i++) read = c->read[i] == it;
-        if (!read) strbuf_addf(c->notes, "ignored key: %s%s%s", where, where[0] ? "." : "", it->string);
+        for (size_t i = mark; i < c->read_len && !read; i++) read = c->read[i].item == it;
+        if (read) continue;
+        key_near n = {0};
+        for (size_t i = mark; i < c->read_len; i++) key_near_consider(&n, it->string, c->read[i].key);
+        if (n.best) jwarn_unknown_key(c, where, it->string, &n);
+        else if (c->verbose) strbuf_addf(c->notes, "ignored key: %s%s%s", where, where[0] ? "." : "", it->string);
     }
     c->read_len = mark;
 }

@@ -4,6 +4,7 @@
 #include "settings.h"
 
 #include <errno.h>
+#include <float.h>
 #include <libgen.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -428,6 +429,32 @@ static void warn_light_outside_medium(json_ctx *c, const scene *s)
                   s->media[s->cam.medium].name, s->media[s->cam.medium].name);
 }
 
+/* A response's offsets are added to arrival times of the scene's size: an offset of magnitude M rounds the sum
+ * to M·2^-52, and once that is more than a millionth of the window's width the detections land in the wrong
+ * gate or frame (issue 48: a table at times of 1e200 gave half the undelayed image). Refused, naming the key;
+ * a steady-state render has no window for them to miss. */
+static int check_response_precision(json_ctx *c, const scene *s)
+{
+    const sensor_response *r = &s->cam.response;
+    const time_window *tw = &s->integrator.window;
+    if (!r->on || !tw->gated || !(tw->width > 0.0)) return 0;
+    double limit = 1e-6 * tw->width / DBL_EPSILON;
+    const char *key = "sensor_response_file";
+    double worst = 0.0;
+    for (int i = 0; i < r->n; i++) worst = dp_fmax(worst, fabs(r->t[i]));
+    if (!r->n) {
+        /* the Gaussian reaches about 8 σ and the exponential about 37 τ before their tails round to 0 */
+        double fwhm = s->integrator.sensor_jitter_fwhm, tail = s->integrator.sensor_jitter_tail;
+        worst = 8.0 * fwhm / 2.3548200450309493 + 37.0 * tail;
+        key = 8.0 * fwhm / 2.3548200450309493 >= 37.0 * tail ? "sensor_jitter_fwhm" : "sensor_jitter_tail";
+    }
+    if (worst <= limit) return 0;
+    return jfail(c, "integrator", key, "offsets of the time response reach %g: added to arrival times they round "
+                 "them by up to %g, more than a millionth of the %s width %g, so detections would land in the wrong "
+                 "%s; the response's offsets must stay within %g here", worst, worst * DBL_EPSILON,
+                 tw->frame_count > 0 ? "frames'" : "gate's", tw->width, tw->frame_count > 0 ? "frame" : "gate", limit);
+}
+
 /* The camera's time response from the integrator's sensor_* keys (docs/sensor.md §2); a table file is
  * relative to the scene file. */
 static int load_sensor_response(json_ctx *c, scene *s)
@@ -442,7 +469,7 @@ static int load_sensor_response(json_ctx *c, scene *s)
     dp_error e;
     if (sensor_response_init(&s->cam.response, in->sensor_jitter_fwhm, in->sensor_jitter_tail, path, &e))
         return jfail(c, "integrator", file[0] ? "sensor_response_file" : "sensor_jitter_fwhm", "%s", e.msg);
-    return 0;
+    return check_response_precision(c, s);
 }
 
 static int parse_all(json_ctx *c, cJSON *root, scene *s, const scene_load_options *opt)

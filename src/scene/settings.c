@@ -3,6 +3,7 @@
  * read (docs/scene-format.md §2.8). */
 #include "settings.h"
 
+#include <float.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -51,9 +52,16 @@ int settings_apply_overrides(json_ctx *c, cJSON *root, const char *const *sets, 
             continue;
         }
         const scene_key *k = scene_key_find(key);
-        if (!k)
-            return dp_fail(c->err, "%s: --set %s: unknown integrator or renderer key '%s' (dartspp keys lists them)",
-                           c->file, sets[i], key);
+        if (!k) {
+            int count;
+            const scene_key *keys = scene_keys(&count);
+            key_near near = {0};
+            for (int j = 0; j < count; j++) key_near_consider(&near, key, keys[j].name);
+            char hint[128] = "";
+            if (near.best) snprintf(hint, sizeof hint, "; did you mean '%s'?", near.best);
+            return dp_fail(c->err, "%s: --set %s: unknown integrator or renderer key '%s' (dartspp keys lists them%s)",
+                           c->file, sets[i], key, hint);
+        }
         const char *section = scene_key_section_name(k->section);
         cJSON *obj = cJSON_GetObjectItemCaseSensitive(root, section);
         if (!obj) obj = cJSON_AddObjectToObject(root, section);
@@ -205,6 +213,19 @@ static int key_at_default(const scene_key *k, scene *s)
     }
 }
 
+/* A key of no table row but a few edits from one of its section ("photon_cont"): the warning naming that row
+ * (key_suggest.c). 1 when warned. */
+static int misspelt_key(json_ctx *c, const char *key, scene_key_section section, const char *where)
+{
+    int count;
+    const scene_key *keys = scene_keys(&count);
+    key_near n = {0};
+    for (int i = 0; i < count; i++)
+        if (keys[i].section == section) key_near_consider(&n, key, keys[i].name);
+    jwarn_unknown_key(c, where, key, &n);
+    return n.best != NULL;
+}
+
 /* Keys of a section that nothing will read: not in the table, written by the format and never read, or not
  * read by the chosen integrator. A key set away from its default that the integrator ignores is a warning
  * (the user asked for something that will not happen); the rest are notes with --verbose. */
@@ -219,6 +240,7 @@ static void note_unread_keys(json_ctx *c, const cJSON *obj, scene_key_section se
         if (k && k->read_by && !key_at_default(k, s))
             jwarn(c, "%s.%s: the %s integrator does not read this key; its value has no effect", where, k->name,
                   s->integrator.type_name);
+        else if (!k && misspelt_key(c, it->string, section, where)) continue;
         else if (c->verbose && c->notes && !k)
             strbuf_addf(c->notes, "ignored key: %s.%s (not a key of dartspp)", where, it->string);
         else if (c->verbose && c->notes && !k->read_by)
@@ -226,6 +248,23 @@ static void note_unread_keys(json_ctx *c, const cJSON *obj, scene_key_section se
         else if (c->verbose && c->notes)
             strbuf_addf(c->notes, "ignored key: %s.%s (not read by %s)", where, k->name, s->integrator.type_name);
     }
+}
+
+/* A window narrower than the rounding of its own times: its start and end, and every arrival time compared with
+ * them, carry a relative error of 2^-52, so a width below a thousand times that rounding at the window's end (where
+ * the rounding would move a thousandth of the gate's detections in or out) (a gate of
+ * 1e-300 at 6 is [6, 6); one of 0.5 centred at 1e200 starts and ends at 1e200) holds nothing, or whatever the
+ * rounding puts in it: the image is black or wrong (issue 48). Refused, naming the width key. */
+static int window_precision(json_ctx *c, const time_window *tw)
+{
+    if (!tw->gated) return 0;
+    double end = tw->start + tw->width * (tw->frame_count > 0 ? tw->frame_count : 1);
+    double scale = dp_fmax(fabs(tw->start), fabs(end));
+    if (tw->width >= 1e3 * DBL_EPSILON * scale && end > tw->start) return 0;
+    return jfail(c, "integrator", "transient_time_width", "%g is below the precision of the window's times (%s at "
+                 "%g: arrival times there are rounded by up to %g); a %s needs a width of at least %g there",
+                 tw->width, tw->frame_count > 0 ? "frames starting" : "a gate starting", tw->start, scale * DBL_EPSILON,
+                 tw->frame_count > 0 ? "frame" : "gate", 1e3 * DBL_EPSILON * scale);
 }
 
 /* The time window from the time keys: no time key at all is steady state (as the reference path tracer). */
@@ -248,7 +287,7 @@ static int resolve_window(json_ctx *c, const cJSON *v, integrator_settings *in)
         tw->gated = width > 0;
         tw->start = width > 0 ? in->transient_time_center - 0.5 * width : 0.0;
     }
-    return 0;
+    return window_precision(c, tw);
 }
 
 /* Rules between integrator keys, after every key is read. */

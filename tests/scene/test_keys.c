@@ -145,9 +145,10 @@ static int loader_accepts_in_file(const char *section, const char *key, const ch
     dp_error err = {0};
     scene_load_options opt = {.verbose = 1};
     if (scene_load(path, &opt, &s, &err)) return 1; /* read, and refused: the loader knows the key */
-    char note[256];
+    char note[256], misspelt[256]; /* a key far from every key is a note, one a few edits from one a warning */
     snprintf(note, sizeof note, "ignored key: %s.%s (not a key of dartspp)", section, key);
-    int unknown = s.notes && strstr(s.notes, note);
+    snprintf(misspelt, sizeof misspelt, "%s: unknown key \"%s\" (did you mean", section, key);
+    int unknown = s.notes && (strstr(s.notes, note) || strstr(s.notes, misspelt));
     scene_free(&s);
     return !unknown;
 }
