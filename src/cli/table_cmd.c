@@ -8,6 +8,7 @@
 
 #include "dartspp/cli.h"
 #include "dartspp/darts.h"
+#include "dartspp/io.h"
 
 static int parse_double(const char *s, double *out)
 {
@@ -60,6 +61,13 @@ int cli_table(int argc, char **argv)
     if (isnan(ss) || isnan(sa) || !have_g || !out) {
         fprintf(stderr, "dartspp table: --sigma-s, --sigma-a, --g and --output are required\n");
         usage();
+        return 2;
+    }
+    /* the table is our headered binary format (darts.md §8.3), named .bin like the render's cache: a name of
+     * another format (x.exr) would hold what its readers cannot read */
+    if (!io_has_extension(out, ".bin")) {
+        fprintf(stderr, "dartspp table: --output %s: an EDA table is a binary file of its own format: the name must "
+                        "end in .bin\n", out);
         return 2;
     }
     eda_table t;
