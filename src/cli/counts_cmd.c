@@ -53,7 +53,9 @@ static const counts_option OPTIONS[] = {
 static void usage(FILE *f)
 {
     fprintf(f, "usage: dartspp counts CUBE.npy --output COUNTS.npy --pulses N --scale S [options]\n"
-               "  (a transient cube of `dartspp render`, (frames, height, width, 3) float32, with its frames CSV)\n");
+               "  (a transient cube of `dartspp render`, (frames, height, width, 3) float32, with its frames CSV)\n"
+               "  %-15s the int32 histograms (frames, height, width), with the sidecar COUNTS.json (required)\n",
+            "--output");
     for (int i = 0; i < OPTION_COUNT; i++) {
         const counts_option *o = &OPTIONS[i];
         if (isnan(o->def)) fprintf(f, "  %-15s %s (required)\n", o->flag, o->help);
@@ -63,6 +65,7 @@ static void usage(FILE *f)
                "  %-15s the frames' time axis (default: the cube's <stem>_frames.csv)\n"
                "  %-15s also write COUNTS_coates.npy: the cube estimated back from the counts (needs a dead time\n"
                "  %-15s at least the frames' span: one detection per pulse)\n"
+               "  -h, --help      this text\n"
                "Units: times and rates in the scene's time unit (docs/time.md); model: docs/sensor.md.\n",
             "--channel", "--frames", "--coates", "");
 }
@@ -82,7 +85,6 @@ static int parse_args(int argc, char **argv, counts_args *a)
     for (int i = 0; i < OPTION_COUNT; i++) *(double *)((char *)a + OPTIONS[i].offset) = OPTIONS[i].def;
     for (int i = 0; i < argc; i++) {
         const char *f = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
-        if (!strcmp(f, "--help") || !strcmp(f, "-h")) return 1;
         if (!strcmp(f, "--coates")) {
             a->coates = 1;
             continue;
@@ -395,6 +397,10 @@ done:
 int cli_counts(int argc, char **argv)
 {
     counts_args a;
+    if (cli_help_asked(argc, argv)) {
+        usage(stdout);
+        return 0;
+    }
     int pr = parse_args(argc, argv, &a);
     if (pr) {
         usage(pr > 0 ? stdout : stderr);

@@ -37,10 +37,21 @@ static int same_pixels(const image_rgb *a, const image_rgb *b)
     return lit != 0;
 }
 
+static void usage(FILE *f)
+{
+    fprintf(f, "usage: dartspp merge OUTPUT.exr|.pfm IMAGE IMAGE [IMAGE...]   (the equal-weight mean of independent\n"
+               "       renders of the same size, and the variance of that mean)\n"
+               "  -h, --help  this text\n");
+}
+
 int cli_merge(int argc, char **argv)
 {
+    if (cli_help_asked(argc, argv)) {
+        usage(stdout);
+        return 0;
+    }
     if (argc < 3) {
-        fprintf(stderr, "usage: dartspp merge OUTPUT.exr|.pfm IMAGE IMAGE [IMAGE...]   (equal-weight mean)\n");
+        usage(stderr);
         return 2;
     }
     int k = argc - 1, rc = 0;
