@@ -75,7 +75,7 @@ int cli_table(int argc, char **argv)
         usage(stderr);
         return 2;
     }
-    /* the table is our headered binary format (darts.md §8.3), named .bin like the render's cache: a name of
+    /* the table is our headered binary format (docs/darts.md §8.3), named .bin like the render's cache: a name of
      * another format (x.exr) would hold what its readers cannot read */
     if (!io_has_extension(out, ".bin")) {
         fprintf(stderr, "dartspp table: --output %s: an EDA table is a binary file of its own format: the name must "
