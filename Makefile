@@ -10,6 +10,11 @@ LTO      ?= -flto=auto
 ARCH     ?=
 CFLAGS   += -std=c11 -D_GNU_SOURCE $(OPT) $(if $(ARCH),-march=$(ARCH)) -g -Wall -Wextra -fopenmp -Iinclude \
             -I/usr/include/OpenEXR $(EXTRA_CFLAGS)
+# The version, in this one place: `dartspp --version` prints it with the commit of the checkout when the program
+# was last linked (none outside a git checkout).
+VERSION  := 0.48
+COMMIT   := $(shell git rev-parse --short=12 HEAD 2>/dev/null)
+VERSION_FLAGS = -DDARTSPP_VERSION='"$(VERSION)"' -DDARTSPP_COMMIT='"$(COMMIT)"'
 LDLIBS   += -lembree3 -lOpenEXRCore-3_1 -lcjson -lpng -lstb -lflann -lm -fopenmp
 
 DEB_PACKAGES = libembree-dev libopenexr-dev libflann-dev libcjson-dev libcmocka-dev libpng-dev libstb-dev pkg-config \
@@ -81,13 +86,13 @@ build/libdartspp.a: $(OBJ)
 	$(if $(LTO),gcc-ar,$(AR)) rcs $@ $^
 
 build/dartspp: $(CLI_SRC) build/libdartspp.a
-	$(CC) $(CFLAGS) $(DEPFLAGS) $(LTO) $< build/libdartspp.a $(LDLIBS) -o $@
+	$(CC) $(CFLAGS) $(VERSION_FLAGS) $(DEPFLAGS) $(LTO) $< build/libdartspp.a $(LDLIBS) -o $@
 
 # dartspp-mpi: the same program with the render shared by MPI ranks (include/dartspp/cluster.h)
 # (two sources in one command: -MMD would keep only the second one's headers, so -MM lists both first)
 build/dartspp-mpi: $(CLI_SRC) $(MPI_SRC) build/libdartspp.a
 	OMPI_CC=$(CC) $(MPICC) $(CFLAGS) -DDARTSPP_MPI -MM -MP -MT $@ $(CLI_SRC) $(MPI_SRC) > $@.d.tmp && mv $@.d.tmp $@.d
-	OMPI_CC=$(CC) $(MPICC) $(CFLAGS) $(LTO) -DDARTSPP_MPI $(CLI_SRC) $(MPI_SRC) build/libdartspp.a $(LDLIBS) -o $@
+	OMPI_CC=$(CC) $(MPICC) $(CFLAGS) $(VERSION_FLAGS) $(LTO) -DDARTSPP_MPI $(CLI_SRC) $(MPI_SRC) build/libdartspp.a $(LDLIBS) -o $@
 
 build/san/obj/%.o: src/%.c build/san/obj/%.d | $(DEPS_STAMP)
 	@mkdir -p $(dir $@)
@@ -98,7 +103,7 @@ build/san/libdartspp.a: $(SAN_OBJ)
 	$(AR) rcs $@ $^
 
 build/san/dartspp: $(CLI_SRC) build/san/libdartspp.a
-	$(CC) $(CFLAGS) $(SAN_FLAGS) $(DEPFLAGS) $< build/san/libdartspp.a $(LDLIBS) -o $@
+	$(CC) $(CFLAGS) $(VERSION_FLAGS) $(SAN_FLAGS) $(DEPFLAGS) $< build/san/libdartspp.a $(LDLIBS) -o $@
 
 # Test programs and fixtures are compiled to objects, then linked: a library edit relinks the programs.
 build/san/test-obj/%.o: tests/%.c build/san/test-obj/%.d | $(DEPS_STAMP)

@@ -19,5 +19,8 @@ int cli_keys(int argc, char **argv);
 /* `dartspp counts CUBE.npy --output COUNTS.npy --pulses N --scale S ...`: photon-counting histograms of a
  * transient cube (include/dartspp/sensor.h). */
 int cli_counts(int argc, char **argv);
+/* Whether `-h` or `--help` is among a command's arguments: then the command prints its usage on stdout and
+ * returns 0. */
+int cli_help_asked(int argc, char **argv);
 
 #endif

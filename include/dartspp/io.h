@@ -213,6 +213,21 @@ typedef struct {
 /* The page, atomically. Its default exposure maps the 0.99 quantile of the cube's positive values to 1. */
 int viewer_html_write(const char *path, const viewer_cube *v, const viewer_time *t, dp_error *err);
 
+/* ---- outputs over inputs (same_file.c) ---- */
+/* A file a command reads or writes, and what it is to the command, for messages ("the scene file", "--log"). */
+typedef struct {
+    const char *path; /* NULL: skipped */
+    const char *what;
+} io_file;
+/* Whether a and b are one file: by device and inode when both exist (hard links and symlinks included), by
+ * their resolved folder and name when neither does; a name that does not exist is never one that does. */
+int io_same_file(const char *a, const char *b);
+/* Before any work of a command that writes: an input error naming both paths when an output is an existing
+ * input (the same device and inode: also through a hard link or a symlink). 0, or -1 with err. */
+int io_refuse_output_over_input(const io_file *outputs, int n_out, const io_file *inputs, int n_in, dp_error *err);
+/* Whether the file name (not its folders) ends in ext (".npy"), in any letter case. */
+int io_has_extension(const char *path, const char *ext);
+
 /* Create the parent folders of a file path (mkdir -p of dirname); 0 on success. */
 int io_make_parent_dirs(const char *path, dp_error *err);
 

@@ -209,6 +209,13 @@ int render_write_outputs(const film *f, const char *path, const char *integrator
  * there, the disk room and file count of the gate image, preview, frame files, cube and viewer (skip as
  * above). 0 or -1 with err. */
 int render_outputs_check(const char *path, int width, int height, int frame_count, int skip, dp_error *err);
+/* Before any work (first of the output checks): refuses, naming both paths, an output of the render over one
+ * of its inputs — any file it writes for `path` (image, preview, frames and their time axis, cube, viewer,
+ * scattering orders, ground truth, checkpoint state, --log) that is the scene file, --reference, a texture,
+ * the sensor's response table or an EDA table, by device and inode (links included) — and a --log that is
+ * one of the render's other outputs. 0 or -1 with err. */
+int render_outputs_refuse_inputs(const char *path, const scene *s, const render_plan *p, const render_request *rq,
+                                 dp_error *err);
 /* When writing to `path` failed at the end: the same outputs, under the same file names, in a new folder
  * dartspp-rescue-XXXXXX in $TMPDIR, else /tmp, else the working folder (the first that takes them);
  * rescue_dir receives that folder. 0, or -1 with err when no folder took them. */

@@ -5,8 +5,19 @@
 #include "dartspp/cli.h"
 #include "dartspp/io.h"
 
+static void usage(FILE *f)
+{
+    fprintf(f, "usage: dartspp compare IMAGE REFERENCE [--csv]   (EXR or PFM, the same size)\n"
+               "  --csv       one line: mse,rmse,rel_mse,mse_q99,q99,nonfinite,pixels\n"
+               "  -h, --help  this text\n");
+}
+
 int cli_compare(int argc, char **argv)
 {
+    if (cli_help_asked(argc, argv)) {
+        usage(stdout);
+        return 0;
+    }
     const char *paths[2] = {NULL, NULL};
     int csv = 0, np = 0;
     for (int i = 0; i < argc; i++) {
@@ -21,7 +32,7 @@ int cli_compare(int argc, char **argv)
         }
     }
     if (np != 2) {
-        fprintf(stderr, "usage: dartspp compare IMAGE REFERENCE [--csv]\n");
+        usage(stderr);
         return 2;
     }
     image_rgb img = {0}, ref = {0};

@@ -12,6 +12,9 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
+
+#include <unistd.h>
 
 #include <cjson/cJSON.h>
 
@@ -50,7 +53,9 @@ static const counts_option OPTIONS[] = {
 static void usage(FILE *f)
 {
     fprintf(f, "usage: dartspp counts CUBE.npy --output COUNTS.npy --pulses N --scale S [options]\n"
-               "  (a transient cube of `dartspp render`, (frames, height, width, 3) float32, with its frames CSV)\n");
+               "  (a transient cube of `dartspp render`, (frames, height, width, 3) float32, with its frames CSV)\n"
+               "  %-15s the int32 histograms (frames, height, width), with the sidecar COUNTS.json (required)\n",
+            "--output");
     for (int i = 0; i < OPTION_COUNT; i++) {
         const counts_option *o = &OPTIONS[i];
         if (isnan(o->def)) fprintf(f, "  %-15s %s (required)\n", o->flag, o->help);
@@ -60,6 +65,7 @@ static void usage(FILE *f)
                "  %-15s the frames' time axis (default: the cube's <stem>_frames.csv)\n"
                "  %-15s also write COUNTS_coates.npy: the cube estimated back from the counts (needs a dead time\n"
                "  %-15s at least the frames' span: one detection per pulse)\n"
+               "  -h, --help      this text\n"
                "Units: times and rates in the scene's time unit (docs/time.md); model: docs/sensor.md.\n",
             "--channel", "--frames", "--coates", "");
 }
@@ -79,7 +85,6 @@ static int parse_args(int argc, char **argv, counts_args *a)
     for (int i = 0; i < OPTION_COUNT; i++) *(double *)((char *)a + OPTIONS[i].offset) = OPTIONS[i].def;
     for (int i = 0; i < argc; i++) {
         const char *f = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
-        if (!strcmp(f, "--help") || !strcmp(f, "-h")) return 1;
         if (!strcmp(f, "--coates")) {
             a->coates = 1;
             continue;
@@ -159,7 +164,7 @@ static char *frames_of(const char *cube)
 {
     size_t n = strlen(cube);
     const char *tail = "_cube.npy";
-    if (n > strlen(tail) && !strcmp(cube + n - strlen(tail), tail)) n -= strlen(tail);
+    if (n > strlen(tail) && !strcasecmp(cube + n - strlen(tail), tail)) n -= strlen(tail);
     char *s = malloc(n + 16);
     if (s) snprintf(s, n + 16, "%.*s_frames.csv", (int)n, cube);
     return s;
@@ -289,6 +294,69 @@ static int read_frame_bins(const counts_args *a, const char *frames_path, int F,
     return 0;
 }
 
+/* The first NaN, Inf or negative value of the cube, as (frame, row, column, channel): such a value is a render
+ * gone wrong, and the detector model would take it for 0 photons (or fail) without a word. 0, or 2 with the
+ * message printed. */
+static int check_cube_values(const char *path, const float *cube, const size_t *shape)
+{
+    size_t n = shape[0] * shape[1] * shape[2] * 3, bad = 0, first = 0;
+    for (size_t i = 0; i < n; i++)
+        if (!(cube[i] >= 0.0f) || isinf(cube[i])) {
+            if (!bad) first = i;
+            bad++;
+        }
+    if (!bad) return 0;
+    size_t c = first % 3, x = first / 3 % shape[2], y = first / 3 / shape[2] % shape[1], k = first / 3 / shape[2] / shape[1];
+    fprintf(stderr, "dartspp counts: %s: %zu value(s) NaN, Inf or negative; the first, %g, at frame %zu, row %zu, "
+                    "column %zu, channel %c: not a radiance a detector can count\n",
+            path, bad, (double)cube[first], k, y, x, "rgb"[c]);
+    return 2;
+}
+
+/* Whether the JSON file at path is a sidecar of this command (written by an earlier run with the same
+ * --output): only then may it be replaced. */
+static int is_counts_sidecar(const char *path)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f) return 0;
+    char *text = malloc(1 << 20);
+    size_t n = text ? fread(text, 1, (1 << 20) - 1, f) : 0;
+    fclose(f);
+    if (!text) return 0;
+    text[n] = 0;
+    cJSON *root = cJSON_Parse(text);
+    free(text);
+    const cJSON *dtype = cJSON_GetObjectItemCaseSensitive(root, "dtype");
+    int ok = cJSON_IsString(dtype) && !strcmp(dtype->valuestring, "int32") &&
+             cJSON_HasObjectItem(root, "total_counts") && cJSON_HasObjectItem(root, "pulses");
+    cJSON_Delete(root);
+    return ok;
+}
+
+/* Before any work: the output a .npy, no output over an input (the cube, its frames CSV) by device and inode,
+ * and the sidecar <stem>.json not a file of another kind (`--output scene.npy` beside scene.json). 0, or 2. */
+static int check_files(const counts_args *a, const char *frames_path, const char *json, const char *coates_path)
+{
+    if (!io_has_extension(a->output, ".npy")) {
+        fprintf(stderr, "dartspp counts: --output %s: the counts are a NumPy int32 array: the name must end in .npy\n",
+                a->output);
+        return 2;
+    }
+    io_file out[] = {{a->output, "--output"}, {json, "the sidecar"}, {coates_path, "the Coates estimate"}};
+    io_file in[] = {{a->cube, "the cube"}, {a->frames ? a->frames : frames_path, "the frames' time axis"}};
+    dp_error err;
+    if (io_refuse_output_over_input(out, 3, in, 2, &err)) {
+        fprintf(stderr, "dartspp counts: %s\n", err.msg);
+        return 2;
+    }
+    if (!access(json, F_OK) && !is_counts_sidecar(json)) {
+        fprintf(stderr, "dartspp counts: the sidecar of --output %s would replace %s, which is not a sidecar of "
+                        "dartspp counts: choose another --output, or move that file\n", a->output, json);
+        return 2;
+    }
+    return 0;
+}
+
 /* The counts (and Coates estimates) of every pixel, written with the sidecar; the run's line on stderr.
  * 0, 1 (out of memory, a failed write) or 2 (a plan the checks refuse), the message printed. */
 static int write_counts(const counts_args *a, const spad_bins *b, spad_model m, const float *cube, const size_t *shape,
@@ -329,6 +397,10 @@ done:
 int cli_counts(int argc, char **argv)
 {
     counts_args a;
+    if (cli_help_asked(argc, argv)) {
+        usage(stdout);
+        return 0;
+    }
     int pr = parse_args(argc, argv, &a);
     if (pr) {
         usage(pr > 0 ? stdout : stderr);
@@ -336,24 +408,30 @@ int cli_counts(int argc, char **argv)
     }
     dp_error err;
     size_t shape[NPY_MAX_DIMS];
-    int ndim = 0;
+    int ndim = 0, rc = 2;
     float *cube = NULL;
-    if (npy_read_f32(a.cube, shape, &ndim, &cube, &err)) {
-        fprintf(stderr, "dartspp counts: %s\n", err.msg);
-        return 2;
-    }
-    int rc = 2;
     char *frames_path = a.frames ? NULL : frames_of(a.cube), *json = beside(a.output, ".json"),
          *coates_path = a.coates ? beside(a.output, "_coates.npy") : NULL;
     double *start = NULL, *end = NULL;
+    if (!json || (!a.frames && !frames_path) || (a.coates && !coates_path)) {
+        fprintf(stderr, "dartspp counts: out of memory\n");
+        rc = 1;
+        goto done;
+    }
+    if (check_files(&a, frames_path, json, coates_path)) goto done;
+    if (npy_read_f32(a.cube, shape, &ndim, &cube, &err)) {
+        fprintf(stderr, "dartspp counts: %s\n", err.msg);
+        goto done;
+    }
     if (ndim != 4 || shape[3] != 3 || shape[0] < 1 || shape[0] > 1000000) {
         fprintf(stderr, "dartspp counts: %s: expected a transient cube of shape (frames, height, width, 3), got %d axes\n",
                 a.cube, ndim);
         goto done;
     }
+    if (check_cube_values(a.cube, cube, shape)) goto done;
     int F = (int)shape[0];
     start = malloc((size_t)F * sizeof *start), end = malloc((size_t)F * sizeof *end);
-    if (!start || !end || !json || (!a.frames && !frames_path) || (a.coates && !coates_path)) {
+    if (!start || !end) {
         fprintf(stderr, "dartspp counts: out of memory\n");
         rc = 1;
         goto done;

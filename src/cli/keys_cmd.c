@@ -43,11 +43,22 @@ static void print_markdown(const scene_key *keys, int n)
     }
 }
 
+static void usage(FILE *f)
+{
+    fprintf(f, "usage: dartspp keys [--markdown]   (every integrator and renderer key: type, default, range, meaning)\n"
+               "  --markdown  as the tables of docs/keys.md\n"
+               "  -h, --help  this text\n");
+}
+
 int cli_keys(int argc, char **argv)
 {
+    if (cli_help_asked(argc, argv)) {
+        usage(stdout);
+        return 0;
+    }
     int markdown = argc == 1 && !strcmp(argv[0], "--markdown");
     if (argc > 1 || (argc == 1 && !markdown)) {
-        fprintf(stderr, "usage: dartspp keys [--markdown]\n");
+        usage(stderr);
         return 2;
     }
     int n;

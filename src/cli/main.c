@@ -7,6 +7,24 @@
 
 #include "dartspp/cli.h"
 
+/* The version, from one place: the Makefile's VERSION (and the commit it was built from, when built in a git
+ * checkout). */
+#ifndef DARTSPP_VERSION
+#define DARTSPP_VERSION "unknown"
+#endif
+#ifndef DARTSPP_COMMIT
+#define DARTSPP_COMMIT ""
+#endif
+
+static int version(const char *prog)
+{
+    printf("%s %s%s%s%s\n", prog, DARTSPP_VERSION, DARTSPP_COMMIT[0] ? " (commit " : "", DARTSPP_COMMIT,
+           DARTSPP_COMMIT[0] ? ")" : "");
+    return 0;
+}
+
+static int is_version_flag(const char *a) { return !strcmp(a, "--version") || !strcmp(a, "-V"); }
+
 static void usage(FILE *f)
 {
     fprintf(f,
@@ -17,14 +35,16 @@ static void usage(FILE *f)
             "                      [--max-memory SIZE] [--no-cube] [--no-viewer] [--verbose] [--quiet]\n"
             "                      [--reduce-every SECONDS]  (dartspp-mpi: the checkpoint state's interval)\n"
             "       dartspp compare IMAGE REFERENCE [--csv]      (EXR or PFM)\n"
-            "       dartspp patch-mean IMAGE X0 Y0 X1 Y1          (mean of a pixel rectangle)\n"
+            "       dartspp patch-mean IMAGE X0 Y0 X1 Y1 [--mask MASK]  (mean of a pixel rectangle)\n"
             "       dartspp merge OUTPUT IMAGE IMAGE [IMAGE...]   (mean of independent renders, its variance)\n"
             "       dartspp table --sigma-s S --sigma-a A --g G [--shape R,S,C] [--s-max X] --output FILE\n"
             "                                                     (EDA direction-sampling table)\n"
             "       dartspp keys [--markdown]                     (the scene's integrator and renderer keys)\n"
             "       dartspp counts CUBE.npy --output COUNTS.npy --pulses N --scale S [...]\n"
             "                                                     (photon-counting histograms of a cube)\n"
-            "See docs/ for the scene keys, outputs and units.\n");
+            "       dartspp --version | -V                        (the version and commit)\n"
+            "`dartspp COMMAND --help` (or -h) lists every flag of a command. See docs/ for the scene keys, outputs\n"
+            "and units.\n");
 }
 
 /* The process keeps the memory it frees. Every pass allocates and frees photon buffers, maps and splat lists
@@ -55,7 +75,8 @@ int main(int argc, char **argv)
         return 1;
     }
     int rc;
-    if (argc >= 2 && !strcmp(argv[1], "render")) rc = cli_render_cluster(argc - 2, argv + 2, &c);
+    if (argc >= 2 && is_version_flag(argv[1])) rc = c.rank == 0 ? version("dartspp-mpi") : 0;
+    else if (argc >= 2 && !strcmp(argv[1], "render")) rc = cli_render_cluster(argc - 2, argv + 2, &c);
     else {
         if (c.rank == 0) {
             fprintf(stderr, "dartspp-mpi: only 'render' runs on a cluster (the other commands: dartspp)\n");
@@ -75,6 +96,7 @@ int main(int argc, char **argv)
         usage(argc < 2 ? stderr : stdout);
         return argc < 2 ? 2 : 0;
     }
+    if (is_version_flag(argv[1])) return version("dartspp");
     if (!strcmp(argv[1], "render")) return cli_render(argc - 2, argv + 2);
     if (!strcmp(argv[1], "compare")) return cli_compare(argc - 2, argv + 2);
     if (!strcmp(argv[1], "patch-mean")) return cli_patch_mean(argc - 2, argv + 2);

@@ -19,8 +19,20 @@ static int parse_int(const char *s, long *out)
     return 0;
 }
 
+static void usage(FILE *f)
+{
+    fprintf(f, "usage: dartspp patch-mean IMAGE X0 Y0 X1 Y1 [--mask MASK]   (the mean over channels and pixels)\n"
+               "  X0 Y0 X1 Y1   integers: the pixel rectangle [X0,X1) x [Y0,Y1), row 0 at the top\n"
+               "  --mask MASK   an image of the same size: only its pixels whose first channel is > 0.5\n"
+               "  -h, --help    this text\n");
+}
+
 int cli_patch_mean(int argc, char **argv)
 {
+    if (cli_help_asked(argc, argv)) {
+        usage(stdout);
+        return 0;
+    }
     long r[4];
     const char *mask_path = NULL;
     if (argc == 7 && !strcmp(argv[5], "--mask")) {
@@ -29,9 +41,7 @@ int cli_patch_mean(int argc, char **argv)
     }
     if (argc != 5 || parse_int(argv[1], &r[0]) || parse_int(argv[2], &r[1]) || parse_int(argv[3], &r[2]) ||
         parse_int(argv[4], &r[3])) {
-        fprintf(stderr, "usage: dartspp patch-mean IMAGE X0 Y0 X1 Y1 [--mask MASK]   (integers, pixel rectangle "
-                        "[X0,X1) x [Y0,Y1); with a mask image of the same size, only its pixels whose first "
-                        "channel is > 0.5)\n");
+        usage(stderr);
         return 2;
     }
     image_rgb img = {0};

@@ -13,13 +13,27 @@
 
 static void render_usage(FILE *f)
 {
-    fprintf(f, "usage: dartspp render SCENE.json [--threads N] [--seed S] [--spp N] [--time SECONDS]\n"
-               "                      [--output PATH.exr|.pfm] [--checkpoint SECONDS] [--set key=value ...]\n"
-               "                      [--reference REF.exr --log RUN.csv [--log-every SECONDS]]\n"
-               "                      [--max-memory SIZE] [--no-cube] [--no-viewer] [--verbose] [--quiet]\n"
-               "  --threads N     worker threads, 0 (all cores, the default) to %d\n"
-               "  --seed S        an integer 0 to 18446744073709551615 (default 1)\n"
-               "  --spp N         progressive passes; --time SECONDS: a wall-time budget\n"
+    fprintf(f, "usage: dartspp render SCENE.json [options]   (dartspp-mpi render: the same, on MPI ranks)\n"
+               "  --output PATH       the image, .exr or .pfm (default: <scene>/<scene>.exr); the preview, frames,\n"
+               "                      cube, viewer and checkpoint state go beside it\n"
+               "  --spp N             progressive passes; --time SECONDS: a wall-time budget (--spp 0 --time 0:\n"
+               "  --time SECONDS      until Ctrl-C)\n"
+               "  --threads N         worker threads, 0 (all cores, the default) to %d\n"
+               "  --seed S            an integer 0 to 18446744073709551615 (default 1)\n"
+               "  --set KEY=VALUE     overrides an integrator or renderer key (repeatable; dartspp keys lists them)\n"
+               "  --checkpoint SECONDS  all outputs and the state <stem>.state every SECONDS of rendering (0: none)\n"
+               "  --resume            goes on from the checkpoint state <stem>.state\n"
+               "  --overwrite         replaces a checkpoint state holding more passes than this run renders\n"
+               "  --reference REF.exr  with --log: the image's error against REF as the render goes\n"
+               "  --log RUN.csv       the error log's CSV (with --reference)\n"
+               "  --log-every SECONDS  between the log's rows (default 1; 0: every pass)\n"
+               "  --max-memory SIZE   the memory guard's limit, e.g. 8G, 512M or 1e9\n"
+               "  --reduce-every SECONDS  dartspp-mpi: the ranks' sums into the state this often (default 30; 0: never)\n"
+               "  --no-cube           no transient cube <stem>_cube.npy (frame mode)\n"
+               "  --no-viewer         no viewer page <stem>_viewer.html (frame mode)\n"
+               "  --verbose           every ignored scene key and the resolved plan\n"
+               "  --quiet             no progress line\n"
+               "  -h, --help          this text\n"
                "See docs/cli.md for every option, the outputs and the exit status.\n", MAX_THREADS);
 }
 
@@ -100,11 +114,10 @@ int cli_render(int argc, char **argv) { return cli_render_cluster(argc, argv, NU
 
 int cli_render_cluster(int argc, char **argv, const render_cluster *cluster)
 {
-    for (int i = 0; i < argc; i++)
-        if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h")) {
-            if (!cluster || cluster->rank == 0) render_usage(stdout);
-            return 0;
-        }
+    if (cli_help_asked(argc, argv)) {
+        if (!cluster || cluster->rank == 0) render_usage(stdout);
+        return 0;
+    }
     render_request rq;
     const char **sets = calloc((size_t)argc + 1, sizeof(char *));
     int rc = parse_args(argc, argv, &rq, sets);

@@ -8,6 +8,7 @@
 
 #include "dartspp/cli.h"
 #include "dartspp/darts.h"
+#include "dartspp/io.h"
 
 static int parse_double(const char *s, double *out)
 {
@@ -19,10 +20,17 @@ static int parse_double(const char *s, double *out)
     return 0;
 }
 
-static void usage(void)
+static void usage(FILE *f)
 {
-    fprintf(stderr, "usage: dartspp table --sigma-s S --sigma-a A --g G [--shape 128,128,256] [--s-max X]\n"
-                    "                     [--r-range 0.2,0.999] --output FILE\n");
+    fprintf(f, "usage: dartspp table --sigma-s S --sigma-a A --g G [options] --output FILE.bin   (an EDA table)\n"
+               "  --sigma-s S       the medium's scattering coefficient (required)\n"
+               "  --sigma-a A       its absorption coefficient (required)\n"
+               "  --g G             its Henyey-Greenstein g (required)\n"
+               "  --shape R,S,C     cells along C/S, S and the cosine (default 128,128,256)\n"
+               "  --s-max X         the S range [0, X) (default 16)\n"
+               "  --r-range LO,HI   the C/S range (default 0.2,0.999)\n"
+               "  --output FILE.bin where the table goes (required)\n"
+               "  -h, --help        this text\n");
 }
 
 static void progress(void *ctx, int done, int rows)
@@ -36,10 +44,14 @@ int cli_table(int argc, char **argv)
     double ss = NAN, sa = NAN, g = 0, s_max = 16.0, r_lo = EDA_DEFAULT_R_LO, r_hi = EDA_DEFAULT_R_HI;
     int shape[3] = {128, 128, 256}, have_g = 0;
     const char *out = NULL;
+    if (cli_help_asked(argc, argv)) {
+        usage(stdout);
+        return 0;
+    }
     for (int i = 0; i < argc; i++) {
         const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
         int bad = 0;
-        if (!v && strcmp(a, "--help")) bad = 1;
+        if (!v) bad = 1;
         else if (!strcmp(a, "--sigma-s")) bad = parse_double(v, &ss);
         else if (!strcmp(a, "--sigma-a")) bad = parse_double(v, &sa);
         else if (!strcmp(a, "--g")) bad = parse_double(v, &g), have_g = 1;
@@ -48,8 +60,9 @@ int cli_table(int argc, char **argv)
         else if (!strcmp(a, "--shape")) bad = sscanf(v, "%d,%d,%d", &shape[0], &shape[1], &shape[2]) != 3;
         else if (!strcmp(a, "--output")) out = v;
         else {
-            usage();
-            return !strcmp(a, "--help") ? 0 : 2;
+            fprintf(stderr, "dartspp table: unknown option '%s'\n", a);
+            usage(stderr);
+            return 2;
         }
         if (bad) {
             fprintf(stderr, "dartspp table: bad value for %s: '%s'\n", a, v ? v : "(missing)");
@@ -59,7 +72,14 @@ int cli_table(int argc, char **argv)
     }
     if (isnan(ss) || isnan(sa) || !have_g || !out) {
         fprintf(stderr, "dartspp table: --sigma-s, --sigma-a, --g and --output are required\n");
-        usage();
+        usage(stderr);
+        return 2;
+    }
+    /* the table is our headered binary format (docs/darts.md §8.3), named .bin like the render's cache: a name of
+     * another format (x.exr) would hold what its readers cannot read */
+    if (!io_has_extension(out, ".bin")) {
+        fprintf(stderr, "dartspp table: --output %s: an EDA table is a binary file of its own format: the name must "
+                        "end in .bin\n", out);
         return 2;
     }
     eda_table t;

@@ -5,9 +5,11 @@
 #include "dartspp/render.h"
 
 #include <errno.h>
+#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 #include <sys/stat.h>
 #include <sys/statvfs.h>
 #include <unistd.h>
@@ -28,7 +30,7 @@ static int split_output_path(const char *path, char *stem, size_t n, const char 
 {
     const char *dot = strrchr(path, '.');
     const char *slash = strrchr(path, '/');
-    if (!dot || (slash && dot < slash) || (strcmp(dot, ".exr") && strcmp(dot, ".pfm")))
+    if (!dot || (slash && dot < slash) || (strcasecmp(dot, ".exr") && strcasecmp(dot, ".pfm")))
         return dp_fail(err, "%s: output must end in .exr or .pfm", path);
     if ((size_t)(dot - path) + 32 >= n) return dp_fail(err, "%s: output path too long", path);
     snprintf(stem, n, "%.*s", (int)(dot - path), path);
@@ -300,6 +302,106 @@ int render_outputs_check(const char *path, int width, int height, int frame_coun
                            files, dir, (unsigned long)vfs.f_favail);
     }
     return 0;
+}
+
+/* ---- outputs over inputs ---- */
+
+/* A list of paths that owns its strings. */
+typedef struct {
+    io_file *f;
+    int n, cap;
+} file_list;
+
+static int list_add(file_list *l, const char *what, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
+static int list_add(file_list *l, const char *what, const char *fmt, ...)
+{
+    if (l->n == l->cap) {
+        int cap = l->cap ? 2 * l->cap : 16;
+        io_file *f = realloc(l->f, (size_t)cap * sizeof *f);
+        if (!f) return -1;
+        l->f = f, l->cap = cap;
+    }
+    va_list ap;
+    va_start(ap, fmt);
+    char *path = NULL;
+    int rc = vasprintf(&path, fmt, ap);
+    va_end(ap);
+    if (rc < 0) return -1;
+    l->f[l->n++] = (io_file){path, what};
+    return 0;
+}
+
+static void list_free(file_list *l)
+{
+    for (int i = 0; i < l->n; i++) free((char *)l->f[i].path);
+    free(l->f);
+}
+
+/* Every file the render writes for the image path `path` (the same names as write_all, write_frames,
+ * ground_truth_write, the checkpoint state of resume.c and the error log of error_log.c). */
+static int list_outputs(file_list *l, const char *path, const scene *s, const render_plan *p, const render_request *rq,
+                        dp_error *err)
+{
+    char stem[OUTPUT_PATH_MAX];
+    const char *ext;
+    if (split_output_path(path, stem, sizeof stem, &ext, err)) return -1;
+    const time_window *tw = &p->window;
+    int fail = list_add(l, "the image", "%s", path) || list_add(l, "the preview", "%s.png", stem) ||
+               list_add(l, "the checkpoint state", "%s.state", stem);
+    for (int k = 0; k < tw->frame_count && !fail; k++) {
+        char frame[STAGED_PATH_MAX];
+        frame_path(frame, sizeof frame, stem, tw->frame_count, k, ext);
+        fail = list_add(l, "a frame", "%s", frame);
+    }
+    if (tw->frame_count > 0 && !fail)
+        fail = list_add(l, "the frames' time axis", "%s" ATOMIC_SET_MANIFEST, stem) ||
+               (!(rq->skip & RENDER_SKIP_CUBE) && list_add(l, "the transient cube", "%s_cube.npy", stem)) ||
+               (!(rq->skip & RENDER_SKIP_VIEWER) && list_add(l, "the viewer", "%s_viewer.html", stem));
+    if (tw->orders > 0 && !fail) fail = list_add(l, "the scattering orders", "%s_orders.npy", stem);
+    for (int k = 0; k < GROUND_TRUTH_IMAGES && s->renderer.ground_truth && !fail; k++)
+        fail = list_add(l, "a ground-truth image", "%s_%s%s", stem, GROUND_TRUTH_NAMES[k], ext);
+    if (rq->log && !fail) {
+        const char *dot = strrchr(rq->log, '.'), *slash = strrchr(rq->log, '/');
+        int n = dot && (!slash || dot > slash) ? (int)(dot - rq->log) : (int)strlen(rq->log);
+        fail = list_add(l, "--log", "%s", rq->log) ||
+               (tw->frame_count > 0 &&
+                list_add(l, "--log's frames", "%.*s_frames%s", n, rq->log, n < (int)strlen(rq->log) ? rq->log + n : ".csv"));
+    }
+    return fail ? dp_fail_kind(err, DP_ERROR_MEMORY, "out of memory") : 0;
+}
+
+/* What the render reads: the scene file, --reference, textures, the sensor's response table and the authors'
+ * EDA tables (the meshes are read once, at load, and not kept by name). */
+static int list_inputs(file_list *l, const scene *s, const render_request *rq, dp_error *err)
+{
+    int fail = list_add(l, "the scene file", "%s", rq->scene_path) ||
+               (rq->reference && list_add(l, "--reference", "%s", rq->reference));
+    for (int i = 0; i < s->texture_count && !fail; i++) fail = list_add(l, "a texture", "%s", s->textures[i].path);
+    const char *resp = s->integrator.sensor_response_file;
+    if (resp[0] && !fail)
+        fail = list_add(l, "integrator.sensor_response_file", "%s%s%s", resp[0] == '/' ? "" : s->dir,
+                        resp[0] == '/' ? "" : "/", resp);
+    for (int i = 0; i < s->medium_count && !fail; i++) {
+        const char *t = s->media[i].eda_table_path;
+        if (t[0]) fail = list_add(l, "an EDA table (table_path)", "%s%s%s", t[0] == '/' ? "" : s->dir, t[0] == '/' ? "" : "/", t);
+    }
+    return fail ? dp_fail_kind(err, DP_ERROR_MEMORY, "out of memory") : 0;
+}
+
+int render_outputs_refuse_inputs(const char *path, const scene *s, const render_plan *p, const render_request *rq,
+                                 dp_error *err)
+{
+    file_list out = {0}, in = {0};
+    int rc = list_outputs(&out, path, s, p, rq, err) || list_inputs(&in, s, rq, err) ||
+             io_refuse_output_over_input(out.f, out.n, in.f, in.n, err);
+    /* --log is the one output named apart from the image: it must not be one of the render's other files */
+    for (int i = 0; !rc && rq->log && i < out.n; i++)
+        if (strcmp(out.f[i].what, "--log") && strcmp(out.f[i].what, "--log's frames") && io_same_file(rq->log, out.f[i].path))
+            rc = dp_fail(err, "--log %s is %s %s of this render: give the log another name", rq->log, out.f[i].what,
+                         out.f[i].path);
+    list_free(&out);
+    list_free(&in);
+    return rc ? -1 : 0;
 }
 
 int render_write_rescue(const film *f, const char *path, const char *integrator, const char *plan, int skip,

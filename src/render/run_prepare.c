@@ -49,10 +49,11 @@ static int resolve_plan(render_run_job *j, dp_error *err)
     return 0;
 }
 
-/* Rank 0 writes the outputs, so rank 0 checks where they go. */
+/* Rank 0 writes the outputs, so rank 0 checks where they go: over no input, then room and rights. */
 static int check_outputs(render_run_job *j, dp_error *err)
 {
     if (j->rank != 0) return 0;
+    if (render_outputs_refuse_inputs(j->out, &j->s, &j->p, j->rq, err)) return -1;
     return render_outputs_check(j->out, j->s.cam.width, j->s.cam.height, j->p.window.frame_count, j->rq->skip, err);
 }
 

@@ -9,9 +9,17 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
+#include <sys/stat.h>
 
 static char *read_text_file(const char *path, dp_error *err)
 {
+    /* a folder opens for reading on Linux, and its size then reads as LONG_MAX: say what it is */
+    struct stat st;
+    if (stat(path, &st) == 0 && S_ISDIR(st.st_mode)) {
+        dp_fail(err, "%s: is a folder, not a scene file (give the .json file in it)", path);
+        return NULL;
+    }
     FILE *f = fopen(path, "rb");
     if (!f) {
         dp_fail(err, "%s: cannot open scene file: %s", path, strerror(errno));
@@ -185,8 +193,8 @@ static int load_shape(json_ctx *c, scene *s, const cJSON *v, const char *where, 
         size_t n = strlen(file);
         dp_error merr;
         int rc;
-        if (n > 4 && !strcmp(file + n - 4, ".wo3")) rc = mesh_load_wo3(path, m, &merr);
-        else if (n > 4 && !strcmp(file + n - 4, ".obj")) rc = mesh_load_obj(path, m, &merr);
+        if (n > 4 && !strcasecmp(file + n - 4, ".wo3")) rc = mesh_load_wo3(path, m, &merr);
+        else if (n > 4 && !strcasecmp(file + n - 4, ".obj")) rc = mesh_load_obj(path, m, &merr);
         else return jfail(c, where, "file", "'%s': unsupported mesh format (supported: .wo3, .obj)", file);
         if (rc) return jfail(c, where, "file", "%s", merr.msg);
         return mesh_flags(c, v, where, file, m, flags);

@@ -37,8 +37,13 @@ static int override_resolution(json_ctx *c, cJSON *root, const char *set, const 
     return 0;
 }
 
+/* The names of the keys given with --set, kept in the tree under a member no scene file has, so that the check
+ * of unread keys can tell the user's settings from the file's (note_unread_keys). */
+#define SET_KEYS_MEMBER "\001dartspp --set keys"
+
 int settings_apply_overrides(json_ctx *c, cJSON *root, const char *const *sets, int count)
 {
+    cJSON *given = count > 0 ? cJSON_AddArrayToObject(root, SET_KEYS_MEMBER) : NULL;
     for (int i = 0; i < count; i++) {
         const char *eq = strchr(sets[i], '=');
         if (!eq || eq == sets[i]) return dp_fail(c->err, "%s: --set %s: expected key=value", c->file, sets[i]);
@@ -68,6 +73,7 @@ int settings_apply_overrides(json_ctx *c, cJSON *root, const char *const *sets, 
         if (!cJSON_IsObject(obj)) return jfail(c, section, NULL, "expected an object");
         cJSON_DeleteItemFromObjectCaseSensitive(obj, key);
         cJSON_AddItemToObject(obj, key, override_value(eq + 1));
+        if (given) cJSON_AddItemToArray(given, cJSON_CreateString(key));
     }
     return 0;
 }
@@ -226,18 +232,29 @@ static int misspelt_key(json_ctx *c, const char *key, scene_key_section section,
     return n.best != NULL;
 }
 
+/* Whether --set gave the key (the list of settings_apply_overrides). */
+static int given_by_set(const cJSON *given, const char *name)
+{
+    const cJSON *it;
+    cJSON_ArrayForEach(it, given) if (cJSON_IsString(it) && !strcmp(it->valuestring, name)) return 1;
+    return 0;
+}
+
 /* Keys of a section that nothing will read: not in the table, written by the format and never read, or not
  * read by the chosen integrator. A key set away from its default that the integrator ignores is a warning
- * (the user asked for something that will not happen); the rest are notes with --verbose. */
-static void note_unread_keys(json_ctx *c, const cJSON *obj, scene_key_section section, scene *s)
+ * (the user asked for something that will not happen) — unless the file set it for its own integrator and
+ * `--set type=...` chose another: the demo's photon keys under `--set type=path_tracer` are the scene's
+ * settings for the integrator it was written for, not a mistake. The rest are notes with --verbose. */
+static void note_unread_keys(json_ctx *c, const cJSON *obj, scene_key_section section, scene *s, const cJSON *given)
 {
     if (!cJSON_IsObject(obj)) return;
+    int switched = given_by_set(given, "type");
     const char *where = scene_key_section_name(section);
     for (const cJSON *it = obj->child; it; it = it->next) {
         const scene_key *k = it->string ? scene_key_find(it->string) : NULL;
         if (k && k->section != section) k = NULL;
         if (k && scene_key_read_by(k, s->integrator.type)) continue;
-        if (k && k->read_by && !key_at_default(k, s))
+        if (k && k->read_by && !key_at_default(k, s) && (!switched || given_by_set(given, k->name)))
             jwarn(c, "%s.%s: the %s integrator does not read this key; its value has no effect", where, k->name,
                   s->integrator.type_name);
         else if (!k && misspelt_key(c, it->string, section, where)) continue;
@@ -342,7 +359,8 @@ int settings_parse(json_ctx *c, const cJSON *root, scene *s)
         snprintf(s->renderer.timeout_negative, sizeof s->renderer.timeout_negative, "%g", timeout->valuedouble);
     else if (cJSON_IsString(timeout) && timeout->valuestring[0] == '-')
         snprintf(s->renderer.timeout_negative, sizeof s->renderer.timeout_negative, "%s", timeout->valuestring);
-    note_unread_keys(c, in, KEY_SECTION_INTEGRATOR, s);
-    note_unread_keys(c, re, KEY_SECTION_RENDERER, s);
+    const cJSON *given = jget_item(c, root, SET_KEYS_MEMBER);
+    note_unread_keys(c, in, KEY_SECTION_INTEGRATOR, s, given);
+    note_unread_keys(c, re, KEY_SECTION_RENDERER, s, given);
     return 0;
 }
