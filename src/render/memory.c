@@ -13,8 +13,10 @@
 #include <string.h>
 
 /* Resident memory of the process before any scene data: the C and C++ runtimes, Embree, OpenEXR, FLANN,
- * OpenMP threads (measured: a 1-pixel render of a fog scene without geometry peaks at 8.7 MiB, Debian 12). */
-#define RUNTIME_BYTES (9.0 * 1048576.0)
+ * OpenMP threads (measured, Debian 12: a 1-pixel path-traced render of the fog box peaks at 10.7-10.8 MiB with
+ * 1 or 2 threads, 2026-11-28; 8.7 MiB of a fog scene without geometry on 2026-11-27, which the estimate of
+ * 9.0 MiB then left 1.7 MiB under the peak of small path-traced renders). */
+#define RUNTIME_BYTES (11.5 * 1048576.0)
 /* Geometry per triangle: our float vertices and indices, Embree's BVH and its build scratch, and the corner
  * normals and UVs of smooth and textured meshes (60 bytes, counted for every triangle: an upper bound). */
 #define BYTES_PER_TRIANGLE 220.0
