@@ -48,6 +48,9 @@ int cli_compare(int argc, char **argv)
             rc = dp_fail(&err, "%s: %ld of %ld pixels have a NaN or Inf channel (the first at x %d, y %d): "
                                "not compared", paths[i], bad, (long)im->width * im->height, x, y);
     }
+    if (!rc && (img.width != ref.width || img.height != ref.height))
+        rc = dp_fail(&err, "%s is %dx%d but the reference %s is %dx%d: compare needs images of one size", paths[0],
+                     img.width, img.height, paths[1], ref.width, ref.height);
     if (!rc) rc = image_compare(&img, &ref, &e, &err);
     if (rc) fprintf(stderr, "dartspp compare: %s\n", err.msg);
     else if (csv)

@@ -71,6 +71,10 @@ int cli_merge(int argc, char **argv)
                          argv[1 + j], bad, (long)imgs[j].width * imgs[j].height, x, y);
     }
     for (int j = 1; j < k && !rc; j++)
+        if (imgs[j].width != imgs[0].width || imgs[j].height != imgs[0].height)
+            rc = dp_fail(&err, "%s is %dx%d but %s is %dx%d: merge needs renders of one size", argv[1 + j],
+                         imgs[j].width, imgs[j].height, argv[1], imgs[0].width, imgs[0].height);
+    for (int j = 1; j < k && !rc; j++)
         for (int m = 0; m < j && !rc; m++)
             if (same_pixels(&imgs[m], &imgs[j]))
                 rc = dp_fail(&err, "%s and %s hold the same pixel values: copies of one render, not independent "

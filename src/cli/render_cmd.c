@@ -121,6 +121,12 @@ int cli_render_cluster(int argc, char **argv, const render_cluster *cluster)
     render_request rq;
     const char **sets = calloc((size_t)argc + 1, sizeof(char *));
     int rc = parse_args(argc, argv, &rq, sets);
+    /* --reduce-every paces dartspp-mpi's reductions; one process has none (accepted, so that one command line
+     * serves both binaries, but said) */
+    for (int i = 0; !rc && !cluster && i < argc; i++)
+        if (!strcmp(argv[i], "--reduce-every"))
+            fprintf(stderr, "warning: --reduce-every has no effect in dartspp (one process: no reductions); it paces "
+                            "dartspp-mpi's\n");
     rc = rc ? render_run_refused(cluster, rc) : render_run(&rq, cluster);
     free(sets);
     return rc;

@@ -356,7 +356,11 @@ static int exr_open_read(const char *path, exr_stream *s, exr_context_t *ctx, dp
     init.flags = EXR_CONTEXT_FLAG_DISABLE_CHUNK_RECONSTRUCTION;
     exr_result_t rv = exr_start_read(ctx, path, &init);
     if (rv == EXR_OK) return 0;
-    int rc = fail_exr(err, DP_ERROR_INPUT, path, s, rv);
+    /* OpenEXR's own words for a file of another kind ("Unable to read magic and version flags") name no cause */
+    int rc = rv == EXR_ERR_FILE_BAD_HEADER || rv == EXR_ERR_READ_IO
+                 ? dp_fail_kind(err, DP_ERROR_INPUT, "%s: not an OpenEXR image (%s)", path,
+                                s->msg[0] ? s->msg : exr_get_default_error_message(rv))
+                 : fail_exr(err, DP_ERROR_INPUT, path, s, rv);
     if (*ctx) exr_finish(ctx);
     close(s->fd);
     return rc;

@@ -32,6 +32,8 @@ static int split_output_path(const char *path, char *stem, size_t n, const char 
     const char *slash = strrchr(path, '/');
     if (!dot || (slash && dot < slash) || (strcasecmp(dot, ".exr") && strcasecmp(dot, ".pfm")))
         return dp_fail(err, "%s: output must end in .exr or .pfm", path);
+    if (dot == path || (slash && dot == slash + 1)) /* ".exr": hidden files ".exr", "_cube.npy", ".state" */
+        return dp_fail(err, "%s: no file name before the extension (e.g. render.exr)", path);
     if ((size_t)(dot - path) + 32 >= n) return dp_fail(err, "%s: output path too long", path);
     snprintf(stem, n, "%.*s", (int)(dot - path), path);
     *ext = dot;

@@ -337,6 +337,42 @@ static void test_shipped_scenes_without_warnings(void **state)
         fail_msg("a --set key the path tracer ignores: expected its warning");
 }
 
+/* Messages that name their files (2026-11-28 probes 24, 27 of tests/campaign-48/driver.md): compare and merge of
+ * images of two sizes name both files (before: "compare: image is 2x1 but the reference is 1x1"); a file that
+ * is not OpenEXR says so (before: OpenEXR's "Unable to read magic and version flags"); an output with no name
+ * before its extension is refused (probe 11: before, hidden files ".exr", ".png" were written); --reduce-every
+ * on the one-process binary is said to have no effect (probe 23: before, accepted without a word). */
+static void test_messages_name_their_files(void **state)
+{
+    const char *d = *state;
+    char out[8192], a[700], w[700], g[700];
+    snprintf(a, sizeof a, "%s/two.pfm", d);
+    snprintf(w, sizeof w, "%s/one.pfm", d);
+    snprintf(g, sizeof g, "%s/garbage.exr", d);
+    write_pfm(a, 1.0f, 2.0f);
+    FILE *f = fopen(w, "wb");
+    assert_non_null(f);
+    fputs("PF\n1 1\n-1\n", f);
+    float v[3] = {1, 1, 1};
+    fwrite(v, sizeof(float), 3, f);
+    fclose(f);
+    test_write_file(g, "garbage, not an image");
+    int rc = run(out, sizeof out, "compare %s %s", a, w);
+    assert_refused_naming(rc, out, "two.pfm is 2x1", "one.pfm is 1x1");
+    rc = run(out, sizeof out, "merge %s/m.pfm %s %s", d, a, w);
+    assert_refused_naming(rc, out, "two.pfm", "one.pfm is 1x1");
+    rc = run(out, sizeof out, "compare %s %s", g, a);
+    assert_refused_naming(rc, out, "garbage.exr", "not an OpenEXR image");
+    rc = run(out, sizeof out, "render scenes/fogbox/fogbox.json " RENDER_ARGS " --output %s/.exr", d);
+    assert_refused_naming(rc, out, "/.exr", "no file name before the extension");
+    char hidden[800];
+    snprintf(hidden, sizeof hidden, "%s/.png", d);
+    assert_int_equal(access(hidden, F_OK), -1);
+    rc = run(out, sizeof out, "render scenes/fogbox/fogbox.json " RENDER_ARGS " --reduce-every 5 --output %s/r.exr", d);
+    assert_int_equal(rc, 0);
+    if (!strstr(out, "--reduce-every has no effect")) fail_msg("no word on --reduce-every: %s", out);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -347,6 +383,7 @@ int main(void)
         cmocka_unit_test_setup_teardown(test_scene_is_a_folder, setup_dir, test_teardown_tmpdir),
         cmocka_unit_test(test_help_and_version),
         cmocka_unit_test_setup_teardown(test_shipped_scenes_without_warnings, setup_dir, test_teardown_tmpdir),
+        cmocka_unit_test_setup_teardown(test_messages_name_their_files, setup_dir, test_teardown_tmpdir),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
