@@ -269,6 +269,19 @@ static void extras_room(int width, int height, int frame_count, int skip, double
     }
 }
 
+/* A render without frames writes only the gate image and its preview: the frame set of an earlier render to
+ * the same name (its manifest, frames, cube and viewer) stays beside them and does not belong to them. Said
+ * before the render, not removed (they are the user's files). */
+static void warn_older_frame_set(const char *stem, int frame_count)
+{
+    char manifest[OUTPUT_PATH_MAX + 32];
+    snprintf(manifest, sizeof manifest, "%s" ATOMIC_SET_MANIFEST, stem);
+    if (frame_count == 0 && access(manifest, F_OK) == 0)
+        fprintf(stderr, "warning: %s and the frames, cube and viewer it goes with are from an earlier render with "
+                        "frames; this render has none and leaves them as they are: they do not belong to its image\n",
+                manifest);
+}
+
 int render_outputs_check(const char *path, int width, int height, int frame_count, int skip, dp_error *err)
 {
     char stem[OUTPUT_PATH_MAX], dir[OUTPUT_PATH_MAX], probe[STAGED_PATH_MAX];
@@ -278,6 +291,7 @@ int render_outputs_check(const char *path, int width, int height, int frame_coun
     if (stat(path, &st) == 0 && S_ISDIR(st.st_mode)) return dp_fail(err, "%s: output is a folder", path);
     if (io_make_parent_dirs(path, err)) return -1;
     atomic_clean_stale(stem, say_note);
+    warn_older_frame_set(stem, frame_count);
     parent_dir(path, dir, sizeof dir);
     /* writability: create and remove a probe file where the outputs will go */
     snprintf(probe, sizeof probe, "%s/.dartspp-probe-XXXXXX", dir);

@@ -341,7 +341,8 @@ static void test_shipped_scenes_without_warnings(void **state)
  * images of two sizes name both files (before: "compare: image is 2x1 but the reference is 1x1"); a file that
  * is not OpenEXR says so (before: OpenEXR's "Unable to read magic and version flags"); an output with no name
  * before its extension is refused (probe 11: before, hidden files ".exr", ".png" were written); --reduce-every
- * on the one-process binary is said to have no effect (probe 23: before, accepted without a word). */
+ * on the one-process binary is said to have no effect (probe 23: before, accepted without a word); a render
+ * without frames over an older frame set says that set is not its own (probe 14: before, nothing). */
 static void test_messages_name_their_files(void **state)
 {
     const char *d = *state;
@@ -371,6 +372,14 @@ static void test_messages_name_their_files(void **state)
     rc = run(out, sizeof out, "render scenes/fogbox/fogbox.json " RENDER_ARGS " --reduce-every 5 --output %s/r.exr", d);
     assert_int_equal(rc, 0);
     if (!strstr(out, "--reduce-every has no effect")) fail_msg("no word on --reduce-every: %s", out);
+    /* probe 14: a render without frames over the name of an earlier frame set (whose manifest, frames, cube and
+     * viewer stay) says so; a render with frames replaces the set and says nothing */
+    const char *frames = "--set frame_num=2 --set start_time=6";
+    assert_int_equal(run(out, sizeof out, "render scenes/fogbox/fogbox.json " RENDER_ARGS " %s --output %s/f.exr", frames, d), 0);
+    assert_null(strstr(out, "from an earlier render with frames"));
+    assert_int_equal(run(out, sizeof out, "render scenes/fogbox/fogbox.json " RENDER_ARGS " --output %s/f.exr", d), 0);
+    if (!strstr(out, "f_frames.csv and the frames, cube and viewer it goes with are from an earlier render"))
+        fail_msg("no word on the older frame set: %s", out);
 }
 
 int main(void)
