@@ -146,17 +146,25 @@ static int resumable(const film *f, long dropped)
     return f->passes > 0 && dropped == 0;
 }
 
+/* What the state beside the outputs holds after a final write of the state that did not happen there. */
+static const char *state_on_disk(const render_run_job *j)
+{
+    if (access(j->state, F_OK) != 0) return "does not exist";
+    return j->cp.state_written || j->resumed.passes > 0 ? "holds fewer passes (an earlier write)"
+                                                        : "is that of an earlier render";
+}
+
 /* The final write failed and the images went to the rescue folder: the state goes with them (the one beside
  * the outputs holds only the last checkpoint's passes, if any), and the message says what is where. */
 static void rescue_state(const render_run_job *j, const film *f, const char *rescue)
 {
     const char *base = strrchr(j->state, '/');
-    char path[OUTPUT_PATH_MAX + 64], image[OUTPUT_PATH_MAX + 64];
+    char path[2 * OUTPUT_PATH_MAX + 64], image[2 * OUTPUT_PATH_MAX + 64];
     snprintf(path, sizeof path, "%s/%s", rescue, base ? base + 1 : j->state);
     const char *ibase = strrchr(j->out, '/');
     snprintf(image, sizeof image, "%s/%s", rescue, ibase ? ibase + 1 : j->out);
     dp_error err;
-    const char *old = j->cp.state_written || j->resumed.passes > 0 ? "holds fewer passes" : "does not exist";
+    const char *old = state_on_disk(j);
     if (resume_state_write(path, f, j->plan_json, j->cp.seed, j->digest, 1, &err))
         fprintf(stderr, "dartspp render: the images of the %ld completed passes were written to %s instead, but not "
                 "their checkpoint state (%s): they cannot be resumed; %s %s\n", f->passes, rescue, err.msg, j->state,
@@ -243,6 +251,7 @@ static int render_and_write(render_run_job *j)
     if (j->rank != 0) {
         /* nothing to write here: rank 0 holds the summed film */
     } else if (f.passes > 0) {
+        interrupt_writing(1);
         if (write_outputs(j, &f, st.dropped, &werr)) {
             if (!failed) {
                 err = werr;
@@ -254,13 +263,15 @@ static int render_and_write(render_run_job *j)
         } else if (j->cp.state && resume_state_write(j->cp.state, &f, j->plan_json, j->cp.seed, j->digest, 1, &werr)) {
             say_error(&werr, "");
             fprintf(stderr, "dartspp render: the images of the %ld passes were written, but not their checkpoint "
-                    "state: %s %s, and --resume will refuse it while the images hold more passes\n", f.passes,
-                    j->cp.state, j->cp.state_written || j->resumed.passes > 0 ? "holds fewer passes" : "does not exist");
+                    "state: %s %s (--resume from it is refused while an EXR image holds more passes, warned about for other "
+                    "formats)\n", f.passes,
+                    j->cp.state, state_on_disk(j));
             if (!failed) {
                 err = werr;
                 failed = 1;
             }
         }
+        interrupt_writing(0);
     } else if (st.interrupted)
         fprintf(stderr, "dartspp render: interrupted before the first pass completed: nothing written\n");
     film_free(&f);

@@ -147,5 +147,7 @@ void run_print_summary(const render_run_job *j, const render_stats *st);
 /* SIGINT and SIGTERM from here on (interrupt.c): the first one sets ro->stop once ro->passes_started is set
  * (the pass in progress is dropped, the completed passes are written), else the process exits at once. */
 void interrupt_install(render_options *ro);
+/* The final write of the completed passes begins (1) or ends (0): a second interrupt during it lets it finish. */
+void interrupt_writing(int on);
 
 #endif
