@@ -16,7 +16,8 @@
 
 #define DEMO "scenes/fogbox/fogbox.json"
 /* small photon counts: a pass takes a few tens of milliseconds under the sanitizers */
-#define ARGS " --set resolution=16 --set photon_count=20000 --set volume_photon_count=3000 --seed 11 --threads 2 --quiet"
+#define ARGS " --set resolution=16 --set photon_count=20000 --set volume_photon_count=3000 --seed 11 --threads 2" \
+             " --quiet"
 
 static int setup_dir(void **state)
 {
@@ -227,9 +228,9 @@ static void test_stale_state_refused(void **state)
     assert_int_equal(exr_passes(img), 7);
 }
 
-/* The output folder replaced by a file while a checkpointed render runs: the final write fails, the images and
- * the state go to the rescue folder, the message says so, and --resume from there continues it. Main wrote the
- * images there without the state. */
+/* The output folder replaced by a file while a resumed render runs (no checkpoints: nothing recreates the folder
+ * before the end): the final write fails, the images and the state go to the rescue folder, the message says
+ * so, and --resume from there continues it. Main wrote the images there without the state. */
 static void test_rescue_keeps_state(void **state)
 {
     const char *d = *state;
@@ -238,8 +239,11 @@ static void test_rescue_keeps_state(void **state)
     snprintf(o, sizeof o, "%s/renders/fog.exr", d);
     snprintf(tmp, sizeof tmp, "%s/tmp", d);
     assert_int_equal(mkdir(tmp, 0755), 0);
+    assert_int_equal(mkdir(folder, 0755), 0);
+    render_state(DEMO, folder, "fog", 1, "");
     const char *argv[] = {DARTSPP_BIN, "render", DEMO, "--set", "resolution=16", "--set", "photon_count=20000", "--set",
-                          "volume_photon_count=3000", "--seed", "11", "--threads", "1", "--time", "3", "--checkpoint", "0.2", "--quiet", "--output", o, NULL};
+                          "volume_photon_count=3000", "--seed", "11", "--threads", "1", "--time", "3", "--resume",
+                          "--quiet", "--output", o, NULL};
     child c;
     child_start(&c, d, argv, tmp, 0);
     usleep(1200000);
