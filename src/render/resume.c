@@ -267,8 +267,10 @@ int resume_overwrite_check(const char *path, long spp, dp_error *err)
     struct stat st;
     if (stat(path, &st) != 0) return 0;
     resume_state s;
-    dp_error ignored;
-    if (resume_state_read(path, 0, &s, &ignored)) return 0; /* not a state this version reads: replaced */
+    dp_error why;
+    if (resume_state_read(path, 0, &s, &why)) /* damaged, or of an older version: how many passes is unknown */
+        return dp_fail(err, "%s; this run would overwrite it, and the passes it holds are unknown: --overwrite "
+                       "replaces it", why.msg);
     long held = s.passes;
     resume_state_free(&s);
     if (held == 0 || (spp > 0 && held <= spp)) return 0;

@@ -103,7 +103,7 @@ void resume_state_free(resume_state *s);
  * spp > 0). */
 int resume_check(const resume_state *s, const char *path, const render_run_job *j, long spp, dp_error *err);
 /* Without --resume: refuses (-1 with err) when the state at path holds more passes than spp (or any, when
- * spp <= 0: the run's pass count is unknown). */
+ * spp <= 0: the run's pass count is unknown), or is damaged or of an older version (its passes unknown). */
 int resume_overwrite_check(const char *path, long spp, dp_error *err);
 
 /* ---- the state's lock (state_lock.c): "<stem>.state.lock", flock()ed while a run may write the state ---- */

@@ -273,9 +273,17 @@ static void test_stopped_before_any_reduction(void **state)
     char *log = read_text(c.log);
     print_message("  job stopped: mpirun exit %d\n", rc);
     int lie = strstr(log, "keeps the last reduction") != NULL, said = strstr(log, "cannot be resumed") != NULL;
+    int watchdog = strstr(log, "nothing was kept") != NULL;
     if (lie || !said) print_tail(log);
     free(log);
     assert_false(lie);
+    if (!file_exists(img)) {
+        /* on a loaded machine rank 0 may wait in the last collective past the watchdog's 0.3 s: then the
+         * job counts as stuck, and what it says must be that nothing was kept */
+        print_message("  the watchdog ended the job (a loaded machine): no image\n");
+        assert_true(watchdog);
+        return;
+    }
     assert_true(said);
     long passes = exr_passes(img);
     assert_true(passes > 0);
