@@ -43,7 +43,7 @@ static void on_signal(int sig)
     }
     stop_requested = 1;
     say("\ndartspp render: interrupted: stopping the pass in progress and writing the completed passes "
-        "(interrupt again to exit at once)\n");
+        "(interrupt again to exit at once; once the write has begun, it finishes first)\n");
 }
 
 void interrupt_install(render_options *ro)

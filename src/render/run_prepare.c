@@ -94,10 +94,14 @@ static int images_not_newer(const render_run_job *j, long state_passes, dp_error
                        "--overwrite does so, or move the images away", j->out, passes, j->state, state_passes);
     int newer = img.st_mtim.tv_sec > st.st_mtim.tv_sec ||
                 (img.st_mtim.tv_sec == st.st_mtim.tv_sec && img.st_mtim.tv_nsec > st.st_mtim.tv_nsec);
-    if (exr || newer) /* a warning even with --quiet: the images are about to be replaced */
-        fprintf(stderr, "warning: %s was written after its checkpoint state %s (%s): they may not hold the same "
-                "passes; resuming from the state's %ld passes and replacing the images\n", j->out, j->state,
-                exr ? "more passes, --overwrite" : "its format does not record its passes", state_passes);
+    /* a warning even with --quiet: the images are about to be replaced */
+    if (exr)
+        fprintf(stderr, "warning: %s holds %d passes, its checkpoint state %s only %ld: --overwrite: resuming from "
+                "the state's passes and replacing the images\n", j->out, passes, j->state, state_passes);
+    else if (newer)
+        fprintf(stderr, "warning: %s was written after its checkpoint state %s (its format does not record its "
+                "passes): they may not hold the same passes; resuming from the state's %ld passes and replacing "
+                "the images\n", j->out, j->state, state_passes);
     return 0;
 }
 
