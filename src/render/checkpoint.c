@@ -21,8 +21,9 @@ static int write_images(checkpoints *c, const film *f)
 static void write_state(checkpoints *c, const film *f)
 {
     dp_error werr;
-    if (resume_state_write(c->state, f, c->plan_json, c->seed, &werr))
+    if (resume_state_write(c->state, f, c->plan_json, c->seed, c->digest, 1, &werr))
         fprintf(stderr, "%swarning: checkpoint state not written: %s\n", line_start(), werr.msg);
+    else c->state_written = 1;
 }
 
 /* Several ranks: the state after a reduction whose film holds iterations 0..passes−1 exactly (no rank

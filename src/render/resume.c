@@ -7,18 +7,22 @@
  * resumed from the sums after N passes with the same plan and seed therefore adds exactly the passes
  * N, N+1, ... that the uninterrupted render adds, in the same order, to the same numbers.
  *
- * The file: a text header, then the raw sums in this machine's byte order.
- *   dartspp-state 1
+ * The file: a text header, then the raw sums in this machine's byte order, then the checksum of it all.
+ *   dartspp-state 3
  *   byte-order 0x0102030405060708       (the uint64 1 2 3 4 5 6 7 8, written as it lies in memory, in hex)
  *   seed S
  *   resolution W H
  *   frames F
+ *   orders K
+ *   scene geometry G materials M media E lights L camera C   (scene_digest.c, in hex)
  *   passes N
+ *   resumable 1|0                       (0: several ranks, one dropped a pass: not iterations 0..N−1)
  *   weight_sum %a   last_weight %a       (hexadecimal doubles: exact)
  *   nonfinite K
  *   plan_bytes L     then the plan's JSON (L bytes) and a newline
- *   data_bytes D     then D bytes: W·H·3 doubles (gate sums), F·W·H·3 floats (frame sums)
- *   checksum X       FNV-1a 64 of the data, in hex
+ *   data_bytes D     then D bytes: W·H·3 doubles (gate sums), layers·W·H·3 floats (frame and order sums)
+ *   checksum X       FNV-1a 64 of every byte before this line, in hex: an edited header field (a weight sum,
+ *                    a pass count, a seed) is as damaged as an edited sum, and is refused the same way
  */
 #include <errno.h>
 #include <inttypes.h>
@@ -29,7 +33,9 @@
 
 #include "run_internal.h"
 
-#define STATE_VERSION 2 /* 2: the line "orders N" and the order layers after the frames */
+#define STATE_VERSION 3 /* 3: the scene's digest, and the checksum over the whole file at its end */
+#define FNV_OFFSET 0xcbf29ce484222325ULL
+#define TRAILER_BYTES 28 /* "checksum 0x" + 16 hex digits + "\n" */
 
 static uint64_t fnv1a(uint64_t h, const void *p, size_t n)
 {
@@ -55,22 +61,53 @@ void resume_state_path(const char *out, char *path, size_t n)
 
 static size_t gate_count(int w, int h) { return (size_t)w * h * 3; }
 
-int resume_state_write(const char *path, const film *f, const char *plan_json, uint64_t seed, dp_error *err)
+/* Writes n bytes and adds them to the running checksum; 1 when the write failed. */
+static int put(FILE *o, uint64_t *h, const void *p, size_t n)
 {
+    *h = fnv1a(*h, p, n);
+    return fwrite(p, 1, n, o) != n;
+}
+
+/* The text header (up to the plan's JSON and the data_bytes line) in memory, so that it is checksummed as
+ * written. NULL when out of memory. */
+static char *header_text(const film *f, const char *plan_json, uint64_t seed, const uint64_t *digest, int resumable,
+                         size_t data, size_t *len)
+{
+    char *text = NULL;
+    FILE *m = open_memstream(&text, len);
+    if (!m) return NULL;
+    fprintf(m, "dartspp-state %d\nbyte-order 0x%016" PRIx64 "\nseed %" PRIu64 "\nresolution %d %d\nframes %d\n"
+            "orders %d\nscene", STATE_VERSION, byte_order_mark(), seed, f->width, f->height, f->window.frame_count,
+            f->window.orders);
+    for (int i = 0; i < SCENE_DIGEST_PARTS; i++) fprintf(m, " %s 0x%016" PRIx64, SCENE_DIGEST_NAMES[i], digest[i]);
+    fprintf(m, "\npasses %ld\nresumable %d\nweight_sum %a\nlast_weight %a\nnonfinite %ld\n", f->passes,
+            resumable ? 1 : 0, f->weight_sum, f->last_weight, f->nonfinite);
+    fprintf(m, "plan_bytes %zu\n%s\ndata_bytes %zu\n", strlen(plan_json), plan_json, data);
+    if (fclose(m)) {
+        free(text);
+        return NULL;
+    }
+    return text;
+}
+
+int resume_state_write(const char *path, const film *f, const char *plan_json, uint64_t seed, const uint64_t *digest,
+                       int resumable, dp_error *err)
+{
+    size_t n = gate_count(f->width, f->height), nf = n * (size_t)time_window_layers(&f->window), len = 0;
+    size_t data = n * sizeof(double) + nf * sizeof(float);
+    char *head = header_text(f, plan_json, seed, digest, resumable, data, &len);
+    if (!head) return dp_fail_kind(err, DP_ERROR_MEMORY, "%s: out of memory for the checkpoint state", path);
     atomic_file af;
     FILE *o = atomic_fopen(path, "wb", &af, err);
-    if (!o) return -1;
-    size_t n = gate_count(f->width, f->height), nf = n * (size_t)time_window_layers(&f->window);
-    size_t data = n * sizeof(double) + nf * sizeof(float);
-    uint64_t sum = fnv1a(0xcbf29ce484222325ULL, f->sum, n * sizeof(double));
-    if (nf) sum = fnv1a(sum, f->frame_sum, nf * sizeof(float));
-    fprintf(o, "dartspp-state %d\nbyte-order 0x%016" PRIx64 "\nseed %" PRIu64 "\nresolution %d %d\nframes %d\norders %d\n",
-            STATE_VERSION, byte_order_mark(), seed, f->width, f->height, f->window.frame_count, f->window.orders);
-    fprintf(o, "passes %ld\nweight_sum %a\nlast_weight %a\nnonfinite %ld\nchecksum 0x%016" PRIx64 "\n", f->passes,
-            f->weight_sum, f->last_weight, f->nonfinite, sum);
-    fprintf(o, "plan_bytes %zu\n%s\ndata_bytes %zu\n", strlen(plan_json), plan_json, data);
-    int failed = fwrite(f->sum, sizeof(double), n, o) != n;
-    if (!failed && nf) failed = fwrite(f->frame_sum, sizeof(float), nf, o) != nf;
+    if (!o) {
+        free(head);
+        return -1;
+    }
+    uint64_t h = FNV_OFFSET;
+    int failed = put(o, &h, head, len) || put(o, &h, f->sum, n * sizeof(double)) ||
+                 (nf && put(o, &h, f->frame_sum, nf * sizeof(float)));
+    free(head);
+    if (!failed) failed = fprintf(o, "checksum 0x%016" PRIx64 "\n", h) != TRAILER_BYTES;
     return atomic_fclose(&af, failed, err);
 }
 
@@ -82,13 +119,62 @@ void resume_state_free(resume_state *s)
     memset(s, 0, sizeof *s);
 }
 
+/* The trailer's checksum against every byte before it; *body: where the trailer starts. 0: intact; 1: not a
+ * state of this version (first line); 2: damaged or truncated. Leaves the file at its start. */
+static int check_whole_file(FILE *in, long *body)
+{
+    int version = 0;
+    if (fscanf(in, "dartspp-state %d", &version) != 1 || version != STATE_VERSION) return 1;
+    if (fseek(in, 0, SEEK_END)) return 2;
+    long size = ftell(in);
+    char tail[TRAILER_BYTES + 1] = {0};
+    uint64_t want = 0;
+    if (size < TRAILER_BYTES || fseek(in, size - TRAILER_BYTES, SEEK_SET) ||
+        fread(tail, 1, TRAILER_BYTES, in) != TRAILER_BYTES || sscanf(tail, "checksum 0x%16" SCNx64, &want) != 1 ||
+        tail[TRAILER_BYTES - 1] != '\n')
+        return 2;
+    rewind(in);
+    uint64_t h = FNV_OFFSET;
+    unsigned char buf[1 << 16];
+    for (long left = size - TRAILER_BYTES; left > 0;) {
+        size_t k = fread(buf, 1, left < (long)sizeof buf ? (size_t)left : sizeof buf, in);
+        if (k == 0) return 2;
+        h = fnv1a(h, buf, k);
+        left -= (long)k;
+    }
+    rewind(in);
+    *body = size - TRAILER_BYTES;
+    return h == want ? 0 : 2;
+}
+
+static int read_digest(FILE *in, uint64_t *digest)
+{
+    int at = -1;
+    if (fscanf(in, " scene%n", &at) < 0 || at < 0) return 0;
+    for (int i = 0; i < SCENE_DIGEST_PARTS; i++) {
+        char name[32];
+        if (fscanf(in, " %31s 0x%" SCNx64, name, &digest[i]) != 2 || strcmp(name, SCENE_DIGEST_NAMES[i])) return 0;
+    }
+    return 1;
+}
+
 int resume_state_read(const char *path, int with_data, resume_state *s, dp_error *err)
 {
     memset(s, 0, sizeof *s);
     FILE *in = fopen(path, "rb");
     if (!in) return dp_fail(err, "%s: cannot read the checkpoint state: %s", path, strerror(errno));
+    long body = 0;
+    int whole = check_whole_file(in, &body);
+    if (whole) {
+        fclose(in);
+        if (whole == 1)
+            return dp_fail(err, "%s: not a dartspp checkpoint state of version %d (an older dartspp wrote it, or it "
+                           "is another file): cannot resume from it", path, STATE_VERSION);
+        return dp_fail(err, "%s: the checkpoint state is damaged: its checksum does not match its contents (a byte "
+                       "was changed, or the file was cut short): cannot resume from it", path);
+    }
     int version = 0;
-    uint64_t bom = 0, checksum = 0;
+    uint64_t bom = 0;
     size_t plan_bytes = 0, data_bytes = 0;
     int ok = fscanf(in, "dartspp-state %d", &version) == 1 && version == STATE_VERSION &&
              fscanf(in, " byte-order 0x%" SCNx64, &bom) == 1 && bom == byte_order_mark() &&
@@ -96,11 +182,12 @@ int resume_state_read(const char *path, int with_data, resume_state *s, dp_error
              fscanf(in, " resolution %d %d", &s->width, &s->height) == 2 && s->width > 0 && s->height > 0 &&
              fscanf(in, " frames %d", &s->frames) == 1 && s->frames >= 0 &&
              fscanf(in, " orders %d", &s->orders) == 1 && s->orders >= 0 && s->orders <= 64 &&
+             read_digest(in, s->digest) &&
              fscanf(in, " passes %ld", &s->passes) == 1 && s->passes >= 0 &&
+             fscanf(in, " resumable %d", &s->resumable) == 1 && (s->resumable == 0 || s->resumable == 1) &&
              fscanf(in, " weight_sum %la", &s->weight_sum) == 1 &&
              fscanf(in, " last_weight %la", &s->last_weight) == 1 &&
              fscanf(in, " nonfinite %ld", &s->nonfinite) == 1 &&
-             fscanf(in, " checksum 0x%" SCNx64, &checksum) == 1 &&
              fscanf(in, " plan_bytes %zu", &plan_bytes) == 1 && plan_bytes < (1u << 24) && fgetc(in) == '\n';
     if (ok && (s->plan = malloc(plan_bytes + 1)) != NULL) {
         ok = fread(s->plan, 1, plan_bytes, in) == plan_bytes && fgetc(in) == '\n';
@@ -109,7 +196,7 @@ int resume_state_read(const char *path, int with_data, resume_state *s, dp_error
     time_window layers = {.frame_count = s->frames, .orders = s->orders};
     size_t n = ok ? gate_count(s->width, s->height) : 0, nf = n * (size_t)time_window_layers(&layers);
     ok = ok && fscanf(in, "data_bytes %zu", &data_bytes) == 1 && fgetc(in) == '\n' &&
-         data_bytes == n * sizeof(double) + nf * sizeof(float);
+         data_bytes == n * sizeof(double) + nf * sizeof(float) && ftell(in) + (long)data_bytes == body;
     if (ok && with_data) {
         s->sum = malloc(n * sizeof(double));
         s->frame_sum = nf ? malloc(nf * sizeof(float)) : NULL;
@@ -118,21 +205,13 @@ int resume_state_read(const char *path, int with_data, resume_state *s, dp_error
             resume_state_free(s);
             return dp_fail_kind(err, DP_ERROR_MEMORY, "%s: out of memory for the checkpoint state", path);
         }
-        ok = fread(s->sum, sizeof(double), n, in) == n && (!nf || fread(s->frame_sum, sizeof(float), nf, in) == nf) &&
-             fgetc(in) == EOF;
-        uint64_t h = fnv1a(0xcbf29ce484222325ULL, s->sum, n * sizeof(double));
-        if (ok && nf) h = fnv1a(h, s->frame_sum, nf * sizeof(float));
-        if (ok && h != checksum) {
-            fclose(in);
-            resume_state_free(s);
-            return dp_fail(err, "%s: the checkpoint state is damaged (checksum mismatch)", path);
-        }
+        ok = fread(s->sum, sizeof(double), n, in) == n && (!nf || fread(s->frame_sum, sizeof(float), nf, in) == nf);
     }
     fclose(in);
     if (!ok) {
         resume_state_free(s);
-        return dp_fail(err, "%s: not a dartspp checkpoint state of version %d written on a machine of this byte "
-                       "order, or truncated", path, STATE_VERSION);
+        return dp_fail(err, "%s: the checkpoint state (version %d, its checksum intact) is not one this machine "
+                       "reads: another byte order, or fields out of range", path, STATE_VERSION);
     }
     return 0;
 }
@@ -148,6 +227,10 @@ static void plan_difference(const char *a, const char *b, char *out, size_t n)
 
 int resume_check(const resume_state *s, const char *path, const render_run_job *j, long spp, dp_error *err)
 {
+    if (!s->resumable)
+        return dp_fail(err, "%s: the checkpoint holds the %ld passes of a render in which a rank dropped a pass: not "
+                       "the passes 0..%ld a resume continues from: cannot resume (--overwrite renders anew)", path,
+                       s->passes, s->passes - 1);
     if (s->seed != j->ro.seed)
         return dp_fail(err, "%s: the checkpoint was rendered with seed %" PRIu64 ", this run has seed %" PRIu64
                        " (--seed): cannot resume", path, s->seed, j->ro.seed);
@@ -160,6 +243,14 @@ int resume_check(const resume_state *s, const char *path, const render_run_job *
     if (s->orders != j->p.window.orders)
         return dp_fail(err, "%s: the checkpoint has %d scattering-order layers, this run %d (integrator.bounce_orders): "
                        "cannot resume", path, s->orders, j->p.window.orders);
+    char parts[128] = "";
+    for (int i = 0; i < SCENE_DIGEST_PARTS; i++)
+        if (s->digest[i] != j->digest[i])
+            snprintf(parts + strlen(parts), sizeof parts - strlen(parts), "%s%s", parts[0] ? ", " : "",
+                     SCENE_DIGEST_NAMES[i]);
+    if (parts[0])
+        return dp_fail(err, "%s: the checkpoint was rendered from another scene (this run's scene differs in: %s): "
+                       "its sums would be blended into this scene's image: cannot resume", path, parts);
     if (strcmp(s->plan, j->plan_json)) {
         char diff[256];
         plan_difference(s->plan, j->plan_json, diff, sizeof diff);
@@ -176,8 +267,10 @@ int resume_overwrite_check(const char *path, long spp, dp_error *err)
     struct stat st;
     if (stat(path, &st) != 0) return 0;
     resume_state s;
-    dp_error ignored;
-    if (resume_state_read(path, 0, &s, &ignored)) return 0; /* not a state this version reads: replaced */
+    dp_error why;
+    if (resume_state_read(path, 0, &s, &why)) /* damaged, or of an older version: how many passes is unknown */
+        return dp_fail(err, "%s; this run would overwrite it, and the passes it holds are unknown: --overwrite "
+                       "replaces it", why.msg);
     long held = s.passes;
     resume_state_free(&s);
     if (held == 0 || (spp > 0 && held <= spp)) return 0;

@@ -139,9 +139,45 @@ static int write_ground_truth(const render_run_job *j, dp_error *err)
     return rc;
 }
 
+/* Whether the film may be written as the checkpoint state: this process alone, or several ranks none of which
+ * dropped a pass (only then are the sums iterations 0..passes−1, which a resume needs). */
+static int resumable(const film *f, long dropped)
+{
+    return f->passes > 0 && dropped == 0;
+}
+
+/* What the state beside the outputs holds after a final write of the state that did not happen there. */
+static const char *state_on_disk(const render_run_job *j)
+{
+    if (access(j->state, F_OK) != 0) return "does not exist";
+    return j->cp.state_written || j->resumed.passes > 0 ? "holds fewer passes (an earlier write)"
+                                                        : "is that of an earlier render";
+}
+
+/* The final write failed and the images went to the rescue folder: the state goes with them (the one beside
+ * the outputs holds only the last checkpoint's passes, if any), and the message says what is where. */
+static void rescue_state(const render_run_job *j, const film *f, const char *rescue)
+{
+    const char *base = strrchr(j->state, '/');
+    char path[2 * OUTPUT_PATH_MAX + 64], image[2 * OUTPUT_PATH_MAX + 64];
+    snprintf(path, sizeof path, "%s/%s", rescue, base ? base + 1 : j->state);
+    const char *ibase = strrchr(j->out, '/');
+    snprintf(image, sizeof image, "%s/%s", rescue, ibase ? ibase + 1 : j->out);
+    dp_error err;
+    const char *old = state_on_disk(j);
+    if (resume_state_write(path, f, j->plan_json, j->cp.seed, j->digest, 1, &err))
+        fprintf(stderr, "dartspp render: the images of the %ld completed passes were written to %s instead, but not "
+                "their checkpoint state (%s): they cannot be resumed; %s %s\n", f->passes, rescue, err.msg, j->state,
+                old);
+    else
+        fprintf(stderr, "dartspp render: the images of the %ld completed passes and their checkpoint state were "
+                "written to %s instead (%s %s): continue with --resume --output %s\n", f->passes, rescue, j->state,
+                old, image);
+}
+
 /* The completed passes to the output, or to a rescue folder when that fails: finished work is never thrown
  * away. 0, or -1 with err (the write that failed) when the images had to go elsewhere, or nowhere. */
-static int write_outputs(const render_run_job *j, const film *f, dp_error *err)
+static int write_outputs(const render_run_job *j, const film *f, long dropped, dp_error *err)
 {
     const char *integrator = j->p.type_name;
     int skip = j->rq->skip;
@@ -152,10 +188,32 @@ static int write_outputs(const render_run_job *j, const film *f, dp_error *err)
     dp_error rescue_err = *err;
     if (render_write_rescue(f, j->out, integrator, j->plan_json, skip, print_written, rescue, sizeof rescue, &rescue_err))
         fprintf(stderr, "dartspp render: no rescue folder took the images either (%s): they are lost\n", rescue_err.msg);
+    else if (j->cp.state && resumable(f, dropped))
+        rescue_state(j, f, rescue);
     else
         fprintf(stderr, "dartspp render: the images of the %ld completed passes were written to %s instead\n",
                 f->passes, rescue);
     return -1;
+}
+
+/* Several ranks, after a render in which a rank dropped a pass: the images were written, but the final film
+ * is not a prefix of iterations and cannot be the state. What the state on disk holds, truly. */
+static void say_kept_state(const render_run_job *j, const film *f)
+{
+    if (j->cp.state_written)
+        fprintf(stderr, "dartspp render: %s keeps the last reduction in which every rank had finished its passes "
+                "(fewer than the %ld passes of the images): --resume continues from it\n", j->cp.state, f->passes);
+    else if (j->resumed.passes > 0)
+        fprintf(stderr, "dartspp render: %s still holds the %ld passes this run resumed from (no reduction of this "
+                "run had every rank's passes; the images hold %ld)\n", j->cp.state, j->resumed.passes, f->passes);
+    else {
+        /* a state that cannot be resumed, so that the next run does not replace the images without a word */
+        dp_error err;
+        int kept = !resume_state_write(j->cp.state, f, j->plan_json, j->cp.seed, j->digest, 0, &err);
+        fprintf(stderr, "dartspp render: no reduction had every rank's passes (--reduce-every sets how often they "
+                "are taken): the images hold %ld passes that cannot be resumed%s\n", f->passes,
+                kept ? "; a new run to the same output refuses to replace them without --overwrite" : "");
+    }
 }
 
 /* Several ranks, a collective call failed (an MPI that reports a lost rank instead of ending the job): the
@@ -193,22 +251,27 @@ static int render_and_write(render_run_job *j)
     if (j->rank != 0) {
         /* nothing to write here: rank 0 holds the summed film */
     } else if (f.passes > 0) {
-        if (write_outputs(j, &f, &werr)) {
+        interrupt_writing(1);
+        if (write_outputs(j, &f, st.dropped, &werr)) {
             if (!failed) {
                 err = werr;
                 failed = 1;
             }
         } else if (j->cp.state && st.dropped > 0) {
             /* several ranks, some of which dropped a pass: not iterations 0..N−1, which a resume needs */
-            fprintf(stderr, "dartspp render: %s keeps the last reduction in which every rank had finished its "
-                    "passes\n", j->cp.state);
-        } else if (j->cp.state && resume_state_write(j->cp.state, &f, j->plan_json, j->cp.seed, &werr)) {
-            say_error(&werr, " (the checkpoint state; the images were written)");
+            say_kept_state(j, &f);
+        } else if (j->cp.state && resume_state_write(j->cp.state, &f, j->plan_json, j->cp.seed, j->digest, 1, &werr)) {
+            say_error(&werr, "");
+            fprintf(stderr, "dartspp render: the images of the %ld passes were written, but not their checkpoint "
+                    "state: %s %s (--resume from it is refused while an EXR image holds more passes, warned about for other "
+                    "formats)\n", f.passes,
+                    j->cp.state, state_on_disk(j));
             if (!failed) {
                 err = werr;
                 failed = 1;
             }
         }
+        interrupt_writing(0);
     } else if (st.interrupted)
         fprintf(stderr, "dartspp render: interrupted before the first pass completed: nothing written\n");
     film_free(&f);

@@ -3,6 +3,8 @@
  * its cause (exit 2): nothing has been rendered yet. */
 #include <stdio.h>
 #include <string.h>
+#include <strings.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include "run_internal.h"
@@ -38,6 +40,7 @@ static int load_scene(render_run_job *j, dp_error *err)
     double t0 = dp_seconds();
     if (scene_load(rq->scene_path, &lo, &j->s, err)) return -1;
     j->load_seconds = dp_seconds() - t0;
+    scene_digest(&j->s, j->digest);
     return 0;
 }
 
@@ -73,6 +76,36 @@ static void set_up_checkpoints(render_run_job *j)
                           .every = j->rank != 0 ? 0 : rq->checkpoint >= 0 ? rq->checkpoint : j->p.checkpoint_interval};
 }
 
+/* --resume: the images at the output must not hold more passes than the state (a run that wrote its images
+ * but not its state: a full disk, a rescue folder, a render without checkpoints after the checkpointed one);
+ * resuming would render over them from fewer passes. EXR images record their passes; other formats only their
+ * time, and an image written after the state is then said aloud. Refused unless --overwrite. */
+static int images_not_newer(const render_run_job *j, long state_passes, dp_error *err)
+{
+    struct stat img, st;
+    if (stat(j->out, &img) != 0 || stat(j->state, &st) != 0) return 0;
+    int passes = 0;
+    dp_error ignored;
+    const char *dot = strrchr(j->out, '.');
+    int exr = dot && !strcasecmp(dot, ".exr") && !exr_read_int_attribute(j->out, "dartspp.passes", &passes, &ignored);
+    if (exr && passes <= state_passes) return 0;
+    if (exr && !j->rq->overwrite)
+        return dp_fail(err, "%s holds %d passes but its checkpoint state %s only %ld (the state was not written "
+                       "with the images): --resume would render over them from the older passes; --resume "
+                       "--overwrite does so, or move the images away", j->out, passes, j->state, state_passes);
+    int newer = img.st_mtim.tv_sec > st.st_mtim.tv_sec ||
+                (img.st_mtim.tv_sec == st.st_mtim.tv_sec && img.st_mtim.tv_nsec > st.st_mtim.tv_nsec);
+    /* a warning even with --quiet: the images are about to be replaced */
+    if (exr)
+        fprintf(stderr, "warning: %s holds %d passes, its checkpoint state %s only %ld: --overwrite: resuming from "
+                "the state's passes and replacing the images\n", j->out, passes, j->state, state_passes);
+    else if (newer)
+        fprintf(stderr, "warning: %s was written after its checkpoint state %s (its format does not record its "
+                "passes): they may not hold the same passes; resuming from the state's %ld passes and replacing "
+                "the images\n", j->out, j->state, state_passes);
+    return 0;
+}
+
 /* The checkpoint state beside the outputs (resume.c), rank 0's: with --resume it is loaded into j->resumed and
  * must fit this run; without, a state holding more passes than this run renders is not overwritten unless
  * --overwrite. This process alone writes it at checkpoints and, with checkpoints or --resume, at the end;
@@ -86,6 +119,11 @@ static int set_up_state(render_run_job *j, dp_error *err)
     if (j->cl || j->cp.every > 0 || rq->resume) { /* --resume alone: the final write updates it */
         j->cp.state = j->state;
         j->cp.seed = rq->seed;
+        j->cp.digest = j->digest;
+        /* before the state is read: the run holding it may be about to replace it */
+        snprintf(j->lock, sizeof j->lock, "%s.lock", j->state);
+        if (state_lock_take(j->lock, j->state, &j->lock_fd, err)) return -1;
+        j->locked = 1;
     }
     long spp = rq->spp >= 0 ? rq->spp : j->p.spp;
     if (!rq->resume) return rq->overwrite ? 0 : resume_overwrite_check(j->state, spp, err);
@@ -99,6 +137,7 @@ static int set_up_state(render_run_job *j, dp_error *err)
     resume_state_free(&st);
     if (rc || resume_state_read(j->state, 1, &st, err)) return -1;
     rc = resume_check(&st, j->state, j, spp, err); /* the same file, unless replaced in between */
+    if (!rc) rc = images_not_newer(j, st.passes, err);
     if (!rc) rc = film_init(&j->resumed, st.width, st.height, &j->p.window, err);
     if (!rc) {
         size_t n = (size_t)st.width * st.height * 3;
@@ -136,6 +175,8 @@ int run_prepare(render_run_job *j, dp_error *err)
         rc = set_up_state(j, err) || open_error_log(j, err);
     }
     if (rc) {
+        if (j->locked) state_lock_release(j->lock, j->lock_fd);
+        j->locked = 0;
         film_free(&j->resumed);
         plan_free(&j->p);
         scene_free(&j->s);
@@ -149,6 +190,8 @@ void run_release(render_run_job *j)
 {
     if (!j->prepared) return;
     error_log_close(j->cp.log);
+    if (j->locked) state_lock_release(j->lock, j->lock_fd);
+    j->locked = 0;
     film_free(&j->resumed);
     plan_free(&j->p);
     scene_free(&j->s);

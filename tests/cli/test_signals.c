@@ -281,11 +281,13 @@ static void test_sigkill_during_frame_write(void **state)
     assert_true(old_sets >= 1); /* the kills did land inside writes */
 }
 
-/* A second interrupt during the write of the outputs means "exit now": the process ends at once, and the
- * temporary file of the write in progress and the staging folder go with it, the previous set staying as it
- * was. Round 0 writes a set and measures the write; rounds 1-3 interrupt twice at 15, 30 and 45 % of it.
- * Before: the temporary files of the frame and the cube being written were left behind. */
-static void test_second_interrupt_during_write(void **state)
+/* Interrupts during the write of the outputs: the first stops nothing (the passes are done), a second lets the
+ * write finish (issue 48: it used to exit with nothing written; tests/render/test_state_integrity.c), and a
+ * third means "exit now": the process ends at once, and the temporary file of the write in progress and the
+ * staging folder go with it, the previous set staying as it was. Round 0 writes a set and measures the write;
+ * rounds 1-3 interrupt three times at 15, 30 and 45 % of it. Before issue 48 two interrupts did this; before
+ * that, the temporary files of the frame and the cube being written were left behind. */
+static void test_interrupts_during_write(void **state)
 {
     const char *d = *state;
     char o[600], frames_s[32];
@@ -318,15 +320,16 @@ static void test_second_interrupt_during_write(void **state)
         }
         double delay = write_s * 0.15 * round;
         usleep((useconds_t)(delay * 1e6));
-        kill(c.pid, SIGINT);
-        usleep(20000);
-        kill(c.pid, SIGINT);
+        for (int k = 0; k < 3; k++) {
+            if (k) usleep(20000);
+            kill(c.pid, SIGINT);
+        }
         int rc = child_wait(&c, EXIT_BOUND_S * 4, NULL);
         char *log = read_text(c.log);
         int now = strstr(log, "exiting now") != NULL;
         free(log);
         int n = count_named(d, ".tmp.") + count_named(d, ".set.");
-        print_message("  two interrupts %.2f s into the write: exit %d, %d temporary entries left\n", delay, rc, n);
+        print_message("  three interrupts %.2f s into the write: exit %d, %d temporary entries left\n", delay, rc, n);
         assert_true(rc == 130 || rc == 0); /* 0: the write ended before the interrupts */
         if (rc == 130) {
             assert_true(now);
@@ -381,7 +384,7 @@ int main(void)
         cmocka_unit_test_setup_teardown(test_sighup_writes_completed_passes, setup_dir, test_teardown_tmpdir),
         cmocka_unit_test_setup_teardown(test_file_size_limit, setup_dir, test_teardown_tmpdir),
         cmocka_unit_test_setup_teardown(test_file_size_limit_merge, setup_dir, test_teardown_tmpdir),
-        cmocka_unit_test_setup_teardown(test_second_interrupt_during_write, setup_dir, test_teardown_tmpdir),
+        cmocka_unit_test_setup_teardown(test_interrupts_during_write, setup_dir, test_teardown_tmpdir),
         cmocka_unit_test_setup_teardown(test_sigkill_during_frame_write, setup_dir, test_teardown_tmpdir),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -5,7 +5,8 @@
  * one-process render of K passes within the bound of tests/cluster/test_mpi.c (the gate image's sums are doubles
  * added in another order: 2 float ulps); a one-process state with frames resumes under 3 ranks the same
  * way (frames within 2K ulps); a rank killed before the first reduction leaves nothing and the message says
- * so. Rank 0 exits with status 4 in both (each rank runs in a shell that prints its status: mpirun reports
+ * so; a job stopped before the first reduction says that its images cannot be resumed and the next render
+ * does not replace them silently. Rank 0 exits with status 4 in the first two (each rank runs in a shell that prints its status: mpirun reports
  * the killed rank's). The release binaries. */
 #include "child_process.h"
 #include "fixtures.h"
@@ -254,12 +255,54 @@ static void test_killed_before_any_reduction(void **state)
     assert_false(file_exists(img));
 }
 
+/* The job stopped (SIGTERM to mpirun, as Ctrl-C or a batch system's end does) before the first periodic
+ * reduction: every rank drops its pass, so the final reduction is not iterations 0..N−1 and cannot be resumed.
+ * The message says so (main claimed "x.state keeps the last reduction..." with no state on disk), and the next
+ * render to the same output refuses to replace the images without --overwrite (main replaced them). */
+static void test_stopped_before_any_reduction(void **state)
+{
+    (void)state;
+    char img[600], cmd[2048], out[16384];
+    snprintf(img, sizeof img, "%s/stopped.exr", cbox_dir);
+    child c;
+    start_three(&c, "stopped", "30");
+    if (!log_wait_for(&c, "cluster: 3 ranks", 20)) fail_msg("the job did not start");
+    usleep(1500000);
+    kill(c.pid, SIGTERM);
+    int rc = child_wait(&c, 20, NULL);
+    char *log = read_text(c.log);
+    print_message("  job stopped: mpirun exit %d\n", rc);
+    int lie = strstr(log, "keeps the last reduction") != NULL, said = strstr(log, "cannot be resumed") != NULL;
+    int watchdog = strstr(log, "nothing was kept") != NULL;
+    if (lie || !said) print_tail(log);
+    free(log);
+    assert_false(lie);
+    if (!file_exists(img)) {
+        /* on a loaded machine rank 0 may wait in the last collective past the watchdog's 0.3 s: then the
+         * job counts as stuck, and what it says must be that nothing was kept */
+        print_message("  the watchdog ended the job (a loaded machine): no image\n");
+        assert_true(watchdog);
+        return;
+    }
+    assert_true(said);
+    long passes = exr_passes(img);
+    assert_true(passes > 0);
+    snprintf(cmd, sizeof cmd, ONE_BIN " render %s/box.json " SETS " --spp 1 --quiet --output %s", cbox_dir, img);
+    rc = test_run(cmd, out, sizeof out);
+    print_message("  the next render of 1 pass: exit %d: ", rc);
+    print_tail(out);
+    assert_int_equal(rc, 2);
+    assert_non_null(strstr(out, "--overwrite"));
+    assert_int_equal(exr_passes(img), passes);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_killed_rank_keeps_last_reduction),
         cmocka_unit_test(test_one_process_state_resumes_on_ranks),
         cmocka_unit_test(test_killed_before_any_reduction),
+        cmocka_unit_test(test_stopped_before_any_reduction),
     };
     return cmocka_run_group_tests(tests, setup_cbox_fog40, teardown_cbox_fog);
 }
