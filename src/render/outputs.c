@@ -363,7 +363,8 @@ static int list_outputs(file_list *l, const char *path, const scene *s, const re
     if (split_output_path(path, stem, sizeof stem, &ext, err)) return -1;
     const time_window *tw = &p->window;
     int fail = list_add(l, "the image", "%s", path) || list_add(l, "the preview", "%s.png", stem) ||
-               list_add(l, "the checkpoint state", "%s.state", stem);
+               list_add(l, "the checkpoint state", "%s.state", stem) ||
+               list_add(l, "the checkpoint state's lock", "%s.state.lock", stem);
     for (int k = 0; k < tw->frame_count && !fail; k++) {
         char frame[STAGED_PATH_MAX];
         frame_path(frame, sizeof frame, stem, tw->frame_count, k, ext);
