@@ -1,0 +1,529 @@
+/* tier: stress */
+/* Integrators that check each other (issue 48, item 5): a differential fuzz tier. A seeded generator draws
+ * small random scenes (16 × 16 pixels) from the object types and the key table -- an open floor, a box open
+ * towards the camera or a closed box with the camera inside; no medium, fog everywhere (the camera in it) or a
+ * fog cube (the camera inside or outside it), σs and σa per channel and a Henyey–Greenstein g in (−0.9, 0.9);
+ * one light of every type (point, spot, area quad, sphere and disk, collimated beams of radius > 0 parallel or
+ * diverging, a diverging radius-0 beam, the radius-0 parallel beam and `directional_point`), inside or outside
+ * the fog, its `ext_medium` always set to where it is; an object of every BSDF model (lambert, conductor,
+ * rough conductor, dielectric with and without refraction, rough dielectric, plastic, rough plastic); box and
+ * Gaussian pulses; steady state, a wide gate, a narrow gate or frames; camera-warped or unwarped time. Each
+ * scene is rendered by the plain path tracer and by photon points, baseline and DARTS (enable_guiding,
+ * enable_elliptical), with independent seeds, and the image mean per channel of the gate image and of every
+ * frame must agree (diff_compare below states the bound and its bias budget). A scene where the integrators may
+ * legitimately disagree (a delta BSDF with a light the path tracer cannot connect through it: caustics; a
+ * radius-0 parallel beam, which the path tracer cannot reach) is not compared: the path tracer's warnings
+ * before the render must name the reason.
+ *
+ * One line per scene: its index, description, per method the channel-mean image mean and its standard error,
+ * and the largest z. make test runs DIFF_SCENES scenes, DARTSPP_STRESS=full (make stress) DIFF_STRESS_SCENES.
+ * DARTSPP_DIFF_ONLY=i runs scene i alone (with the threshold of the whole run, so that its verdict is the
+ * run's); DARTSPP_DIFF_KEEP=folder writes its three scene files there (diff-<i>-<method>.json) for
+ * `dartspp render`.
+ *
+ * Broken variants (tests/README.md quotes them): see the note at diff_compare. */
+#include "fixtures.h"
+#include "render_fixtures.h"
+
+#include <math.h>
+#include <stdarg.h>
+#include <time.h>
+
+#include "dartspp/plan.h"
+#include "dartspp/render.h"
+
+#define DIFF_SCENES 30
+#define DIFF_STRESS_SCENES 300
+#define DIFF_SEED 48u
+#define DIFF_RES 16
+#define DIFF_ALPHA 0.01 /* family-wise false-alarm rate of a run: Bonferroni over all its comparisons */
+
+/* ---- random numbers: a scene's stream depends on its index only, so DARTSPP_DIFF_ONLY reproduces it ---- */
+
+static uint64_t rng_s;
+static uint32_t rnd(void)
+{
+    rng_s = rng_s * 6364136223846793005ULL + 1442695040888963407ULL;
+    return (uint32_t)(rng_s >> 33);
+}
+static int pick(int n) { return (int)(rnd() % (uint32_t)n); }
+static double unif(double a, double b) { return a + (b - a) * ((rnd() + 0.5) / 4294967296.0); }
+
+/* ---- a scene as drawn ---- */
+
+enum { GEO_OPEN, GEO_BOX, GEO_CLOSED, GEO_N };
+enum { FOG_NONE, FOG_ALL, FOG_CUBE, FOG_N };
+enum { L_POINT, L_SPOT, L_QUAD, L_SPHERE, L_DISK, L_BEAM, L_BEAM_DIV, L_PENCIL_DIV, L_PENCIL, L_DIRPOINT, L_N };
+enum { B_LAMBERT, B_CONDUCTOR, B_ROUGH_CONDUCTOR, B_DIELECTRIC, B_DIELECTRIC_NOREFR, B_ROUGH_DIELECTRIC,
+       B_PLASTIC, B_ROUGH_PLASTIC, B_N };
+enum { T_STEADY, T_WIDE, T_NARROW, T_FRAMES, T_N };
+enum { M_PT, M_BASE, M_DARTS, M_N };
+
+static const char *const geo_name[GEO_N] = {"open", "box", "closed"};
+static const char *const fog_name[FOG_N] = {"vacuum", "fog-all", "fog-cube"};
+static const char *const light_name[L_N] = {"point", "spot", "quad", "sphere", "disk", "beam",
+                                             "beam-div", "pencil-div", "pencil", "directional_point"};
+static const char *const bsdf_name[B_N] = {"lambert", "conductor", "rough_conductor", "dielectric",
+                                           "dielectric-norefr", "rough_dielectric", "plastic", "rough_plastic"};
+static const char *const time_name[T_N] = {"steady", "wide", "narrow", "frames"};
+static const char *const method_name[M_N] = {"pt", "base", "darts"};
+
+/* The fog cube is centred at CUBE_Y above the floor; a light at LIGHT_IN_Y is inside the small cube, one at
+ * LIGHT_OUT_Y outside it (with the margins of a 0.1 sphere and a 0.3 beam disc), the object stays below it. */
+#define CUBE_Y 1.1
+#define CUBE_SMALL 1.2
+#define CUBE_LARGE 2.6
+#define LIGHT_IN_Y 1.3
+#define LIGHT_OUT_Y 1.85
+
+typedef struct {
+    int geo, fog, light, bsdf, time, unwarp, pulse, max_bounces, frames;
+    double cube, ss[3], sa[3], g, lx, ly, lz, power, pulse_width;
+    double cone, cone_delta, beam_r, divergence, roughness, ior;
+    double center, width, start;           /* the gate, or the frames' start and width */
+    double r_vol, r_surf, alpha;           /* photon points' kernels */
+    int cam_in_fog, light_in_fog;
+} dscene;
+
+static int light_is_area(int l) { return l == L_QUAD || l == L_SPHERE || l == L_DISK; }
+static int bsdf_has_delta(int b) { return b == B_CONDUCTOR || b == B_DIELECTRIC || b == B_DIELECTRIC_NOREFR || b == B_PLASTIC; }
+
+/* Where the camera and the light are, and so which medium each starts in: set from the drawn layout. */
+static void place(dscene *d)
+{
+    double h = d->cube / 2;
+    int light_in_cube = fabs(d->lx) < h && fabs(d->ly - CUBE_Y) < h && fabs(d->lz) < h;
+    d->cam_in_fog = d->fog == FOG_ALL || (d->fog == FOG_CUBE && d->geo == GEO_CLOSED && d->cube == CUBE_LARGE);
+    d->light_in_fog = d->fog == FOG_ALL || (d->fog == FOG_CUBE && light_in_cube);
+}
+
+static void draw_time(dscene *d)
+{
+    d->time = pick(T_N);
+    d->unwarp = pick(2);
+    d->pulse = pick(3); /* delta, box, gaussian */
+    d->pulse_width = d->pulse ? unif(0.2, 1.0) : 0;
+    /* path lengths run from about 2 (camera inside the box) to about 12; unwarped times are shorter */
+    double c0 = d->unwarp ? 3.0 : 5.0;
+    if (d->time == T_WIDE) d->center = c0 + unif(0, 2), d->width = 6;
+    if (d->time == T_NARROW) d->center = c0 + unif(0, 2), d->width = 1.5;
+    if (d->time == T_FRAMES) d->start = c0 - 1.5 + unif(0, 1), d->width = 1.5, d->frames = 2 + pick(2);
+}
+
+static void draw_light(dscene *d)
+{
+    d->light = pick(L_N);
+    d->lx = unif(-0.25, 0.25);
+    d->lz = unif(-0.25, 0.25);
+    d->ly = pick(2) ? LIGHT_IN_Y : LIGHT_OUT_Y;
+    d->power = unif(5, 20);
+    d->cone = unif(20, 70);
+    d->cone_delta = unif(0, 0.5) * d->cone;
+    d->beam_r = unif(0.05, 0.3);
+    d->divergence = d->light == L_BEAM_DIV || d->light == L_PENCIL_DIV ? unif(5, 30) : 0;
+}
+
+static void draw(int idx, dscene *d)
+{
+    memset(d, 0, sizeof *d);
+    rng_s = 0x9E3779B97F4A7C15ULL * (uint64_t)(idx + 1) ^ DIFF_SEED;
+    for (int k = 0; k < 4; k++) rnd();
+    d->geo = pick(GEO_N);
+    d->fog = pick(FOG_N);
+    d->cube = pick(2) ? CUBE_SMALL : CUBE_LARGE;
+    double ss = unif(0.1, 0.8), alb = unif(0.5, 0.95);
+    for (int c = 0; c < 3; c++) {
+        d->ss[c] = ss * unif(0.6, 1.4);
+        d->sa[c] = d->ss[c] * (1 - alb) / alb * unif(0.5, 1.5);
+    }
+    d->g = unif(-0.9, 0.9);
+    draw_light(d);
+    d->bsdf = pick(B_N);
+    d->roughness = unif(0.1, 0.7);
+    d->ior = unif(1.3, 1.7);
+    draw_time(d);
+    d->max_bounces = 2 + pick(5);
+    d->r_vol = 0.03;
+    d->r_surf = 0.05;
+    d->alpha = pick(2) ? 1.0 : 0.7;
+    place(d);
+}
+
+/* ---- the scene's text ---- */
+
+typedef struct {
+    char *p;
+    size_t n, cap;
+} sbuf;
+
+static void sb_add(sbuf *b, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+static void sb_add(sbuf *b, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    int k = vsnprintf(NULL, 0, fmt, ap);
+    va_end(ap);
+    if (b->n + (size_t)k + 1 > b->cap) {
+        b->cap = (b->n + (size_t)k + 1) * 2;
+        b->p = realloc(b->p, b->cap);
+        assert_non_null(b->p);
+    }
+    va_start(ap, fmt);
+    vsnprintf(b->p + b->n, b->cap - b->n, fmt, ap);
+    va_end(ap);
+    b->n += (size_t)k;
+}
+
+static void add_bsdfs(sbuf *b, const dscene *d)
+{
+    sb_add(b, "\"bsdfs\": [ {\"name\": \"white\", \"type\": \"lambert\", \"albedo\": 0.7},"
+              " {\"name\": \"red\", \"type\": \"lambert\", \"albedo\": [0.7, 0.2, 0.1]},"
+              " {\"name\": \"green\", \"type\": \"lambert\", \"albedo\": [0.15, 0.6, 0.2]},"
+              " {\"name\": \"lamp\", \"type\": \"lambert\", \"albedo\": 0.3}, {\"name\": \"obj\", ");
+    double r = d->roughness, n = d->ior;
+    switch (d->bsdf) {
+    case B_LAMBERT: sb_add(b, "\"type\": \"lambert\", \"albedo\": [0.5, 0.7, 0.8]"); break;
+    case B_CONDUCTOR: sb_add(b, "\"type\": \"conductor\", \"material\": \"Au\""); break;
+    case B_ROUGH_CONDUCTOR: sb_add(b, "\"type\": \"rough_conductor\", \"material\": \"Cu\", \"roughness\": %.4f", r); break;
+    case B_DIELECTRIC: sb_add(b, "\"type\": \"dielectric\", \"ior\": %.4f", n); break;
+    case B_DIELECTRIC_NOREFR: sb_add(b, "\"type\": \"dielectric\", \"ior\": %.4f, \"enable_refraction\": false", n); break;
+    case B_ROUGH_DIELECTRIC: sb_add(b, "\"type\": \"rough_dielectric\", \"ior\": %.4f, \"roughness\": %.4f", n, r); break;
+    case B_PLASTIC: sb_add(b, "\"type\": \"plastic\", \"ior\": %.4f, \"albedo\": [0.6, 0.3, 0.2]", n); break;
+    default: sb_add(b, "\"type\": \"rough_plastic\", \"ior\": %.4f, \"roughness\": %.4f, \"albedo\": 0.5", n, r); break;
+    }
+    sb_add(b, "} ],");
+}
+
+static void add_quad(sbuf *b, const char *bsdf, double x, double y, double z, double s, const char *rot)
+{
+    sb_add(b, "{\"type\": \"quad\", \"bsdf\": \"%s\", \"transform\": {\"position\": [%g, %g, %g], \"scale\": [%g, 1, %g]%s}},",
+           bsdf, x, y, z, s, s, rot);
+}
+
+/* The floor (open scene), or the box of five walls open towards the camera (-z), or six walls. */
+static void add_geometry(sbuf *b, const dscene *d)
+{
+    if (d->geo == GEO_OPEN) {
+        add_quad(b, "white", 0, 0, 0, 6, "");
+        return;
+    }
+    add_quad(b, "white", 0, 0, 0, 2, "");
+    add_quad(b, "white", 0, 2, 0, 2, ", \"rotation\": [180, 0, 0]");
+    add_quad(b, "white", 0, 1, 1, 2, ", \"rotation\": [-90, 0, 0]");
+    add_quad(b, "green", -1, 1, 0, 2, ", \"rotation\": [0, 0, -90]");
+    add_quad(b, "red", 1, 1, 0, 2, ", \"rotation\": [0, 0, 90]");
+    if (d->geo == GEO_CLOSED) add_quad(b, "white", 0, 1, -1, 2, ", \"rotation\": [90, 0, 0]");
+}
+
+/* The light's medium keys: where it starts its paths (docs/emitters.md §1); a thin area light binds both sides. */
+static const char *light_media(const dscene *d)
+{
+    if (!d->light_in_fog) return "";
+    return light_is_area(d->light) ? ", \"ext_medium\": \"fog\", \"int_medium\": \"fog\"" : ", \"ext_medium\": \"fog\"";
+}
+
+static void add_pulse(sbuf *b, const dscene *d)
+{
+    if (d->pulse) sb_add(b, ", \"pulse_width\": %.4f, \"pulse_shape\": \"%s\"", d->pulse_width, d->pulse == 1 ? "box" : "gaussian");
+}
+
+static void add_light(sbuf *b, const dscene *d)
+{
+    double x = d->lx, y = d->ly, z = d->lz;
+    static const char *const type[L_N] = {"point", "spot", "quad", "sphere", "disk", "collimated",
+                                          "collimated", "collimated", "collimated", "directional_point"};
+    sb_add(b, "{\"type\": \"%s\", \"power\": %.4f%s", type[d->light], d->power, light_media(d));
+    add_pulse(b, d);
+    switch (d->light) {
+    case L_QUAD: sb_add(b, ", \"bsdf\": \"lamp\", \"transform\": {\"position\": [%g, %g, %g], \"scale\": [0.4, 1, 0.4], \"rotation\": [180, 0, 0]}}", x, y, z); return;
+    case L_DISK: sb_add(b, ", \"bsdf\": \"lamp\", \"transform\": {\"position\": [%g, %g, %g], \"scale\": [0.2, 1, 0.2], \"rotation\": [180, 0, 0]}}", x, y, z); return;
+    case L_SPHERE: sb_add(b, ", \"bsdf\": \"lamp\", \"transform\": {\"position\": [%g, %g, %g], \"scale\": 0.1}}", x, y, z); return;
+    case L_SPOT: sb_add(b, ", \"coneangle\": %.3f, \"conedeltaangle\": %.3f", d->cone, d->cone_delta); break;
+    case L_BEAM: case L_BEAM_DIV: sb_add(b, ", \"radius\": %.4f, \"divergence\": %.3f", d->beam_r, d->divergence); break;
+    case L_PENCIL_DIV: sb_add(b, ", \"divergence\": %.3f", d->divergence); break;
+    default: break;
+    }
+    /* point-like lights and beams aim down and slightly across, towards the floor in front of the object */
+    sb_add(b, ", \"transform\": {\"position\": [%g, %g, %g], \"look_at\": [%g, 0, %g], \"up\": [1, 0, 0]}}", x, y, z,
+           -0.6 * x - 0.2, -0.6 * z - 0.2);
+}
+
+static void add_primitives(sbuf *b, const dscene *d)
+{
+    sb_add(b, "\"primitives\": [");
+    add_geometry(b, d);
+    sb_add(b, "{\"type\": \"cube\", \"bsdf\": \"obj\", \"transform\": {\"position\": [0.4, 0.2, 0.35], \"scale\": 0.4,"
+              " \"rotation\": [0, 25, 0]}},");
+    if (d->fog == FOG_CUBE)
+        sb_add(b, "{\"type\": \"cube\", \"bsdf\": {\"type\": \"forward\"}, \"int_medium\": \"fog\","
+                  " \"transform\": {\"position\": [0, %g, 0], \"scale\": %g}},", CUBE_Y, d->cube);
+    add_light(b, d);
+    sb_add(b, "],");
+}
+
+static void add_time(sbuf *b, const dscene *d)
+{
+    if (d->time == T_WIDE || d->time == T_NARROW)
+        sb_add(b, ", \"transient_time_center\": %.4f, \"transient_time_width\": %.4f", d->center, d->width);
+    if (d->time == T_FRAMES)
+        sb_add(b, ", \"start_time\": %.4f, \"transient_time_width\": %.4f, \"frame_num\": %d", d->start, d->width, d->frames);
+    if (d->time != T_STEADY && d->unwarp) sb_add(b, ", \"camera_unwarp\": true");
+}
+
+static void add_integrator(sbuf *b, const dscene *d, int m)
+{
+    sb_add(b, "\"integrator\": {\"max_bounces\": %d", d->max_bounces);
+    add_time(b, d);
+    if (m == M_PT) {
+        sb_add(b, ", \"type\": \"path_tracer\"},");
+        return;
+    }
+    /* fixed or shrinking radii; glossy_regularization 0: no biased connection after a glossy bounce */
+    sb_add(b, ", \"type\": \"progressive_transient_photon_map\", \"photon_count\": 3000, \"volume_photon_count\": 1e6,"
+              " \"gather_photon_count\": 64, \"gather_radius\": %g, \"volume_gather_radius\": %g, \"alpha\": %g,"
+              " \"volume_alpha\": %g, \"glossy_regularization\": 0%s},",
+           d->r_surf, d->r_vol, d->alpha, d->alpha, m == M_DARTS ? ", \"enable_guiding\": true, \"enable_elliptical\": true" : "");
+}
+
+static char *scene_text(const dscene *d, int m)
+{
+    sbuf b = {0};
+    sb_add(&b, "{\"media\": [");
+    if (d->fog != FOG_NONE)
+        sb_add(&b, "{\"name\": \"fog\", \"type\": \"homogeneous\", \"sigma_s\": [%.4f, %.4f, %.4f], \"sigma_a\": [%.4f, %.4f, %.4f],"
+                   " \"phase_function\": {\"type\": \"henyey_greenstein\", \"g\": %.4f}}",
+               d->ss[0], d->ss[1], d->ss[2], d->sa[0], d->sa[1], d->sa[2], d->g);
+    sb_add(&b, "],");
+    add_bsdfs(&b, d);
+    add_primitives(&b, d);
+    int inside = d->geo == GEO_CLOSED;
+    sb_add(&b, "\"camera\": {\"type\": \"pinhole\", \"resolution\": [%d, %d], \"fov\": %d%s, \"transform\": {\"position\": [0, 1, %g],"
+               " \"look_at\": [0, 0.8, 1], \"up\": [0, 1, 0]}},",
+           DIFF_RES, DIFF_RES, inside ? 80 : 45, d->cam_in_fog ? ", \"medium\": \"fog\"" : "", inside ? -0.85 : -3.0);
+    add_integrator(&b, d, m);
+    sb_add(&b, "\"renderer\": {\"spp\": 1}}");
+    return b.p;
+}
+
+static void describe(const dscene *d, char *out, size_t n)
+{
+    snprintf(out, n, "%s %s%s%s %s%s %s g=%.2f %s%s%s b%d r=%g/%g a=%g", geo_name[d->geo], fog_name[d->fog],
+             d->fog == FOG_CUBE ? (d->cube == CUBE_SMALL ? "(1.2)" : "(2.6)") : "", d->cam_in_fog ? " cam-in" : "",
+             light_name[d->light], d->light_in_fog ? "(in fog)" : "", bsdf_name[d->bsdf], d->g, time_name[d->time],
+             d->time != T_STEADY && d->unwarp ? "-unwarped" : "",
+             d->pulse == 1 ? " box-pulse" : d->pulse == 2 ? " gauss-pulse" : "", d->max_bounces, d->r_vol, d->r_surf, d->alpha);
+}
+
+/* ---- what may legitimately differ: the path tracer's warning must say why ---- */
+
+/* The text the path tracer's warning must contain for a scene where the integrators may disagree, or NULL
+ * where they must agree: a delta lobe (smooth metal or glass, a plastic's coat) with a light the path tracer
+ * cannot connect through it misses caustics (docs/emitters.md §7); a radius-0 parallel beam is not reached. */
+static const char *expected_warning(const dscene *d)
+{
+    if (d->light == L_PENCIL || d->light == L_DIRPOINT) return "parallel beam of radius 0";
+    if (bsdf_has_delta(d->bsdf) && !light_is_area(d->light)) return "cannot connect through it";
+    return NULL;
+}
+
+/* Loads the scene of method m and plans it; its warnings (the loader's notes and render_warn's) into *warn. */
+static void load_method(const dscene *d, int m, int idx, tmp_scene *t, scene *s, char **warn)
+{
+    char *text = scene_text(d, m);
+    tmp_scene_write(t, text);
+    const char *keep = getenv("DARTSPP_DIFF_KEEP");
+    if (keep && keep[0]) {
+        char path[1024];
+        snprintf(path, sizeof path, "%s/diff-%d-%s.json", keep, idx, method_name[m]);
+        write_bytes(path, text, strlen(text));
+    }
+    free(text);
+    load_scene(t->path, NULL, 0, s);
+    dp_error err;
+    render_plan p;
+    if (plan_resolve(s, &p, &err)) fail_msg("scene %d (%s): %s", idx, method_name[m], err.msg);
+    size_t n = 0;
+    FILE *f = open_memstream(warn, &n);
+    assert_non_null(f);
+    if (s->notes) fputs(s->notes, f);
+    render_warn(f, s, &p);
+    fclose(f);
+    plan_free(&p);
+}
+
+/* ---- the comparison ---- */
+
+/* Passes per method: the path tracer's passes are one sample per pixel, photon points' one photon pass and one
+ * gather; the counts give standard errors of a few per cent of the image mean at similar costs. */
+#define PT_PASSES 160
+#define PP_PASSES 48
+
+/* The bias budget of photon points against the path tracer, a fraction of the larger mean. The path tracer is
+ * unbiased; photon points are consistent, their bias set by the kernels (volume radius r, surface radius R; with
+ * α < 1 they shrink, and the first pass's radii bound the rest). To first order in the radii, three ways light
+ * moves (each for light spread evenly at the scale of the radii):
+ *   time    a photon counts at the ray point nearest to it, a hop of at most max(r, R) (speed 1 or less), which
+ *           moves its time by at most that, symmetrically about zero; only light arriving within that band of
+ *           an end of the gate (or frame) of width W can cross it, and at most half of it does: with the arrival
+ *           density at an edge at most twice the gate's mean, at most 2 · ½ · 2 · max(r, R) / W = 2 max(r, R)/W;
+ *   edges   a surface photon's disc beyond a face's edge is lost: over a face of area A and perimeter P, lit
+ *           evenly, the lost share is (2R/(3π))·P/A (the disc's part beyond a line at distance x, integrated
+ *           over 0 ≤ x ≤ R, is 2R/(3π)); the smallest face, the object's 0.4 × 0.4, has P/A = 10;
+ *   ends    a volume photon counts when its foot falls on the ray's segment; where a segment ends on a surface
+ *           or a fog boundary at an angle, the kernel's cylinder pokes through over a length of order r at
+ *           each end, of segments at least about 1 long: 2r.
+ * The budget is their sum. Broken variants this comparison was shown failing on: see tests/README.md. */
+static double bias_budget(const dscene *d)
+{
+    double rmax = fmax(d->r_vol, d->r_surf);
+    double time = d->time == T_STEADY ? 0 : 2 * rmax / d->width;
+    return time + 2 * d->r_surf / (3 * M_PI) * 10 + (d->fog != FOG_NONE ? 2 * d->r_vol : 0);
+}
+
+/* Two-sided normal quantile: z with erfc(z/√2) = p, by bisection. */
+static double z_two_sided(double p)
+{
+    double lo = 0, hi = 40;
+    for (int k = 0; k < 200; k++) {
+        double mid = 0.5 * (lo + hi);
+        if (erfc(mid / M_SQRT2) > p) lo = mid;
+        else hi = mid;
+    }
+    return hi;
+}
+
+/* The images (gate image and frames) × 3 channels × 2 photon methods of a compared scene. */
+static int comparisons(const dscene *d) { return expected_warning(d) ? 0 : 2 * 3 * (1 + d->frames); }
+
+/* z of photon points' image m, channel c against the path tracer's after the bias budget (0 inside it). */
+static double z_of(const pass_totals *pt, const pass_totals *pp, int m, int c, double budget, double *raw)
+{
+    double a, sa, b, sb;
+    pass_totals_mean_se(pt, m, c, &a, &sa);
+    pass_totals_mean_se(pp, m, c, &b, &sb);
+    double se = hypot(sa, sb), d = fabs(a - b), allowed = budget * fmax(fabs(a), fabs(b));
+    *raw = se > 0 ? d / se : (d > 0 ? INFINITY : 0);
+    if (d <= allowed) return 0;
+    return se > 0 ? (d - allowed) / se : INFINITY;
+}
+
+typedef struct {
+    int run, agreed, warned, failed, noted; /* noted: compared scenes with some other warning, printed */
+} diff_counts;
+
+static double now_seconds(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return ts.tv_sec + 1e-9 * ts.tv_nsec;
+}
+
+static void render_method(const dscene *d, int m, int idx, pass_totals *t, char **warn)
+{
+    tmp_scene ts;
+    scene s;
+    load_method(d, m, idx, &ts, &s, warn);
+    uint64_t seed = 1000003u * (uint64_t)idx + 17u * (uint64_t)m + 1;
+    render_totals(&s, seed, 1, m == M_PT ? PT_PASSES : PP_PASSES, t);
+    scene_free(&s);
+    tmp_scene_remove(&ts);
+}
+
+/* A scene where the integrators may disagree: the path tracer's warnings must name why. */
+static int check_warned(const dscene *d, int idx, const char *desc, diff_counts *n)
+{
+    tmp_scene ts;
+    scene s;
+    char *warn = NULL;
+    load_method(d, M_PT, idx, &ts, &s, &warn);
+    scene_free(&s);
+    tmp_scene_remove(&ts);
+    const char *want = expected_warning(d);
+    int ok = warn && strstr(warn, want);
+    print_message("diff %4d %-80s warned: %s\n", idx, desc, ok ? want : "MISSING");
+    if (!ok) print_message("FAIL scene %d: expected a warning containing \"%s\"; got:\n%s\n", idx, want, warn ? warn : "");
+    free(warn);
+    n->warned += ok;
+    n->failed += !ok;
+    return ok;
+}
+
+/* Renders scene idx by the three methods and compares; 1 when it agrees. */
+static int run_scene(int idx, double zcrit, diff_counts *n)
+{
+    dscene d;
+    draw(idx, &d);
+    char desc[256];
+    describe(&d, desc, sizeof desc);
+    n->run++;
+    if (expected_warning(&d)) return check_warned(&d, idx, desc, n);
+    pass_totals t[M_N];
+    char *warn[M_N] = {0};
+    double t0 = now_seconds();
+    for (int m = 0; m < M_N; m++) render_method(&d, m, idx, &t[m], &warn[m]);
+    double budget = bias_budget(&d), zmax = 0, rawmax = 0, mean[M_N], se[M_N];
+    for (int m = 0; m < M_N; m++) pass_totals_mean_se(&t[m], 0, 3, &mean[m], &se[m]);
+    for (int m = M_BASE; m < M_N; m++)
+        for (int im = 0; im < t[0].images; im++)
+            for (int c = 0; c < 3; c++) {
+                double raw, z = z_of(&t[M_PT], &t[m], im, c, budget, &raw);
+                zmax = fmax(zmax, z);
+                rawmax = fmax(rawmax, raw);
+            }
+    int ok = zmax <= zcrit;
+    print_message("diff %4d %-80s pt %.4g±%.2g base %.4g±%.2g darts %.4g±%.2g budget %.3f z %.2f (raw %.2f) %.1fs%s\n",
+                  idx, desc, mean[0] / 3, se[0] / 3, mean[1] / 3, se[1] / 3, mean[2] / 3, se[2] / 3, budget, zmax,
+                  rawmax, now_seconds() - t0, ok ? "" : "  DISAGREE");
+    for (int m = 0; m < M_N; m++) {
+        if (warn[m] && warn[m][0]) print_message("  %s warned: %s", method_name[m], warn[m]);
+        if (warn[m] && warn[m][0]) n->noted++;
+        free(warn[m]);
+        pass_totals_free(&t[m]);
+    }
+    n->agreed += ok;
+    n->failed += !ok;
+    return ok;
+}
+
+/* Runs scenes [first, first + count) (or DARTSPP_DIFF_ONLY's alone, when it falls there) at the Bonferroni
+ * threshold of all their comparisons. */
+static void run_set(int first, int count)
+{
+    long ncmp = 0;
+    for (int i = first; i < first + count; i++) {
+        dscene d;
+        draw(i, &d);
+        ncmp += comparisons(&d);
+    }
+    double zcrit = z_two_sided(DIFF_ALPHA / (double)ncmp);
+    const char *only = getenv("DARTSPP_DIFF_ONLY");
+    int one = only && only[0] ? atoi(only) : -1;
+    if (one >= 0 && (one < first || one >= first + count)) return;
+    print_message("differential: scenes %d..%d, %ld comparisons, |z| threshold %.2f (Bonferroni, α %.2g)\n", first,
+                  first + count - 1, ncmp, zcrit, DIFF_ALPHA);
+    diff_counts n = {0};
+    for (int i = first; i < first + count; i++)
+        if (one < 0 || i == one) run_scene(i, zcrit, &n);
+    print_message("differential: %d scenes run, %d agreed, %d not compared (the expected warning given), %d failed;"
+                  " %d other warnings printed\n", n.run, n.agreed, n.warned, n.failed, n.noted);
+    assert_int_equal(n.failed, 0);
+}
+
+static void test_differential(void **state)
+{
+    (void)state;
+    run_set(0, DIFF_SCENES);
+}
+
+static void test_differential_stress(void **state)
+{
+    (void)state;
+    run_set(DIFF_SCENES, DIFF_STRESS_SCENES);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {cmocka_unit_test(test_differential)};
+    const struct CMUnitTest stress_tests[] = {cmocka_unit_test(test_differential_stress)};
+    return RUN_TESTS_AND_STRESS(tests, stress_tests);
+}
