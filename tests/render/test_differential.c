@@ -32,7 +32,7 @@
 #include "dartspp/plan.h"
 #include "dartspp/render.h"
 
-#define DIFF_SCENES 30
+#define DIFF_SCENES 24
 #define DIFF_STRESS_SCENES 300
 #define DIFF_SEED 48u
 #define DIFF_RES 8
