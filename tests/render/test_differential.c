@@ -1,12 +1,13 @@
 /* tier: stress */
 /* Integrators that check each other (issue 48, item 5): a differential fuzz tier. A seeded generator draws
- * small random scenes (16 × 16 pixels) from the object types and the key table -- an open floor, a box open
+ * small random scenes (8 × 8 pixels) from the object types and the key table -- an open floor, a box open
  * towards the camera or a closed box with the camera inside; no medium, fog everywhere (the camera in it) or a
  * fog cube (the camera inside or outside it), σs and σa per channel and a Henyey–Greenstein g in (−0.9, 0.9);
  * one light of every type (point, spot, area quad, sphere and disk, collimated beams of radius > 0 parallel or
  * diverging, a diverging radius-0 beam, the radius-0 parallel beam and `directional_point`), inside or outside
- * the fog, its `ext_medium` always set to where it is; an object of every BSDF model (lambert, conductor,
- * rough conductor, dielectric with and without refraction, rough dielectric, plastic, rough plastic); box and
+ * the fog, its `ext_medium` always set to where it is; a sphere of every BSDF model (lambert, conductor,
+ * rough conductor, dielectric with and without refraction, rough dielectric, plastic, rough plastic; the rough
+ * ones at α 0.3-0.7); box and
  * Gaussian pulses; steady state, a wide gate, a narrow gate or frames; camera-warped or unwarped time. Each
  * scene is rendered by the plain path tracer and by photon points, baseline and DARTS (enable_guiding,
  * enable_elliptical), with independent seeds, and the image mean per channel of the gate image and of every
