@@ -265,6 +265,8 @@ struct scene {
     uint32_t vert_count, tri_count;
     float ray_offset_scale;  /* largest |coordinate| of the geometry (1 without geometry): ray offsets scale with it */
     char *notes;             /* warnings and (with verbose) ignored keys, one per line; may be NULL */
+    char *mesh_files;        /* the mesh files read, one resolved path per line (a render's outputs must not
+                              * overwrite them); may be NULL */
     void *rt_device, *rt_scene; /* Embree handles */
 };
 

@@ -27,6 +27,34 @@ static int resolved_name(const char *path, char *out, size_t n)
     return snprintf(out, n, "%s/%s", strcmp(buf, "/") ? buf : "", base) < (int)n ? 0 : -1;
 }
 
+/* The path with "." and "name/.." removed by its text alone. Right for a path under folders that do not exist
+ * yet (io_make_parent_dirs will create them as plain folders: no link can make ".." go elsewhere), where the
+ * kernel cannot resolve it: "new/../ref.exr" names ref.exr once "new" is made. */
+static void lexical_normal(const char *path, char *out, size_t n)
+{
+    char buf[PATH_MAX];
+    snprintf(buf, sizeof buf, "%s", path);
+    const char *parts[PATH_MAX / 2];
+    int k = 0;
+    for (char *save = NULL, *p = strtok_r(buf, "/", &save); p && k < PATH_MAX / 2; p = strtok_r(NULL, "/", &save)) {
+        if (!strcmp(p, ".")) continue;
+        if (!strcmp(p, "..") && k > 0 && strcmp(parts[k - 1], "..")) k--;
+        else parts[k++] = p;
+    }
+    size_t used = (size_t)snprintf(out, n, "%s", path[0] == '/' ? "/" : (k ? "" : "."));
+    for (int i = 0; i < k && used < n; i++) used += (size_t)snprintf(out + used, n - used, "%s%s", i ? "/" : "", parts[i]);
+}
+
+/* stat of an output: of its path, or when that fails (a folder on the way does not exist yet), of the path
+ * with its "name/.." removed. */
+static int stat_output(const char *path, struct stat *st)
+{
+    if (stat(path, st) == 0) return 0;
+    char normal[PATH_MAX];
+    lexical_normal(path, normal, sizeof normal);
+    return strcmp(normal, path) ? stat(normal, st) : -1;
+}
+
 int io_same_file(const char *a, const char *b)
 {
     struct stat sa, sb;
@@ -55,7 +83,7 @@ int io_refuse_output_over_input(const io_file *outputs, int n_out, const io_file
     int rc = 0;
     for (int o = 0; o < n_out && !rc; o++) {
         struct stat st;
-        if (!outputs[o].path || stat(outputs[o].path, &st) != 0) continue;
+        if (!outputs[o].path || stat_output(outputs[o].path, &st) != 0) continue;
         for (int i = 0; i < n_in && !rc; i++)
             if (exists[i] && in[i].st_dev == st.st_dev && in[i].st_ino == st.st_ino)
                 rc = dp_fail(err, "the output %s (%s) is the input %s (%s): it would be overwritten; write to "

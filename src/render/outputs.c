@@ -394,6 +394,8 @@ static int list_inputs(file_list *l, const scene *s, const render_request *rq, d
     int fail = list_add(l, "the scene file", "%s", rq->scene_path) ||
                (rq->reference && list_add(l, "--reference", "%s", rq->reference));
     for (int i = 0; i < s->texture_count && !fail; i++) fail = list_add(l, "a texture", "%s", s->textures[i].path);
+    for (const char *m = s->mesh_files; m && *m && !fail; m += strcspn(m, "\n") + 1)
+        fail = list_add(l, "a mesh", "%.*s", (int)strcspn(m, "\n"), m);
     const char *resp = s->integrator.sensor_response_file;
     if (resp[0] && !fail)
         fail = list_add(l, "integrator.sensor_response_file", "%s%s%s", resp[0] == '/' ? "" : s->dir,

@@ -14,13 +14,17 @@
 typedef struct {
     int tty;
     double last_print;
+    long last_passes; /* the pass count of the last line printed (-1: none) */
 } progress_line;
 
 static void progress_print(progress_line *pl, const render_stats *st, long spp, double limit, int final)
 {
     double now = st->seconds;
     if (!final && now - pl->last_print < (pl->tty ? 0.25 : 5.0)) return;
+    /* a log (not a terminal) gets each line once: the final line of a pass already printed is not repeated */
+    if (final && !pl->tty && st->passes == pl->last_passes) return;
     pl->last_print = now;
+    pl->last_passes = st->passes;
     char left[64] = "";
     double rem = -1;
     if (limit > 0) rem = limit - now;
@@ -163,7 +167,7 @@ static int render_rounds(const scene *s, const render_plan *p, const eda_set *ed
                          film *f, render_stats *st, long spp, double limit, dp_error *err)
 {
     const render_cluster *c = opt->cluster;
-    progress_line pl = {.tty = isatty(2), .last_print = -1e9};
+    progress_line pl = {.tty = isatty(2), .last_print = -1e9, .last_passes = -1};
     double t0 = dp_seconds(), last_gather = 0.0;
     long first = opt->resume_passes;
     int failed = 0, go = 1;
@@ -242,7 +246,7 @@ static int render_passes(const scene *s, const render_plan *p, const render_opti
     }
     long spp = opt->spp >= 0 ? opt->spp : p->spp;
     double limit = opt->time_limit >= 0 ? opt->time_limit : p->timeout;
-    progress_line pl = {.tty = isatty(2), .last_print = -1e9};
+    progress_line pl = {.tty = isatty(2), .last_print = -1e9, .last_passes = -1};
     double t0 = dp_seconds();
     int rc = 0;
     st->passes = f->passes; /* 0, or the passes of the film resumed */

@@ -153,6 +153,19 @@ static int append_surface_mesh(json_ctx *c, scene *s, const tri_mesh *m, const x
     return 0;
 }
 
+/* Appends a mesh file's resolved path to s->mesh_files (one per line). Without memory the path is left out:
+ * only the output-over-input check reads the list. */
+static void remember_mesh_file(scene *s, const char *path)
+{
+    size_t old = s->mesh_files ? strlen(s->mesh_files) : 0, n = strlen(path);
+    char *grown = realloc(s->mesh_files, old + n + 2);
+    if (!grown) return;
+    memcpy(grown + old, path, n);
+    grown[old + n] = '\n';
+    grown[old + n + 1] = '\0';
+    s->mesh_files = grown;
+}
+
 /* `smooth`, `backface_culling` and `recompute_normals` of a mesh primitive into SURF_* flags; smooth normals
  * recomputed as Tungsten does when asked, or when a smooth mesh has no vertex normals of its own. */
 static int mesh_flags(json_ctx *c, const cJSON *v, const char *where, const char *file, tri_mesh *m, unsigned *flags)
@@ -197,6 +210,7 @@ static int load_shape(json_ctx *c, scene *s, const cJSON *v, const char *where, 
         else if (n > 4 && !strcasecmp(file + n - 4, ".obj")) rc = mesh_load_obj(path, m, &merr);
         else return jfail(c, where, "file", "'%s': unsupported mesh format (supported: .wo3, .obj)", file);
         if (rc) return jfail(c, where, "file", "%s", merr.msg);
+        remember_mesh_file(s, path);
         return mesh_flags(c, v, where, file, m, flags);
     }
     return 0;
@@ -546,6 +560,7 @@ int scene_load_text(const char *text, const char *name, const char *base_dir, co
 
 void scene_free(scene *s)
 {
+    free(s->mesh_files);
     scene_release_embree(s);
     texture_free_all(s);
     free(s->bsdfs);

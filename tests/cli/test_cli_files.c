@@ -372,6 +372,12 @@ static void test_messages_name_their_files(void **state)
     rc = run(out, sizeof out, "render scenes/fogbox/fogbox.json " RENDER_ARGS " --reduce-every 5 --output %s/r.exr", d);
     assert_int_equal(rc, 0);
     if (!strstr(out, "--reduce-every has no effect")) fail_msg("no word on --reduce-every: %s", out);
+    /* campaign-48/cli.md (open there): a render whose stderr is not a terminal printed its last progress line
+     * twice ("pass 1/1" after the pass and again as the final line) */
+    assert_int_equal(run(out, sizeof out, "render scenes/fogbox/fogbox.json --set type=path_tracer --set resolution=8 "
+                                          "--spp 1 --output %s/p.exr", d), 0);
+    const char *first = strstr(out, "pass 1/1");
+    if (!first || strstr(first + 1, "pass 1/1")) fail_msg("expected one line 'pass 1/1': %s", out);
     /* probe 14: a render without frames over the name of an earlier frame set (whose manifest, frames, cube and
      * viewer stay) says so; a render with frames replaces the set and says nothing */
     const char *frames = "--set frame_num=2 --set start_time=6";
@@ -380,6 +386,47 @@ static void test_messages_name_their_files(void **state)
     assert_int_equal(run(out, sizeof out, "render scenes/fogbox/fogbox.json " RENDER_ARGS " --output %s/f.exr", d), 0);
     if (!strstr(out, "f_frames.csv and the frames, cube and viewer it goes with are from an earlier render"))
         fail_msg("no word on the older frame set: %s", out);
+}
+
+/* The two outputs over inputs of campaign-48/cli.md left open there: `--log` naming a mesh the scene reads
+ * (before: the scene kept no list of its mesh files; the CSV replaced the mesh), and an output under a folder
+ * that does not exist yet whose ".." lands on the reference (`--output new/../ref.exr`: before, the folder was
+ * made and the reference replaced). Both exit 2 naming both paths, the input unchanged. */
+static void test_outputs_over_meshes_and_unmade_folders(void **state)
+{
+    const char *d = *state;
+    char out[8192], path[800], scene[2000];
+    snprintf(path, sizeof path, "%s/tri.obj", d);
+    test_write_file(path, "v -1 -1 0\nv 1 -1 0\nv 0 1 0\nf 1 2 3\n");
+    snprintf(scene, sizeof scene,
+             "{ \"bsdfs\": [ { \"name\": \"w\", \"type\": \"lambert\", \"albedo\": 0.5 } ],"
+             "  \"primitives\": [ { \"type\": \"mesh\", \"file\": \"tri.obj\", \"bsdf\": \"w\" },"
+             "    { \"type\": \"point\", \"emission\": [1, 1, 1], \"transform\": { \"position\": [0, 0, -1] } } ],"
+             "  \"camera\": { \"type\": \"pinhole\", \"resolution\": [8, 8], \"fov\": 40,"
+             "    \"transform\": { \"position\": [0, 0, -3], \"look_at\": [0, 0, 0], \"up\": [0, 1, 0] } },"
+             "  \"integrator\": { \"type\": \"path_tracer\" }, \"renderer\": { \"spp\": 1 } }");
+    char sc[800];
+    snprintf(sc, sizeof sc, "%s/tri.json", d);
+    test_write_file(sc, scene);
+    assert_int_equal(run(out, sizeof out, "render %s --spp 1 --quiet --output %s/ref.exr", sc, d), 0);
+    size_t mesh_len = 0, ref_len = 0;
+    char *mesh = slurp(path, &mesh_len), *ref = NULL;
+    snprintf(path, sizeof path, "%s/ref.exr", d);
+    ref = slurp(path, &ref_len);
+    assert_non_null(mesh);
+    assert_non_null(ref);
+    int rc = run(out, sizeof out, "render %s --spp 1 --quiet --reference %s/ref.exr --log %s/tri.obj --output %s/o.exr",
+                 sc, d, d, d);
+    assert_refused_naming(rc, out, "tri.obj (--log)", "a mesh");
+    rc = run(out, sizeof out, "render %s --spp 1 --quiet --reference %s/ref.exr --log %s/l.csv --output %s/new/../ref.exr",
+             sc, d, d, d);
+    assert_refused_naming(rc, out, "new/../ref.exr", "--reference");
+    snprintf(path, sizeof path, "%s/tri.obj", d);
+    assert_unchanged(path, mesh, mesh_len);
+    snprintf(path, sizeof path, "%s/ref.exr", d);
+    assert_unchanged(path, ref, ref_len);
+    free(mesh);
+    free(ref);
 }
 
 int main(void)
@@ -393,6 +440,7 @@ int main(void)
         cmocka_unit_test(test_help_and_version),
         cmocka_unit_test_setup_teardown(test_shipped_scenes_without_warnings, setup_dir, test_teardown_tmpdir),
         cmocka_unit_test_setup_teardown(test_messages_name_their_files, setup_dir, test_teardown_tmpdir),
+        cmocka_unit_test_setup_teardown(test_outputs_over_meshes_and_unmade_folders, setup_dir, test_teardown_tmpdir),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

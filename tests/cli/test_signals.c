@@ -355,6 +355,7 @@ static void test_file_size_limit_merge(void **state)
     dp_error err;
     noise_image(&img, 64, 64); /* 48 KiB of noise: ZIP keeps most of it */
     assert_int_equal(image_write(a, &img, NULL, &err), 0);
+    img.rgb[0] += 1.0f; /* two renders, not two copies of one (merge refuses copies) */
     assert_int_equal(image_write(b, &img, NULL, &err), 0);
     image_free(&img);
     const char *argv[] = {DARTSPP_BIN, "merge", o, a, b, NULL};
