@@ -251,7 +251,7 @@ static const mat_case CASES[] = {
     {"rough_conductor_ggx", "\"type\": \"rough_conductor\", \"material\": \"Au\", \"distribution\": \"ggx\", \"roughness\": 0.3",
      PANEL_QUAD, 0, 0},
     {"rough_conductor_ggx_direct", "\"type\": \"rough_conductor\", \"material\": \"Au\", \"distribution\": \"ggx\", \"roughness\": 0.3",
-     PANEL_QUAD, 1, 1},
+     PANEL_QUAD, 1, 0},
     {"rough_conductor_beckmann_direct",
      "\"type\": \"rough_conductor\", \"material\": \"Cu\", \"distribution\": \"beckmann\", \"roughness\": 0.25", PANEL_QUAD, 1, 0},
     {"rough_conductor_pbrt_ggx_direct",

@@ -526,14 +526,15 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_beam_single_scatter),
         cmocka_unit_test(test_area_and_spot),
-        cmocka_unit_test(test_sphere_disk_diverging_beam),
-        cmocka_unit_test(test_pencil_beam),
     };
-    /* make stress only (190 s of the 260 s of this program on 2 cores): uniform light selection, the same
+    /* make stress only (240 s of the 260 s of this program on 2 cores): the sphere, disk and diverging beam
+     * (test_differential draws them in make test), the pencil beam, uniform light selection, the same
      * lights camera-unwarped, the narrow gate on the panel's direct view, the collimated beam in the box (the
      * beam's single scattering above checks its connection against quadrature in make test), the DARTS
      * authors' slab files (../shared) */
     const struct CMUnitTest stress[] = {
+        cmocka_unit_test(test_sphere_disk_diverging_beam),
+        cmocka_unit_test(test_pencil_beam),
         cmocka_unit_test(test_area_and_spot_uniform_selection),
         cmocka_unit_test(test_collimated_slabs),
         cmocka_unit_test(test_area_and_spot_unwarped),

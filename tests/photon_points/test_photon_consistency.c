@@ -210,7 +210,15 @@ static void consistency_suite(double g, co_method first, co_method last)
 static void test_consistency_vs_path_tracer(void **state)
 {
     (void)state;
-    consistency_suite(0.3, CO_DARTS, CO_DARTS_EDA);
+    consistency_suite(0.3, CO_DARTS, CO_DARTS);
+}
+
+/* DARTS with EDA direction sampling on the same box (make stress; make test checks EDA's sampling against its
+ * pdf in test_eda and the DARTS path tracer with EDA per tile in test_path_tracer_methods). */
+static void test_eda_consistency(void **state)
+{
+    (void)state;
+    consistency_suite(0.3, CO_DARTS_EDA, CO_DARTS_EDA);
 }
 
 /* Baseline photon points on the same box (make stress; make test checks the baseline against the path tracer
@@ -234,10 +242,11 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_consistency_vs_path_tracer),
     };
-    /* make stress only (160 s on 2 cores): the baseline, and EDA at g = 0.5 and -0.3, each against its own
-     * path-traced reference; make test checks DARTS and EDA end to end at g = 0.3 above */
+    /* make stress only (200 s on 2 cores): the baseline, and EDA at g = 0.3, 0.5 and -0.3, each against its own
+     * path-traced reference; make test checks DARTS end to end at g = 0.3 above */
     const struct CMUnitTest stress[] = {
         cmocka_unit_test(test_baseline_consistency),
+        cmocka_unit_test(test_eda_consistency),
         cmocka_unit_test(test_eda_consistency_anisotropic),
     };
     /* DARTSPP_TEST_FILTER=name (cmocka wildcards) runs only the matching tests */
