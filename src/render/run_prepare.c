@@ -120,11 +120,13 @@ static int set_up_state(render_run_job *j, dp_error *err)
         j->cp.state = j->state;
         j->cp.seed = rq->seed;
         j->cp.digest = j->digest;
-        /* before the state is read: the run holding it may be about to replace it */
-        snprintf(j->lock, sizeof j->lock, "%s.lock", j->state);
-        if (state_lock_take(j->lock, j->state, &j->lock_fd, err)) return -1;
-        j->locked = 1;
     }
+    /* Every render to an output holds its lock, whether it writes the state or not: before the state is read
+     * (the run holding it may be about to replace it), and so that two runs to one output cannot replace each
+     * other's images (tests/campaign-48/state.md, probe 23). */
+    snprintf(j->lock, sizeof j->lock, "%s.lock", j->state);
+    if (state_lock_take(j->lock, j->state, &j->lock_fd, err)) return -1;
+    j->locked = 1;
     long spp = rq->spp >= 0 ? rq->spp : j->p.spp;
     if (!rq->resume) return rq->overwrite ? 0 : resume_overwrite_check(j->state, spp, err);
     resume_state st;

@@ -47,9 +47,9 @@ int state_lock_take(const char *lock_path, const char *state_path, int *fd, dp_e
                 return dp_fail(err, "%s: cannot lock the checkpoint state %s: %s", lock_path, state_path, strerror(e));
             char who[64] = "another render";
             if (pid > 0) snprintf(who, sizeof who, "another render (process %ld)", pid);
-            return dp_fail(err, "%s is in use: %s is writing it (its lock %s is held); two runs on one checkpoint "
-                           "state would overwrite each other's passes: wait for it to end, or render to another "
-                           "--output", state_path, who, lock_path);
+            return dp_fail(err, "%s is in use: %s renders to this output (its lock %s is held); two runs to one "
+                           "output would overwrite each other's images and checkpoint state: wait for it to end, or "
+                           "render to another --output", state_path, who, lock_path);
         }
         if (!same_file(f, lock_path)) { /* removed by its last holder meanwhile: take the new one */
             close(f);

@@ -171,8 +171,9 @@ static void test_other_scene_refused(void **state)
     assert_int_equal(exr_passes(path), 4);
 }
 
-/* A resumed render holding the state (many passes, one thread): a second --resume, and a fresh render to the
- * same output with checkpoints, are refused naming the first one's process id; once the first is SIGKILLed,
+/* A resumed render holding the state (many passes, one thread): a second --resume, a fresh render to the
+ * same output with checkpoints, and one without any (it would replace the images), are refused naming the first
+ * one's process id; once the first is SIGKILLed,
  * its lock file is left but blocks nothing. Main ran both to exit 0, the shorter overwriting the longer. */
 static void test_lock(void **state)
 {
@@ -188,8 +189,11 @@ static void test_lock(void **state)
     child_start(&c, d, argv, NULL, 0);
     if (!log_wait_for(&c, "resuming", 60)) fail_msg("the first render did not start");
     snprintf(pid, sizeof pid, "process %d", (int)c.pid);
-    const char *second[] = {"--spp 6 --resume", "--spp 200000 --checkpoint 1"};
-    for (int i = 0; i < 2; i++) {
+    /* the third: a render that writes no state (no checkpoints, no --resume) to the same output; before the
+     * lock covered every render it ran to exit 0 and replaced the running render's images (campaign-48/state.md,
+     * probe 23) */
+    const char *second[] = {"--spp 6 --resume", "--spp 200000 --checkpoint 1", "--spp 2 --overwrite"};
+    for (int i = 0; i < 3; i++) {
         snprintf(cmd, sizeof cmd, DARTSPP_BIN " render " DEMO ARGS " %s --output %s", second[i], img);
         int rc = run(cmd, out, sizeof out);
         print_message("  second run (%s) while the first runs: exit %d: ", second[i], rc);
