@@ -1,0 +1,53 @@
+/* dartspp photon_beams: progressive transient photon beams (volume_photon_type "beams"; Marco et al. 2019 as
+ * Liu et al. 2022 reproduced them, with the DARTS authors' camera-warped time). The photon pass
+ * (src/photon, photon_pass_input.beams) keeps the medium segments of its light paths as short beams
+ * (photon_beam, include/dartspp/photon.h); this module builds a BVH over them each iteration and evaluates
+ * the 1-D beam × camera-ray kernel along the sensor pass's medium segments (src/gather). The rest of the
+ * iteration — surface photons, the camera walk, the film — is photon points' (src/photon_points). */
+#ifndef DARTSPP_PHOTON_BEAMS_H
+#define DARTSPP_PHOTON_BEAMS_H
+
+#include "dartspp/film.h"
+#include "dartspp/integrator.h"
+#include "dartspp/photon.h"
+#include "dartspp/plan.h"
+
+typedef struct beam_map beam_map;
+
+/* A BVH over the n beams (copied), each box inflated by the radius r >= 0 of this iteration. NULL + err on
+ * failure (out of memory). */
+beam_map *beam_map_build(const photon_beam *b, size_t n, double r, dp_error *err);
+void beam_map_free(beam_map *m);
+size_t beam_map_size(const beam_map *m);
+/* Bytes beam_map_build allocates for n beams (the memory guard). */
+double beam_map_bytes(double n);
+
+/* Called for every beam b whose line passes within the map's r of the camera line o + t·d (d unit) with the
+ * closest points at t in [0, tmax] on the camera line and s in [0, b->length] on the beam; inv_sin = 1/sinθ
+ * of the angle between the two. Beams whose start time plus t_min is at or past t_hi are skipped (a pure
+ * pruning bound: every point of such a beam arrives later; INFINITY: none). Visit order is fixed by the map,
+ * so results are deterministic. */
+typedef void (*beam_hit_fn)(void *ctx, const photon_beam *b, double t, double s, double inv_sin);
+void beam_map_query(const beam_map *m, vec3 o, vec3 d, double tmax, double t_hi, beam_hit_fn hit, void *ctx);
+
+/* What the 1-D kernel needs besides the camera segment. */
+typedef struct {
+    const beam_map *map;
+    double r;                 /* kernel half-width of this iteration (the map's r) */
+    bounce_limits bounces;    /* which light + camera paths count */
+    int camera_unwarp;        /* the camera segment adjacent to the sensor takes no time (docs/time.md §2.2) */
+} beam_gather;
+
+/* The 1-D beam × camera-ray estimate (Jarosz et al. 2011, "beam × beam 1D"; primitives-reference.md §2) of
+ * the camera segment o + t·d, 0 <= t <= len, in medium med (thr and t_cam at o, b_cam camera segments):
+ * for every beam within r, box kernel 1/(2r), σs·f_p(ω_b → −d)·T_cam(t)·power·T_b(s)/P_b(s) / sinθ,
+ * at the path time t_cam + beam time + η·s + η·t (camera-warped; the sensor's own segment takes no time when
+ * unwarped), into the film's slot of that time (box gate and frames). */
+void photon_beams_gather(const beam_gather *g, const scene *s, film_pixel *pix, int med, vec3 o, vec3 d, double len,
+                         vec3 thr, double t_cam, int b_cam);
+
+/* The memory guard's items of the volume part of a beams iteration: the beams at their budget V (capped by
+ * the caller's pilot) and their BVH. */
+void photon_beams_memory(double V, memory_estimate *m);
+
+#endif
