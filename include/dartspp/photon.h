@@ -28,6 +28,7 @@ typedef struct {
     float dir[3];     /* unit */
     float power[3];   /* the path throughput at the start, divided by the number of light paths */
     float length;     /* to the next vertex */
+    float eta;        /* its medium's η (time per length): the time at s is time + η·s */
     int medium;       /* index into scene.media */
     int bounce;       /* path segments from the light to a scattering point on the beam (this segment's index) */
     double time;      /* light-to-start path time */

@@ -19,16 +19,26 @@ typedef struct beam_map beam_map;
 beam_map *beam_map_build(const photon_beam *b, size_t n, double r, dp_error *err);
 void beam_map_free(beam_map *m);
 size_t beam_map_size(const beam_map *m);
-/* Bytes beam_map_build allocates for n beams (the memory guard). */
-double beam_map_bytes(double n);
+/* Bytes beam_map_build allocates at its peak for n beams cut into `pieces` pieces (the memory guard). */
+double beam_map_bytes(double n, double pieces);
+/* How many pieces beam_map_build cuts the n beams into at radius r (long beams are cut so that their boxes
+ * stay tight). */
+double beam_map_pieces(const photon_beam *b, size_t n, double r);
+
+/* A time window on a query: a point s along beam b seen at t along the camera line has the path time
+ * t0 + b->time + η_b·s + eta·t (η_b its medium's), and only times in [lo, hi) count. */
+typedef struct {
+    double t0, eta, lo, hi;
+} beam_window;
 
 /* Called for every beam b whose line passes within the map's r of the camera line o + t·d (d unit) with the
  * closest points at t in [0, tmax] on the camera line and s in [0, b->length] on the beam; inv_sin = 1/sinθ
- * of the angle between the two. Beams whose start time plus t_min is at or past t_hi are skipped (a pure
- * pruning bound: every point of such a beam arrives later; INFINITY: none). Visit order is fixed by the map,
- * so results are deterministic. */
+ * of the angle between the two. With a window w (or NULL: none), subtrees and beams none of whose points can
+ * have a time in it are skipped: bounds from the nodes' time ranges and the slab interval of the camera line
+ * through their boxes, widened by 1e-9 relative, so the caller still tests each time and never misses one.
+ * Visit order is fixed by the map, so results are deterministic. */
 typedef void (*beam_hit_fn)(void *ctx, const photon_beam *b, double t, double s, double inv_sin);
-void beam_map_query(const beam_map *m, vec3 o, vec3 d, double tmax, double t_hi, beam_hit_fn hit, void *ctx);
+void beam_map_query(const beam_map *m, vec3 o, vec3 d, double tmax, const beam_window *w, beam_hit_fn hit, void *ctx);
 
 /* What the 1-D kernel needs besides the camera segment. */
 typedef struct {
@@ -46,8 +56,9 @@ typedef struct {
 void photon_beams_gather(const beam_gather *g, const scene *s, film_pixel *pix, int med, vec3 o, vec3 d, double len,
                          vec3 thr, double t_cam, int b_cam);
 
-/* The memory guard's items of the volume part of a beams iteration: the beams at their budget V (capped by
- * the caller's pilot) and their BVH. */
-void photon_beams_memory(double V, memory_estimate *m);
+/* The memory guard's item of the volume part of a beams iteration: V beams (their budget, capped by the
+ * caller's pilot) and their BVH at the first (widest) radius r0, with as many pieces per beam as the pilot's n
+ * beams (none: one each). */
+void photon_beams_memory(const photon_beam *pilot, size_t n, double r0, double V, memory_estimate *m);
 
 #endif

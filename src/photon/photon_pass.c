@@ -87,7 +87,7 @@ static void beam_end(light_path *lp, const beam_start *b, double length)
     photon_beam bm = {.start = {(float)b->o.x, (float)b->o.y, (float)b->o.z},
                       .dir = {(float)b->d.x, (float)b->d.y, (float)b->d.z},
                       .power = {(float)b->beta.x, (float)b->beta.y, (float)b->beta.z},
-                      .length = (float)length, .medium = b->med, .bounce = b->bounce, .time = b->time};
+                      .length = (float)length, .eta = (float)eta, .medium = b->med, .bounce = b->bounce, .time = b->time};
     if (!isfinite(bm.power[0]) || !isfinite(bm.power[1]) || !isfinite(bm.power[2]) || !isfinite(bm.length)) {
         lp->tb->nonfinite++;
         return;

@@ -47,15 +47,16 @@ void photon_beams_gather(const beam_gather *g, const scene *s, film_pixel *pix, 
     if (!medium_scatters(m)) return;
     beam_ctx c = {g, m, med, pix, d, thr, t_cam, b_cam,
                   m->sigma_t.x == m->sigma_t.y && m->sigma_t.y == m->sigma_t.z};
-    /* every point of a beam arrives at t_cam + its start time or later: beams starting at or past the gate's
-     * end (the last frame's) cannot count */
+    /* on a gated film, the gate (all frames) as the query's window: the path time of beam_hit */
     const time_window *tw = &pix->f->window;
-    double t_hi = tw->gated && tw->width > 0.0 ? time_window_end(tw) - t_cam : INFINITY;
-    beam_map_query(g->map, o, d, len, t_hi, beam_hit, &c);
+    beam_window w = {.t0 = t_cam, .eta = g->camera_unwarp && b_cam == 1 ? 0.0 : m->eta, .lo = tw->start,
+                     .hi = time_window_end(tw)};
+    beam_map_query(g->map, o, d, len, tw->gated && tw->width > 0.0 ? &w : NULL, beam_hit, &c);
 }
 
-void photon_beams_memory(double V, memory_estimate *m)
+void photon_beams_memory(const photon_beam *pilot, size_t n, double r0, double V, memory_estimate *m)
 {
+    double per_beam = n ? beam_map_pieces(pilot, n, r0) / (double)n : 1.0;
     memory_item_add(m, "volume beams and their map", "integrator.volume_photon_count",
-                    photon_beam_array_bytes(V) + beam_map_bytes(V));
+                    photon_beam_array_bytes(V) + beam_map_bytes(V, V * per_beam));
 }

@@ -1,5 +1,5 @@
-/* The beam BVH: a binary tree over the beams' boxes (the segment's box inflated by r), built by median splits
- * on the box centres along the largest extent, leaves of at most BEAM_LEAF beams, nodes in depth-first order.
+/* The beam BVH: a binary tree over pieces of the beams (long beams cut, piece_length) and their boxes (the
+ * piece's box inflated by r), built by median splits on the box centres along the largest extent, leaves of at most BEAM_LEAF beams, nodes in depth-first order.
  * Each node also keeps the earliest start time of its beams, so that a query with a time bound skips whole
  * subtrees. Single-threaded build (about 0.1 s per 10^6 beams); the query is a slab test per node and the
  * closest approach of two lines per beam. */
@@ -14,13 +14,24 @@
 typedef struct {
     float lo[3], hi[3];
     double t_min;      /* earliest start time of its beams */
-    uint32_t first;    /* leaf: first beam; inner: index of the right child (the left one follows) */
-    uint32_t count;    /* beams of a leaf; 0: inner node */
+    double t_max;      /* latest end time (start + η·length) of its beams */
+    uint32_t first;    /* leaf: first piece; inner: index of the right child (the left one follows) */
+    uint32_t count;    /* pieces of a leaf; 0: inner node */
 } beam_node;
+
+/* A piece [s0, s1] of a beam: long beams are cut so that the boxes stay tight (a beam across the scene has a
+ * box as large as the scene). A point at s belongs to the piece with s0 <= s < s1, the last piece also
+ * holding s1 = length, so no point is counted twice. */
+typedef struct {
+    uint32_t beam;
+    float s0, s1;
+} beam_piece;
 
 struct beam_map {
     photon_beam *beams;
     size_t n;
+    beam_piece *pieces; /* in leaf order */
+    size_t n_pieces;
     beam_node *nodes;
     size_t n_nodes;
     double r;
@@ -28,12 +39,14 @@ struct beam_map {
 
 typedef struct {
     float lo[3], hi[3], c[3];
-} beam_box;
+    uint32_t piece;
+} beam_box; /* the build moves these, not indices: partitions then read memory in order */
 
-static void box_of(const photon_beam *b, double r, beam_box *x)
+
+static void box_of(const photon_beam *b, const beam_piece *pc, double r, beam_box *x)
 {
     for (int k = 0; k < 3; k++) {
-        double a = b->start[k], e = b->start[k] + (double)b->dir[k] * b->length;
+        double a = b->start[k] + (double)b->dir[k] * pc->s0, e = b->start[k] + (double)b->dir[k] * pc->s1;
         double lo = a < e ? a : e, hi = a < e ? e : a;
         x->lo[k] = (float)(lo - r) - 1e-6f * (1.0f + fabsf((float)lo));
         x->hi[k] = (float)(hi + r) + 1e-6f * (1.0f + fabsf((float)hi));
@@ -43,26 +56,26 @@ static void box_of(const photon_beam *b, double r, beam_box *x)
 
 typedef struct {
     beam_map *m;
-    const beam_box *box;
-    uint32_t *idx;
+    const beam_piece *pieces; /* in their original order (box[i].piece indexes them) */
+    beam_box *box;
     size_t next;
 } builder;
 
-/* Partial sort of idx[lo, hi) so that idx[mid] has the median centre along axis (quickselect, the middle
+/* Partial sort of box[lo, hi) so that box[mid] has the median centre along axis (quickselect, the middle
  * element as pivot: deterministic). */
-static void select_median(const beam_box *box, uint32_t *idx, size_t lo, size_t hi, size_t mid, int axis)
+static void select_median(beam_box *box, size_t lo, size_t hi, size_t mid, int axis)
 {
     ptrdiff_t l = (ptrdiff_t)lo, h = (ptrdiff_t)hi - 1, m = (ptrdiff_t)mid;
     while (l < h) {
-        float pivot = box[idx[l + (h - l) / 2]].c[axis];
+        float pivot = box[l + (h - l) / 2].c[axis];
         ptrdiff_t i = l, j = h;
         while (i <= j) {
-            while (box[idx[i]].c[axis] < pivot) i++;
-            while (box[idx[j]].c[axis] > pivot) j--;
+            while (box[i].c[axis] < pivot) i++;
+            while (box[j].c[axis] > pivot) j--;
             if (i <= j) {
-                uint32_t t = idx[i];
-                idx[i++] = idx[j];
-                idx[j--] = t;
+                beam_box t = box[i];
+                box[i++] = box[j];
+                box[j--] = t;
             }
         }
         if (m <= j) h = j;
@@ -71,71 +84,128 @@ static void select_median(const beam_box *box, uint32_t *idx, size_t lo, size_t 
     }
 }
 
+static inline float min_f(float a, float b) { return a < b ? a : b; }
+static inline float max_f(float a, float b) { return a > b ? a : b; }
+
+/* A leaf's bounds from its pieces: the boxes and the time range. */
+static void leaf_bounds(builder *B, beam_node *nd, size_t lo, size_t hi)
+{
+    for (int k = 0; k < 3; k++) nd->lo[k] = INFINITY, nd->hi[k] = -INFINITY;
+    nd->t_min = INFINITY;
+    nd->t_max = -INFINITY;
+    for (size_t i = lo; i < hi; i++) {
+        const beam_box *x = &B->box[i];
+        for (int k = 0; k < 3; k++) nd->lo[k] = min_f(nd->lo[k], x->lo[k]), nd->hi[k] = max_f(nd->hi[k], x->hi[k]);
+        const beam_piece *pc = &B->pieces[x->piece];
+        const photon_beam *b = &B->m->beams[pc->beam];
+        double ta = b->time + (double)b->eta * pc->s0, te = b->time + (double)b->eta * pc->s1;
+        if (ta < nd->t_min) nd->t_min = ta;
+        if (te > nd->t_max) nd->t_max = te;
+    }
+}
+
+/* The subtree over idx[lo, hi): split at the median box centre along the centres' largest extent; an inner
+ * node's bounds are its children's union (bottom-up). */
 static void build(builder *B, size_t lo, size_t hi)
 {
     size_t me = B->next++;
-    beam_node *nd = &B->m->nodes[me];
-    float clo[3] = {INFINITY, INFINITY, INFINITY}, chi[3] = {-INFINITY, -INFINITY, -INFINITY};
-    for (int k = 0; k < 3; k++) nd->lo[k] = INFINITY, nd->hi[k] = -INFINITY;
-    nd->t_min = INFINITY;
-    for (size_t i = lo; i < hi; i++) {
-        const beam_box *x = &B->box[B->idx[i]];
-        for (int k = 0; k < 3; k++) {
-            nd->lo[k] = fminf(nd->lo[k], x->lo[k]);
-            nd->hi[k] = fmaxf(nd->hi[k], x->hi[k]);
-            clo[k] = fminf(clo[k], x->c[k]);
-            chi[k] = fmaxf(chi[k], x->c[k]);
-        }
-        double t = B->m->beams[B->idx[i]].time;
-        if (t < nd->t_min) nd->t_min = t;
-    }
+    beam_node *nodes = B->m->nodes;
     if (hi - lo <= BEAM_LEAF) {
-        nd->first = (uint32_t)lo;
-        nd->count = (uint32_t)(hi - lo);
+        leaf_bounds(B, &nodes[me], lo, hi);
+        nodes[me].first = (uint32_t)lo;
+        nodes[me].count = (uint32_t)(hi - lo);
         return;
+    }
+    float clo[3] = {INFINITY, INFINITY, INFINITY}, chi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (size_t i = lo; i < hi; i++) {
+        const float *c = B->box[i].c;
+        for (int k = 0; k < 3; k++) clo[k] = min_f(clo[k], c[k]), chi[k] = max_f(chi[k], c[k]);
     }
     int axis = 0;
     for (int k = 1; k < 3; k++)
         if (chi[k] - clo[k] > chi[axis] - clo[axis]) axis = k;
     size_t mid = lo + (hi - lo) / 2;
-    select_median(B->box, B->idx, lo, hi, mid, axis);
-    nd->count = 0;
+    select_median(B->box, lo, hi, mid, axis);
+    size_t left = B->next;
     build(B, lo, mid);
-    B->m->nodes[me].first = (uint32_t)B->next; /* nd may have moved: nodes is preallocated, it has not */
+    size_t right = B->next;
     build(B, mid, hi);
+    beam_node *nd = &nodes[me], *l = &nodes[left], *r = &nodes[right];
+    for (int k = 0; k < 3; k++) nd->lo[k] = min_f(l->lo[k], r->lo[k]), nd->hi[k] = max_f(l->hi[k], r->hi[k]);
+    nd->t_min = l->t_min < r->t_min ? l->t_min : r->t_min;
+    nd->t_max = l->t_max > r->t_max ? l->t_max : r->t_max;
+    nd->first = (uint32_t)right;
+    nd->count = 0;
+}
+
+/* The pieces' length: a 32nd of the extent of the beams' starts, and at least 4 r (shorter pieces would
+ * only add pieces to a box the radius already dominates). */
+static double piece_length(const photon_beam *b, size_t n, double r)
+{
+    float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (size_t i = 0; i < n; i++)
+        for (int k = 0; k < 3; k++) lo[k] = min_f(lo[k], b[i].start[k]), hi[k] = max_f(hi[k], b[i].start[k]);
+    double ext = 0.0;
+    for (int k = 0; k < 3 && n; k++) ext = dp_fmax(ext, (double)hi[k] - lo[k]);
+    return dp_fmax(ext / 16.0, 4.0 * r);
+}
+
+static size_t pieces_of(const photon_beam *b, double len)
+{
+    double k = ceil((double)b->length / len);
+    return k < 1.0 ? 1 : (size_t)k;
+}
+
+double beam_map_pieces(const photon_beam *b, size_t n, double r)
+{
+    double len = piece_length(b, n, r), sum = 0.0;
+    for (size_t i = 0; i < n; i++) sum += (double)pieces_of(&b[i], len);
+    return sum;
 }
 
 beam_map *beam_map_build(const photon_beam *b, size_t n, double r, dp_error *err)
 {
+    double len = piece_length(b, n, r);
+    size_t np = 0;
+    for (size_t i = 0; i < n; i++) np += pieces_of(&b[i], len);
     beam_map *m = calloc(1, sizeof *m);
-    beam_box *box = n ? malloc(n * sizeof *box) : NULL;
-    uint32_t *idx = n ? malloc(n * sizeof *idx) : NULL;
+    beam_box *box = np ? malloc(np * sizeof *box) : NULL;
+    beam_piece *pc = np ? malloc(np * sizeof *pc) : NULL;
     if (m) {
         m->n = n;
+        m->n_pieces = np;
         m->r = r;
         m->beams = n ? malloc(n * sizeof *m->beams) : NULL;
-        m->nodes = n ? malloc(2 * n * sizeof *m->nodes) : NULL; /* < 2n nodes for any split */
+        m->pieces = np ? malloc(np * sizeof *m->pieces) : NULL;
+        m->nodes = np ? malloc(2 * np * sizeof *m->nodes) : NULL; /* < 2 np nodes for any split */
     }
-    if (!m || (n && (!box || !idx || !m->beams || !m->nodes)) || n > UINT32_MAX / 2) {
+    if (!m || (np && (!box || !pc || !m->beams || !m->pieces || !m->nodes)) || np > UINT32_MAX / 2) {
         free(box);
-        free(idx);
+        free(pc);
         beam_map_free(m);
-        return dp_fail_kind(err, DP_ERROR_MEMORY, "out of memory building the beam map (%zu beams)", n), NULL;
+        return dp_fail_kind(err, DP_ERROR_MEMORY, "out of memory building the beam map (%zu beams, %zu pieces)", n, np), NULL;
     }
+    if (n) memcpy(m->beams, b, n * sizeof *b);
+    size_t j = 0;
     for (size_t i = 0; i < n; i++) {
-        idx[i] = (uint32_t)i;
-        box_of(&b[i], r, &box[i]);
+        size_t k = pieces_of(&b[i], len);
+        double step = (double)b[i].length / (double)k;
+        for (size_t q = 0; q < k; q++, j++) {
+            pc[j] = (beam_piece){.beam = (uint32_t)i, .s0 = (float)(q * step), .s1 = q + 1 == k ? b[i].length : (float)((q + 1) * step)};
+        }
     }
-    if (n) {
-        memcpy(m->beams, b, n * sizeof *b);
-        builder B = {m, box, idx, 0};
-        build(&B, 0, n);
+    for (size_t i = 0; i < np; i++) {
+        box_of(&b[pc[i].beam], &pc[i], r, &box[i]);
+        box[i].piece = (uint32_t)i;
+    }
+    if (np) {
+        builder B = {m, pc, box, 0};
+        build(&B, 0, np);
         m->n_nodes = B.next;
-        /* the beams in leaf order */
-        for (size_t i = 0; i < n; i++) m->beams[i] = b[idx[i]];
+        for (size_t i = 0; i < np; i++) m->pieces[i] = pc[box[i].piece]; /* in leaf order */
     }
     free(box);
-    free(idx);
+    free(pc);
     return m;
 }
 
@@ -143,16 +213,21 @@ void beam_map_free(beam_map *m)
 {
     if (!m) return;
     free(m->beams);
+    free(m->pieces);
     free(m->nodes);
     free(m);
 }
 
 size_t beam_map_size(const beam_map *m) { return m ? m->n : 0; }
 
-double beam_map_bytes(double n) { return n * (sizeof(photon_beam) + 2.0 * sizeof(beam_node)); }
+double beam_map_bytes(double n, double pieces)
+{
+    return n * sizeof(photon_beam) + pieces * (2.0 * sizeof(beam_piece) + sizeof(beam_box) + 2.0 * sizeof(beam_node));
+}
 
-/* The slab test of the segment o + t·d, t in [0, tmax], against a node's box. */
-static int hits_box(const beam_node *nd, const double *o, const double *inv, double tmax)
+/* The slab test of the segment o + t·d, t in [0, tmax], against a node's box; [*t_in, *t_out] the part of
+ * the segment inside it. */
+static int hits_box(const beam_node *nd, const double *o, const double *inv, double tmax, double *t_in, double *t_out)
 {
     double t0 = 0.0, t1 = tmax;
     for (int k = 0; k < 3; k++) {
@@ -168,12 +243,24 @@ static int hits_box(const beam_node *nd, const double *o, const double *inv, dou
         t1 = b < t1 ? b : t1;
         if (t0 > t1) return 0;
     }
+    *t_in = t0;
+    *t_out = t1;
     return 1;
+}
+
+/* Whether path times in [a + eta·t_in, b + eta·t_out] can meet [w->lo, w->hi), widened by 1e-6 of the
+ * magnitudes: the float η and length of the end times, and the caller's own rounding. */
+static int window_meets(const beam_window *w, double a, double b, double t_in, double t_out)
+{
+    double lo = w->t0 + a + w->eta * t_in, hi = w->t0 + b + w->eta * t_out;
+    double eps = 1e-6 * (fabs(w->t0) + fabs(a) + fabs(b) + (b - a) + w->eta * t_out + fabs(w->lo) + fabs(w->hi));
+    return lo - eps < w->hi && hi + eps >= w->lo;
 }
 
 /* Closest approach of the camera line o + t·d and the beam a + s·w (both unit): with w0 = o − a, b = d·w,
  * sin²θ = 1 − b², t = (b (w·w0) − d·w0)/sin²θ, s = (w·w0 − b (d·w0))/sin²θ. */
-static void test_beam(const photon_beam *bm, vec3 o, vec3 d, double tmax, double r2, beam_hit_fn hit, void *ctx)
+static void test_beam(const photon_beam *bm, const beam_piece *pc, vec3 o, vec3 d, double tmax, double r2,
+                      beam_hit_fn hit, void *ctx)
 {
     vec3 w = v3(bm->dir[0], bm->dir[1], bm->dir[2]);
     vec3 w0 = v3_sub(o, v3(bm->start[0], bm->start[1], bm->start[2]));
@@ -181,13 +268,13 @@ static void test_beam(const photon_beam *bm, vec3 o, vec3 d, double tmax, double
     if (!(sin2 > 1e-12)) return; /* parallel: the 1-D kernel's 1/sinθ has no finite limit */
     double dw0 = v3_dot(d, w0), ww0 = v3_dot(w, w0);
     double t = (b * ww0 - dw0) / sin2, s = (ww0 - b * dw0) / sin2;
-    if (t < 0.0 || t > tmax || s < 0.0 || s > bm->length) return;
+    if (t < 0.0 || t > tmax || s < pc->s0 || s > pc->s1 || (s == pc->s1 && pc->s1 < bm->length)) return;
     vec3 gap = v3_sub(v3_add(w0, v3_scale(d, t)), v3_scale(w, s));
     if (v3_dot(gap, gap) >= r2) return;
     hit(ctx, bm, t, s, 1.0 / sqrt(sin2));
 }
 
-void beam_map_query(const beam_map *m, vec3 o, vec3 d, double tmax, double t_hi, beam_hit_fn hit, void *ctx)
+void beam_map_query(const beam_map *m, vec3 o, vec3 d, double tmax, const beam_window *w, beam_hit_fn hit, void *ctx)
 {
     if (!m || m->n == 0) return;
     double oo[3] = {o.x, o.y, o.z}, inv[3] = {1.0 / d.x, 1.0 / d.y, 1.0 / d.z};
@@ -197,11 +284,15 @@ void beam_map_query(const beam_map *m, vec3 o, vec3 d, double tmax, double t_hi,
     stack[top++] = 0;
     while (top > 0) {
         const beam_node *nd = &m->nodes[stack[--top]];
-        if (!(nd->t_min < t_hi) || !hits_box(nd, oo, inv, tmax)) continue;
+        double t_in, t_out;
+        if (!hits_box(nd, oo, inv, tmax, &t_in, &t_out) || (w && !window_meets(w, nd->t_min, nd->t_max, t_in, t_out)))
+            continue;
         if (nd->count) {
             for (uint32_t i = 0; i < nd->count; i++) {
-                const photon_beam *bm = &m->beams[nd->first + i];
-                if (bm->time < t_hi) test_beam(bm, o, d, tmax, r2, hit, ctx);
+                const beam_piece *pc = &m->pieces[nd->first + i];
+                const photon_beam *bm = &m->beams[pc->beam];
+                if (!w || window_meets(w, bm->time + (double)bm->eta * pc->s0, bm->time + (double)bm->eta * pc->s1, t_in, t_out))
+                    test_beam(bm, pc, o, d, tmax, r2, hit, ctx);
             }
             continue;
         }
