@@ -1,8 +1,8 @@
 /* The beam BVH: a binary tree over pieces of the beams (long beams cut, piece_length) and their boxes (the
- * piece's box inflated by r), built by median splits on the box centres along the largest extent, leaves of at most BEAM_LEAF beams, nodes in depth-first order.
- * Each node also keeps the earliest start time of its beams, so that a query with a time bound skips whole
- * subtrees. Single-threaded build (about 0.1 s per 10^6 beams); the query is a slab test per node and the
- * closest approach of two lines per beam. */
+ * piece's box inflated by r): the pieces sorted in Morton order of their box centres and split at the middle
+ * (a linear BVH), leaves of at most BEAM_LEAF pieces, nodes in depth-first order.
+ * Each node also keeps the time range of its pieces, so that a query with a time window skips whole subtrees.
+ * Single-threaded build; the query is a slab test per node and the closest approach of two lines per piece. */
 #include <stddef.h>
 #include <stdlib.h>
 #include <string.h>
@@ -40,7 +40,7 @@ struct beam_map {
 typedef struct {
     float lo[3], hi[3], c[3];
     uint32_t piece;
-} beam_box; /* the build moves these, not indices: partitions then read memory in order */
+} beam_box;
 
 
 static void box_of(const photon_beam *b, const beam_piece *pc, double r, beam_box *x)
@@ -61,27 +61,60 @@ typedef struct {
     size_t next;
 } builder;
 
-/* Partial sort of box[lo, hi) so that box[mid] has the median centre along axis (quickselect, the middle
- * element as pivot: deterministic). */
-static void select_median(beam_box *box, size_t lo, size_t hi, size_t mid, int axis)
+/* Morton order: the box centres quantized to 21 bits per axis over their bounds, bits interleaved. */
+static uint64_t spread21(uint32_t v)
 {
-    ptrdiff_t l = (ptrdiff_t)lo, h = (ptrdiff_t)hi - 1, m = (ptrdiff_t)mid;
-    while (l < h) {
-        float pivot = box[l + (h - l) / 2].c[axis];
-        ptrdiff_t i = l, j = h;
-        while (i <= j) {
-            while (box[i].c[axis] < pivot) i++;
-            while (box[j].c[axis] > pivot) j--;
-            if (i <= j) {
-                beam_box t = box[i];
-                box[i++] = box[j];
-                box[j--] = t;
-            }
+    uint64_t x = v & 0x1fffff;
+    x = (x | x << 32) & 0x1f00000000ffffULL;
+    x = (x | x << 16) & 0x1f0000ff0000ffULL;
+    x = (x | x << 8) & 0x100f00f00f00f00fULL;
+    x = (x | x << 4) & 0x10c30c30c30c30c3ULL;
+    x = (x | x << 2) & 0x1249249249249249ULL;
+    return x;
+}
+
+typedef struct {
+    uint64_t key;
+    uint32_t at;
+} morton_key;
+
+static int key_cmp(const void *a, const void *b)
+{
+    const morton_key *x = a, *y = b;
+    if (x->key != y->key) return x->key < y->key ? -1 : 1;
+    return x->at < y->at ? -1 : x->at > y->at; /* ties by index: a total order, so the tree is deterministic */
+}
+
+/* Sorts box[0, n) into Morton order of the centres. 0, or -1 out of memory. */
+static int morton_sort(beam_box *box, size_t n)
+{
+    float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (size_t i = 0; i < n; i++)
+        for (int k = 0; k < 3; k++) {
+            if (box[i].c[k] < lo[k]) lo[k] = box[i].c[k];
+            if (box[i].c[k] > hi[k]) hi[k] = box[i].c[k];
         }
-        if (m <= j) h = j;
-        else if (m >= i) l = i;
-        else return;
+    morton_key *key = malloc(n * sizeof *key);
+    beam_box *tmp = malloc(n * sizeof *tmp);
+    if (!key || !tmp) {
+        free(key);
+        free(tmp);
+        return -1;
     }
+    for (size_t i = 0; i < n; i++) {
+        uint64_t code = 0;
+        for (int k = 0; k < 3; k++) {
+            double ext = (double)hi[k] - lo[k], u = ext > 0.0 ? ((double)box[i].c[k] - lo[k]) / ext : 0.0;
+            code |= spread21((uint32_t)(u * 2097151.0)) << k;
+        }
+        key[i] = (morton_key){code, (uint32_t)i};
+    }
+    qsort(key, n, sizeof *key, key_cmp);
+    for (size_t i = 0; i < n; i++) tmp[i] = box[key[i].at];
+    memcpy(box, tmp, n * sizeof *box);
+    free(key);
+    free(tmp);
+    return 0;
 }
 
 static inline float min_f(float a, float b) { return a < b ? a : b; }
@@ -104,8 +137,8 @@ static void leaf_bounds(builder *B, beam_node *nd, size_t lo, size_t hi)
     }
 }
 
-/* The subtree over idx[lo, hi): split at the median box centre along the centres' largest extent; an inner
- * node's bounds are its children's union (bottom-up). */
+/* The subtree over box[lo, hi), in Morton order: split at the middle (a linear BVH: each half is a compact
+ * region of the Morton curve); an inner node's bounds are its children's union (bottom-up). */
 static void build(builder *B, size_t lo, size_t hi)
 {
     size_t me = B->next++;
@@ -116,16 +149,7 @@ static void build(builder *B, size_t lo, size_t hi)
         nodes[me].count = (uint32_t)(hi - lo);
         return;
     }
-    float clo[3] = {INFINITY, INFINITY, INFINITY}, chi[3] = {-INFINITY, -INFINITY, -INFINITY};
-    for (size_t i = lo; i < hi; i++) {
-        const float *c = B->box[i].c;
-        for (int k = 0; k < 3; k++) clo[k] = min_f(clo[k], c[k]), chi[k] = max_f(chi[k], c[k]);
-    }
-    int axis = 0;
-    for (int k = 1; k < 3; k++)
-        if (chi[k] - clo[k] > chi[axis] - clo[axis]) axis = k;
     size_t mid = lo + (hi - lo) / 2;
-    select_median(B->box, lo, hi, mid, axis);
     size_t left = B->next;
     build(B, lo, mid);
     size_t right = B->next;
@@ -197,6 +221,12 @@ beam_map *beam_map_build(const photon_beam *b, size_t n, double r, dp_error *err
     for (size_t i = 0; i < np; i++) {
         box_of(&b[pc[i].beam], &pc[i], r, &box[i]);
         box[i].piece = (uint32_t)i;
+    }
+    if (np && morton_sort(box, np)) {
+        free(box);
+        free(pc);
+        beam_map_free(m);
+        return dp_fail_kind(err, DP_ERROR_MEMORY, "out of memory building the beam map (%zu beams, %zu pieces)", n, np), NULL;
     }
     if (np) {
         builder B = {m, pc, box, 0};
