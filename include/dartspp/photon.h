@@ -22,7 +22,7 @@ typedef struct {
  * from a light, surface or medium vertex to the next vertex (a medium event or a surface), as the free-flight
  * sampler drew it. The radiance-weighted flux at distance s along it is power · T(s)/P(s), T the medium's
  * transmittance and P(s) = mean over channels of T(s) the probability that the sampler reaches s (1 in a grey
- * medium): the "short beam" of Jarosz et al. 2011 (primitives-reference.md §2). */
+ * medium): the "short beam" of Jarosz et al. 2011 (docs/beams.md §1). */
 typedef struct {
     float start[3];
     float dir[3];     /* unit */

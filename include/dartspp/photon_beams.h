@@ -48,7 +48,7 @@ typedef struct {
     int camera_unwarp;        /* the camera segment adjacent to the sensor takes no time (docs/time.md §2.2) */
 } beam_gather;
 
-/* The 1-D beam × camera-ray estimate (Jarosz et al. 2011, "beam × beam 1D"; primitives-reference.md §2) of
+/* The 1-D beam × camera-ray estimate (Jarosz et al. 2011, "beam × beam 1D"; docs/beams.md §1) of
  * the camera segment o + t·d, 0 <= t <= len, in medium med (thr and t_cam at o, b_cam camera segments):
  * for every beam within r, box kernel 1/(2r), σs·f_p(ω_b → −d)·T_cam(t)·power·T_b(s)/P_b(s) / sinθ,
  * at the path time t_cam + beam time + η·s + η·t (camera-warped; the sensor's own segment takes no time when
