@@ -204,22 +204,72 @@ static double tiles_z(const char *label, const cell_totals *ref, const cell_tota
  * Broken variant: the phase function evaluated towards +d (the camera ray's direction) instead of −d: total
  * −35.8 %, max |z| 27.9. The beams' bounce one too high (order 6 lost) passes here (−0.81 %, max |z| 1.71):
  * the single-scattering check catches it. */
-static void tiles_check(const char *label, const char *extra, int frames, long pt_passes, long beam_passes)
+/* The fog box with `lights` (JSON primitives) instead of its point light, as tests/emitters/test_emitters_render.c
+ * builds it: the same walls, fog and camera. */
+static void lamp_box_text(char *text, size_t len, const char *integrator, const char *lights)
+{
+    snprintf(text, len,
+             "{ \"media\": [ { \"name\": \"fog\", \"type\": \"homogeneous\", \"sigma_s\": [0.45, 0.4, 0.5],"
+             "    \"sigma_a\": [0.05, 0.08, 0.03], \"phase_function\": { \"type\": \"henyey_greenstein\", \"g\": 0.3 } } ],"
+             BOX_WALLS
+             "%s ],"
+             "  \"camera\": { \"type\": \"pinhole\", \"resolution\": [16, 16], \"fov\": 45, \"medium\": \"fog\","
+             "    \"transform\": { \"position\": [0, 1, -3], \"look_at\": [0, 1, 0], \"up\": [0, 1, 0] } },"
+             "  \"integrator\": { %s },"
+             "  \"renderer\": { \"spp\": 1 } }",
+             lights, integrator);
+}
+
+/* Per tile (and frame) against the path tracer: the fog box with its point light, or with `lights` instead. */
+static void tiles_check_lights(const char *label, const char *lights, const char *extra, int frames, long pt_passes,
+                               long beam_passes)
 {
     char text[16384], keys[2048];
     cell_totals ref, m;
     double t_ref, t_m;
     snprintf(keys, sizeof keys, BOX_PT "%s", extra);
-    box_scene_text(text, sizeof text, 16, keys);
+    if (lights) lamp_box_text(text, sizeof text, keys, lights);
+    else box_scene_text(text, sizeof text, 16, keys);
     cell_render(text, pt_passes, 11, frames, &ref, &t_ref);
     snprintf(keys, sizeof keys, BOX_BEAMS "%s", extra);
-    box_scene_text(text, sizeof text, 16, keys);
+    if (lights) lamp_box_text(text, sizeof text, keys, lights);
+    else box_scene_text(text, sizeof text, 16, keys);
     cell_render(text, beam_passes, 29, frames, &m, &t_m);
     double z = tiles_z(label, &ref, &m, BEAM_TILE_BIAS);
     print_message("  seconds: path tracer %.1f, beams %.1f\n", t_ref, t_m);
     free(ref.x);
     free(m.x);
     assert_true(z < 4.2); /* Bonferroni over 16 tiles, two-sided p ≈ 4e-4 per comparison */
+}
+
+static void tiles_check(const char *label, const char *extra, int frames, long pt_passes, long beam_passes)
+{
+    tiles_check_lights(label, NULL, extra, frames, pt_passes, beam_passes);
+}
+
+/* The other emitters of tests/emitters/test_emitters_render.c (stress): a ceiling panel (box pulse) and a spot
+ * in a clear pocket (Gaussian pulse); a collimated beam of radius 0.08 across the box. */
+#define PANEL_AND_SPOT                                                                                               \
+    "{ \"type\": \"quad\", \"name\": \"panel\", \"bsdf\": \"white\", \"emission\": [3, 2.5, 2], \"int_medium\": \"fog\","   \
+    "  \"ext_medium\": \"fog\", \"pulse_width\": 0.3,"                                                                 \
+    "  \"transform\": { \"position\": [0.3, 1.96, 0.1], \"scale\": [0.7, 1, 0.7], \"rotation\": [180, 0, 0] } },"     \
+    "{ \"type\": \"cube\", \"bsdf\": { \"type\": \"forward\" }, \"ext_medium\": \"fog\","                              \
+    "  \"transform\": { \"position\": [-0.5, 1.2, -2.2], \"scale\": [0.3, 0.3, 0.3] } },"                              \
+    "{ \"type\": \"spot\", \"name\": \"flash\", \"emission\": [5, 6, 7], \"coneangle\": 30, \"conedeltaangle\": 10,"   \
+    "  \"pulse_start\": 0.1, \"pulse_width\": 0.4, \"pulse_shape\": \"gaussian\","                                      \
+    "  \"transform\": { \"position\": [-0.5, 1.2, -2.2], \"look_at\": [0.2, 0.7, 0.8], \"up\": [0, 1, 0] } }"
+#define COLLIMATED                                                                                                   \
+    "{ \"type\": \"collimated\", \"name\": \"laser\", \"radius\": 0.08, \"emission\": [60, 50, 40], \"ext_medium\": \"fog\"," \
+    "  \"transform\": { \"position\": [-0.9, 1.4, -0.8], \"look_at\": [0.9, 0.6, 0.9], \"up\": [0, 1, 0] } }"
+
+/* Measured (2026-11-28): panel and spot +1.24 % (max |z| 1.16), collimated −1.26 % (1.27). Broken variant: the
+ * first segment's beams starting at time 0 instead of the light's emission time: panel and spot −5.48 %, max
+ * |z| 4.73. */
+static void test_beams_other_emitters(void **state)
+{
+    (void)state;
+    tiles_check_lights("beams: panel and spot", PANEL_AND_SPOT, "", 0, 3000, 150);
+    tiles_check_lights("beams: collimated beam", COLLIMATED, "", 0, 3000, 150);
 }
 
 static void test_beams_tiles(void **state)
@@ -303,6 +353,7 @@ int main(void)
         cmocka_unit_test(test_beams_unwarped_single_scatter_total),
         cmocka_unit_test(test_beams_tiles_unwarped),
         cmocka_unit_test(test_beams_frames),
+        cmocka_unit_test(test_beams_other_emitters),
     };
     if (getenv("DARTSPP_TEST_FILTER")) cmocka_set_test_filter(getenv("DARTSPP_TEST_FILTER"));
     return RUN_TESTS_AND_STRESS(tests, stress);
