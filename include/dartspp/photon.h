@@ -18,11 +18,12 @@ typedef struct {
     double time;      /* light-to-photon path time (optical path length) */
 } photon;
 
-/* A short photon beam (volume_photon_type "beams", src/photon_beams): one medium segment of a light path,
- * from a light, surface or medium vertex to the next vertex (a medium event or a surface), as the free-flight
- * sampler drew it. The radiance-weighted flux at distance s along it is power · T(s)/P(s), T the medium's
- * transmittance and P(s) = mean over channels of T(s) the probability that the sampler reaches s (1 in a grey
- * medium): the "short beam" of Jarosz et al. 2011 (docs/beams.md §1). */
+/* A photon beam (volume_photon_type "beams", src/photon_beams): one medium segment of a light path from a
+ * light, surface or medium vertex. Baseline pass: a short beam, to the next vertex (a medium event or a
+ * surface) as the free-flight sampler drew it; the flux at distance s along it is power · T(s)/P(s), T the
+ * medium's transmittance and P(s) = mean over channels of T(s) the probability that the sampler reaches s (1 in
+ * a grey medium). DARTS pass (long_beam): a long beam, to the next surface whatever distance DA sampling drew
+ * (its survival function has no closed form), flux power · T(s). Jarosz et al. 2011 (docs/beams.md §1). */
 typedef struct {
     float start[3];
     float dir[3];     /* unit */
@@ -30,6 +31,8 @@ typedef struct {
     float length;     /* to the next vertex */
     float eta;        /* its medium's η (time per length): the time at s is time + η·s */
     int medium;       /* index into scene.media */
+    int frame;        /* DARTS frame mode: the only frame it may be gathered in; -1: any */
+    int long_beam;    /* 1: flux power·T(s) (DARTS pass); 0: power·T(s)/P(s) (short beam) */
     int bounce;       /* path segments from the light to a scattering point on the beam (this segment's index) */
     double time;      /* light-to-start path time */
 } photon_beam;

@@ -54,12 +54,16 @@ static void store(light_path *lp, photon_buf *b, uint32_t *count, vec3 x, vec3 d
     else (*count)++;
 }
 
+/* The DARTS samplers serve the volume map: they run only while its budget has room. */
+static int aims_at_volume(const light_path *lp) { return lp->g->active && lp->volume_open; }
+
 /* A medium segment of the light path as it starts (volume_photon_type "beams"): where, which way, with what
  * throughput and at what time; its length is known once the sampler has chosen the next vertex. */
 typedef struct {
     vec3 o, d, beta;
     double time;
     int med, bounce, medium_events, on;
+    int long_beam; /* DARTS: to the next surface, whatever distance DA sampling drew */
 } beam_start;
 
 static beam_start beam_begin(const light_path *lp)
@@ -72,22 +76,26 @@ static beam_start beam_begin(const light_path *lp)
     if (!medium_scatters(m) || lp->medium_events + 1 > m->max_bounces ||
         (!lp->in->low_order_scattering && lp->medium_events == 0))
         return b;
-    return (beam_start){.o = lp->o, .d = lp->d, .beta = lp->beta, .time = lp->time, .med = lp->med,
-                        .bounce = lp->bounce + 1, .medium_events = lp->medium_events, .on = 1};
+    /* the bin's probability divides the power as it divides photons' (store) */
+    return (beam_start){.o = lp->o, .d = lp->d, .beta = v3_scale(lp->beta, 1.0 / lp->bin.pdf), .time = lp->time,
+                        .med = lp->med, .bounce = lp->bounce + 1, .medium_events = lp->medium_events, .on = 1,
+                        .long_beam = aims_at_volume(lp)};
 }
 
-/* The segment begun at b ends `length` along it (a medium event or a surface): its beam, cut where its start
- * time plus the leg passes the window's end (no point beyond can count). */
+/* The segment begun at b ends `length` along it (a medium event or a surface; a long beam: the surface, or
+ * INFINITY): its beam, cut where its start time plus the leg passes the window's end (no point beyond can
+ * count). */
 static void beam_end(light_path *lp, const beam_start *b, double length)
 {
-    if (!b->on || !(length > 0.0) || !isfinite(length) || v3_is_zero(b->beta)) return;
+    if (!b->on || v3_is_zero(b->beta)) return;
     double eta = lp->s->media[b->med].eta;
     if (isfinite(lp->in->t_end) && eta > 0.0) length = dp_fmin(length, (lp->in->t_end - b->time) / eta);
-    if (!(length > 0.0)) return;
+    if (!(length > 0.0) || !isfinite(length)) return; /* a long beam into an endless medium needs the window's end */
     photon_beam bm = {.start = {(float)b->o.x, (float)b->o.y, (float)b->o.z},
                       .dir = {(float)b->d.x, (float)b->d.y, (float)b->d.z},
                       .power = {(float)b->beta.x, (float)b->beta.y, (float)b->beta.z},
-                      .length = (float)length, .eta = (float)eta, .medium = b->med, .bounce = b->bounce, .time = b->time};
+                      .length = (float)length, .eta = (float)eta, .medium = b->med, .frame = lp->bin.frame,
+                      .long_beam = b->long_beam, .bounce = b->bounce, .time = b->time};
     if (!isfinite(bm.power[0]) || !isfinite(bm.power[1]) || !isfinite(bm.power[2]) || !isfinite(bm.length)) {
         lp->tb->nonfinite++;
         return;
@@ -96,8 +104,6 @@ static void beam_end(light_path *lp, const beam_start *b, double length)
     else lp->pc->n_beams++;
 }
 
-/* The DARTS samplers serve the volume map: they run only while its budget has room. */
-static int aims_at_volume(const light_path *lp) { return lp->g->active && lp->volume_open; }
 
 /* The records of the camera's mirror images at the current vertex: the same record with the focus moved. */
 static void mirror_records(light_path *lp, const medium *m)
@@ -153,7 +159,7 @@ static int medium_segment(light_path *lp, double tmax)
     const medium *m = &lp->s->media[lp->med];
     /* nothing to aim where nothing scatters, or once no volume photon can be stored */
     int darts = aims_at_volume(lp) && medium_scatters(m);
-    if (darts && g->enable_elliptical) {
+    if (darts && g->enable_elliptical && !lp->in->beams) { /* beams cover the segment: no control vertex */
         double t, pdf;
         double sigma = v3_avg(m->sigma_t), u1 = rng_uniform(lp->rng), u2 = rng_uniform(lp->rng);
         int made;
@@ -334,8 +340,9 @@ void trace_light_path(const scene *s, const photon_pass_input *in, int volume_op
                 if (ev < 0) return;
             }
         }
-        if (ev == 1) { /* a medium event: lp moved to it along the segment */
-            beam_end(&lp, &bs, v3_dot(v3_sub(lp.o, bs.o), bs.d));
+        if (ev == 1) { /* a medium event: lp moved to it along the segment; a long beam goes on to the surface
+                        * (DARTS: the segment was traced to it first, in the ev == 2 branch) */
+            beam_end(&lp, &bs, bs.long_beam ? (hit ? h.t : INFINITY) : v3_dot(v3_sub(lp.o, bs.o), bs.d));
             continue;
         }
         if (!hit) return;

@@ -17,13 +17,16 @@ static void beam_hit(void *ctx, const photon_beam *b, double t, double s, double
     if (b->medium != c->med || !bounces_count(&c->g->bounces, b->bounce + c->b_cam)) return;
     const medium *m = c->m;
     double leg = c->g->camera_unwarp && c->b_cam == 1 ? 0.0 : m->eta * t; /* the sensor's own segment: none */
-    film_slot slot = film_time_slot(c->pix->f, c->t_cam + b->time + m->eta * s + leg, -1, b->bounce + c->b_cam - 1);
+    film_slot slot = film_time_slot(c->pix->f, c->t_cam + b->time + m->eta * s + leg, b->frame, b->bounce + c->b_cam - 1);
     if (!slot.counts) return; /* before the kernel, the phase function and the exponentials */
     vec3 wb = v3(b->dir[0], b->dir[1], b->dir[2]);
     double f = m->phase.type == PHASE_ISOTROPIC || m->phase.g == 0.0 ? DP_INV_4PI : phase_eval(&m->phase, wb, v3_neg(c->d));
     double k = f * inv_sin / (2.0 * c->g->r); /* box kernel over the offset across both lines */
     vec3 tr, along;
-    if (c->grey) {
+    if (b->long_beam) { /* the DARTS pass: T_b(s), the beam reaching the next surface */
+        tr = v3_exp_neg(v3_scale(m->sigma_t, t));
+        along = v3_exp_neg(v3_scale(m->sigma_t, s));
+    } else if (c->grey) {
         tr = v3s(exp(-m->sigma_t.x * t));
         along = v3s(1.0); /* T_b(s)/P_b(s) = 1: free flight drew the beam's length with this σt */
     } else {

@@ -59,12 +59,6 @@ int plan_resolve(const scene *s, render_plan *p, dp_error *err)
     p->time_angular_share = in->time_angular_share;
     p->uniform_time = resolve_uniform_time(s, p);
     if (darts_plan_resolve(s, p->type, &p->shading, &p->darts, err)) return -1;
-    if (p->type == INTEGRATOR_PHOTON_POINTS && p->volume_photon_type == VOLUME_PHOTON_BEAMS && p->darts.active) {
-        plan_free(p);
-        return dp_fail(err, "%s: integrator.volume_photon_type: 'beams' is fed by the baseline photon pass only "
-                            "(DARTS beams are not implemented yet): set enable_guiding, enable_elliptical and eda to false",
-                       s->path);
-    }
     p->spp = s->renderer.spp;
     p->timeout = s->renderer.timeout;
     p->checkpoint_interval = s->renderer.checkpoint_interval;
