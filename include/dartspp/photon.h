@@ -129,8 +129,8 @@ typedef struct {
     int max_bounces;                /* path segments; photons of longer paths cannot count */
     double t_end;                   /* the window's end (INFINITY: steady state) */
     int include_surfaces, low_order_scattering;
-    int beams;                      /* volume_photon_type "beams": the volume budget holds short beams (the
-                                     * medium segments), no volume photons; baseline pass only (plan.c) */
+    int beams;                      /* volume_photon_type "beams": the volume budget holds beams (the medium
+                                     * segments; long ones with DARTS), no volume photons */
     int surface_chains;             /* DARTS: once the volume budget is full, the surface photons come from
                                      * Markov chains over light paths (surface_chain.c) */
     darts_guide guide;              /* DARTS bins, bounds and switches; guide.active 0: baseline */

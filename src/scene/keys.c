@@ -95,7 +95,7 @@ static const scene_key table[] = {
     {.name = "low_order_scattering", IN(low_order_scattering), .type = KEY_BOOL, .read_by = PP,
      .changes_image = 1, .def = 1, .meaning = "Volume photons at the first medium vertex of a light path"},
     {.name = "volume_photon_type", IN(volume_photon_type), CHOICES("points", "beams"), .read_by = PP, .changes_image = 1,
-     .def = 0, .meaning = "Volume photon kind: points (2-D kernel) or short beams (1-D kernel, baseline photon pass; src/photon_beams)"},
+     .def = 0, .meaning = "Volume photon kind: points (2-D kernel) or photon beams (1-D kernel; docs/beams.md)"},
     {.name = "camera_leg", IN(camera_leg), CHOICES("euclidean", "projected"), .read_by = PP,
      .changes_image = 1, .def = 0, .meaning = "Camera leg length of a volume photon's time: along the ray or projected"},
     {.name = "volume_gather", IN(volume_gather), CHOICES("splat", "beam"), .read_by = PP, .changes_image = 1,
