@@ -322,15 +322,16 @@ static void test_beams_thread_independent(void **state)
 
 /* The DARTS photon pass feeding beams (bin sampling, DA distance sampling, EDA where on, the early exit; no
  * control vertices: a beam covers its segment): long beams, each to the next surface with flux power·T(s),
- * since DA's survival function has no closed form. Single scattering against the quadrature, and the plan
- * taking it. Broken variant: long beams weighted as short ones (T/P), i.e. as if DA had drawn free flight. */
+ * since DA's survival function has no closed form. Single scattering against the quadrature (stress, 4 seeds:
+ * −0.118 % = −1.6 se, allowance 0.43 %; 28 s under ASan for 2 seeds, so not in the default tier). */
 static void test_darts_beams_single_scatter_total(void **state)
 {
     (void)state;
     beams_total_check("DARTS beams (DA, strict)", DARTS_KEYS, NULL, 0, 4);
 }
 
-/* Per tile against the path tracer, with DARTS (stress). */
+/* Per tile against the path tracer, with DARTS (stress): +0.31 %, max |z| 1.48. Broken variant: the beams
+ * ended at the DA-drawn vertex (short beams with a distance whose survival is not T): −24.9 %, max |z| 21.8. */
 static void test_darts_beams_tiles(void **state)
 {
     (void)state;
