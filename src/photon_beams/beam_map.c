@@ -162,22 +162,29 @@ static void build(builder *B, size_t lo, size_t hi)
     nd->count = 0;
 }
 
-/* The pieces' length: a 32nd of the extent of the beams' starts, and at least 4 r (shorter pieces would
- * only add pieces to a box the radius already dominates). */
+/* The pieces' length: a 16th of the largest side of the beams' box, and at least 4 r (shorter pieces would
+ * only add pieces to a box the radius already dominates); at most BEAM_PIECES_MAX pieces a beam. */
 static double piece_length(const photon_beam *b, size_t n, double r)
 {
     float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-    for (size_t i = 0; i < n; i++)
-        for (int k = 0; k < 3; k++) lo[k] = min_f(lo[k], b[i].start[k]), hi[k] = max_f(hi[k], b[i].start[k]);
+    for (size_t i = 0; i < n; i++) /* both ends: beams from one point light all start at one point */
+        for (int k = 0; k < 3; k++) {
+            float e = b[i].start[k] + b[i].dir[k] * b[i].length;
+            lo[k] = min_f(lo[k], min_f(b[i].start[k], e));
+            hi[k] = max_f(hi[k], max_f(b[i].start[k], e));
+        }
     double ext = 0.0;
     for (int k = 0; k < 3 && n; k++) ext = dp_fmax(ext, (double)hi[k] - lo[k]);
     return dp_fmax(ext / 16.0, 4.0 * r);
 }
 
+#define BEAM_PIECES_MAX 64 /* per beam: a tiny radius (late iterations of a small α) must not explode the count */
+
 static size_t pieces_of(const photon_beam *b, double len)
 {
     double k = ceil((double)b->length / len);
-    return k < 1.0 ? 1 : (size_t)k;
+    if (!(k >= 1.0)) return 1; /* also NaN */
+    return k > BEAM_PIECES_MAX ? BEAM_PIECES_MAX : (size_t)k;
 }
 
 double beam_map_pieces(const photon_beam *b, size_t n, double r)

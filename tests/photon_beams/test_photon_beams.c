@@ -55,7 +55,7 @@ static void test_beam_map_brute_force(void **state)
     dp_error err;
     beam_map *m = beam_map_build(b, NB, r, &err);
     assert_non_null(m);
-    assert_true(beam_map_pieces(b, NB, r) > 2.0 * NB); /* long beams were cut */
+    assert_true(beam_map_pieces(b, NB, r) > 1.2 * NB); /* long beams were cut */
     int *count = calloc(NB, sizeof(int));
     double *t = calloc(NB, sizeof(double)), *s = calloc(NB, sizeof(double)), *is = calloc(NB, sizeof(double));
     long pairs = 0, windowed = 0;
@@ -149,7 +149,8 @@ static void beams_total_check(const char *label, const char *keys, const char *c
 /* Warped time. Broken variants (2026-11-28): the beam's T(s)/P(s) left out in this coloured fog (green
  * −3.98 % = −31 se, red −0.39 %); the camera leg left out of the path time (image 0); the kernel 1/r instead
  * of 1/(2r) (+100 % = 373 se); the beams' bounce one too high (image 0: the order-1 layer lost). Measured:
- * +0.008 %, +0.007 %, +0.011 % (se 0.11 % with 3 seeds; bias allowance 0.43 %). */
+ * +0.031 %, +0.030 %, +0.032 % (se 0.13 % with 2 seeds; with 3: +0.008 % at se 0.11 %; bias allowance
+ * 0.43 %). */
 static void test_beams_single_scatter_total(void **state)
 {
     (void)state;
