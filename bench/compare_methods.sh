@@ -13,7 +13,9 @@
 #   darts_pt_eda  DARTS path tracer with elliptical light connections and EDA directions, DA off (not in the
 #               default set: METHODS="... darts_pt_eda"; its EDA tables are cached in tables/)
 #   darts_pp    DARTS photon points (DA + elliptical control vertices)
-# Photon beams are not a method of dartspp (refused with a message). The scene's own integrator keys (photon
+#   pb          baseline progressive transient photon beams (1-D kernel; docs/beams.md), not in the default set
+#   darts_pb    DARTS photon beams (long beams from the DARTS photon pass), not in the default set
+# The scene's own integrator keys (photon
 # counts, radii, bounces, gate) are kept; only the method's keys are set. Images, logs and error-against-time
 # rows (with REFERENCE, one per second) go to bench/results/NAME/; the table to
 # bench/results/NAME-methods-SECONDSs.md. Uses only the command line.
@@ -29,6 +31,7 @@ out=bench/results/$name; mkdir -p "$out"
 table=bench/results/$name-methods-${secs}s.md
 pt="--set type=path_tracer"
 pp="--set type=progressive_transient_photon_map --set volume_photon_type=points"
+pb="--set type=progressive_transient_photon_map --set volume_photon_type=beams"
 off="--set enable_guiding=false --set enable_elliptical=false --set eda=false"
 on="--set enable_guiding=true --set enable_elliptical=true"
 methods="uniform_pt|$pt $off --set time_sampling=uniform
@@ -36,7 +39,9 @@ pt|$pt $off
 pp|$pp $off
 darts_pt|$pt $on
 darts_pt_eda|$pt --set enable_guiding=false --set enable_elliptical=true --set eda=true
-darts_pp|$pp $on"
+darts_pp|$pp $on
+pb|$pb $off
+darts_pb|$pb $on"
 only=${METHODS:-uniform_pt pt pp darts_pt darts_pp}
 s=1
 while [ "$s" -le "$seeds" ]; do

@@ -9,10 +9,13 @@
 
 #include "dartspp/film.h"
 #include "dartspp/photon.h"
+#include "dartspp/photon_beams.h"
 #include "dartspp/plan.h"
 
 typedef struct {
     const volume_photon_map *vol;   /* may be NULL */
+    const beam_gather *beams;       /* volume_photon_type "beams": the 1-D beam kernel along every medium
+                                     * segment instead of volume photons (vol NULL), or NULL */
     const surface_photon_map *surf; /* may be NULL */
     const photon *surf_photons;     /* the array the surface map was built over */
     const photon *vol_photons;      /* the array the volume map was built over (the splat reads it) */

@@ -18,6 +18,25 @@ typedef struct {
     double time;      /* light-to-photon path time (optical path length) */
 } photon;
 
+/* A photon beam (volume_photon_type "beams", src/photon_beams): one medium segment of a light path from a
+ * light, surface or medium vertex. Baseline pass: a short beam, to the next vertex (a medium event or a
+ * surface) as the free-flight sampler drew it; the flux at distance s along it is power · T(s)/P(s), T the
+ * medium's transmittance and P(s) = mean over channels of T(s) the probability that the sampler reaches s (1 in
+ * a grey medium). DARTS pass (long_beam): a long beam, to the next surface whatever distance DA sampling drew
+ * (its survival function has no closed form), flux power · T(s). Jarosz et al. 2011 (docs/beams.md §1). */
+typedef struct {
+    float start[3];
+    float dir[3];     /* unit */
+    float power[3];   /* the path throughput at the start, divided by the number of light paths */
+    float length;     /* to the next vertex */
+    float eta;        /* its medium's η (time per length): the time at s is time + η·s */
+    int medium;       /* index into scene.media */
+    int frame;        /* DARTS frame mode: the only frame it may be gathered in; -1: any */
+    int long_beam;    /* 1: flux power·T(s) (DARTS pass); 0: power·T(s)/P(s) (short beam) */
+    int bounce;       /* path segments from the light to a scattering point on the beam (this segment's index) */
+    double time;      /* light-to-start path time */
+} photon_beam;
+
 /* ---- volume photon map ---- */
 typedef struct volume_photon_map volume_photon_map;
 
@@ -97,6 +116,8 @@ typedef struct {
     long early_exits;      /* paths ended by the DARTS early exit */
     long aimed_paths;      /* DARTS: paths traced with its samplers, before the volume budget filled */
     photon_chain_stats chain; /* surface chains (all 0 without them) */
+    photon_beam *beams;    /* photon_pass_input.beams: the medium segments, instead of volume photons */
+    size_t n_beams;
     int interrupted;       /* the stop flag ended the pass early: the sets are incomplete */
 } photon_set;
 
@@ -108,6 +129,8 @@ typedef struct {
     int max_bounces;                /* path segments; photons of longer paths cannot count */
     double t_end;                   /* the window's end (INFINITY: steady state) */
     int include_surfaces, low_order_scattering;
+    int beams;                      /* volume_photon_type "beams": the volume budget holds beams (the medium
+                                     * segments; long ones with DARTS), no volume photons */
     int surface_chains;             /* DARTS: once the volume budget is full, the surface photons come from
                                      * Markov chains over light paths (surface_chain.c) */
     darts_guide guide;              /* DARTS bins, bounds and switches; guide.active 0: baseline */
@@ -128,6 +151,9 @@ void photon_pass_input_init(photon_pass_input *in, const scene *s, const render_
 int photon_pass_uses_chains(const photon_pass_input *in);
 int photon_pass(const scene *s, const photon_pass_input *in, photon_set *out, dp_error *err);
 void photon_set_free(photon_set *ps);
+
+/* Bytes a beam array of n beams holds at its capacity (it grows by doubling). */
+double photon_beam_array_bytes(double n);
 
 /* Bytes a photon set's array of n photons holds at its capacity (it grows by doubling: less than 2n). */
 double photon_array_bytes(double n);

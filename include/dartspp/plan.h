@@ -47,9 +47,11 @@ typedef struct render_plan {
     double photon_count;             /* light paths per iteration, and the surface photon budget */
     double volume_photon_count;      /* volume photon budget per iteration */
     int gather_photon_count;         /* surface photons gathered per camera hit (k nearest) */
-    radius_schedule r_vol;           /* volume_gather_radius, volume_alpha, radius_schedule */
+    radius_schedule r_vol;           /* volume_gather_radius, volume_alpha, radius_schedule; beams: dims 1 (their
+                                      * kernel is 1-D, Marco et al. 2019's r0·γ_i) unless radius_schedule "3d" */
     radius_schedule r_surf;          /* gather_radius, alpha */
     int include_surfaces, low_order_scattering, surface_chains;
+    volume_photon_type_choice volume_photon_type; /* points, or short beams (src/photon_beams) */
     camera_leg_choice camera_leg;
     volume_gather_choice volume_gather;
     pass_weights_choice pass_weights;

@@ -155,7 +155,7 @@ typedef struct {
     double gather_radius, volume_gather_radius, alpha, volume_alpha;
     int fixed_volume_radius, include_surfaces, low_order_scattering;
     int enable_guiding, enable_elliptical, strict_time_width;
-    int volume_photon_type;         /* volume_photon_type_choice (beams load and are refused at render time) */
+    int volume_photon_type;         /* volume_photon_type_choice */
     int camera_leg;                 /* camera_leg_choice */
     int volume_gather;              /* volume_gather_choice */
     int radius_schedule;            /* radius_schedule_choice */

@@ -29,16 +29,37 @@ static inline int buf_push(photon_buf *b, const photon *ph)
     return 0;
 }
 
+typedef struct {
+    photon_beam *p;
+    size_t n, cap;
+} beam_buf;
+
+static inline int beam_buf_push(beam_buf *b, const photon_beam *bm)
+{
+    if (b->n == b->cap) {
+        size_t cap = b->cap ? 2 * b->cap : PHOTON_BUF_FIRST;
+        photon_beam *q = realloc(b->p, cap * sizeof(photon_beam));
+        if (!q) return -1;
+        b->p = q;
+        b->cap = cap;
+    }
+    b->p[b->n++] = *bm;
+    return 0;
+}
+
 /* Written by one thread per photon stored: on cache lines of its own (core.h, dp_calloc_cache_aligned). */
 typedef struct {
     _Alignas(DP_CACHE_LINE) photon_buf vol;
     photon_buf surf;
+    beam_buf beams;
     long nonfinite;
     int oom;
 } thread_bufs;
 
 typedef struct {
     uint32_t n_vol, n_surf;    /* photons this path stored */
+    uint32_t n_beams;          /* beams this path stored (photon_pass_input.beams) */
+    size_t off_beams;
     int early_exit;            /* ended by the DARTS early exit */
     int thread;                /* whose buffers hold them */
     size_t off_vol, off_surf;  /* where they start there */

@@ -57,6 +57,54 @@ static void store(light_path *lp, photon_buf *b, uint32_t *count, vec3 x, vec3 d
 /* The DARTS samplers serve the volume map: they run only while its budget has room. */
 static int aims_at_volume(const light_path *lp) { return lp->g->active && lp->volume_open; }
 
+/* A medium segment of the light path as it starts (volume_photon_type "beams"): where, which way, with what
+ * throughput and at what time; its length is known once the sampler has chosen the next vertex. */
+typedef struct {
+    vec3 o, d, beta;
+    double time;
+    int med, bounce, medium_events, on;
+    int long_beam; /* DARTS: to the next surface, whatever distance DA sampling drew */
+} beam_start;
+
+static beam_start beam_begin(const light_path *lp)
+{
+    beam_start b = {.on = 0};
+    if (!lp->in->beams || !lp->volume_open || lp->med == MEDIUM_VACUUM) return b;
+    const medium *m = &lp->s->media[lp->med];
+    /* a scattering point on the beam is the path's next medium event: none past the medium's limit, and
+     * low_order_scattering off, none at the first medium event after a light or surface (as photons) */
+    if (!medium_scatters(m) || lp->medium_events + 1 > m->max_bounces ||
+        (!lp->in->low_order_scattering && lp->medium_events == 0))
+        return b;
+    /* the bin's probability divides the power as it divides photons' (store) */
+    return (beam_start){.o = lp->o, .d = lp->d, .beta = v3_scale(lp->beta, 1.0 / lp->bin.pdf), .time = lp->time,
+                        .med = lp->med, .bounce = lp->bounce + 1, .medium_events = lp->medium_events, .on = 1,
+                        .long_beam = aims_at_volume(lp)};
+}
+
+/* The segment begun at b ends `length` along it (a medium event or a surface; a long beam: the surface, or
+ * INFINITY): its beam, cut where its start time plus the leg passes the window's end (no point beyond can
+ * count). */
+static void beam_end(light_path *lp, const beam_start *b, double length)
+{
+    if (!b->on || v3_is_zero(b->beta)) return;
+    double eta = lp->s->media[b->med].eta;
+    if (isfinite(lp->in->t_end) && eta > 0.0) length = dp_fmin(length, (lp->in->t_end - b->time) / eta);
+    if (!(length > 0.0) || !isfinite(length)) return; /* a long beam into an endless medium needs the window's end */
+    photon_beam bm = {.start = {(float)b->o.x, (float)b->o.y, (float)b->o.z},
+                      .dir = {(float)b->d.x, (float)b->d.y, (float)b->d.z},
+                      .power = {(float)b->beta.x, (float)b->beta.y, (float)b->beta.z},
+                      .length = (float)length, .eta = (float)eta, .medium = b->med, .frame = lp->bin.frame,
+                      .long_beam = b->long_beam, .bounce = b->bounce, .time = b->time};
+    if (!isfinite(bm.power[0]) || !isfinite(bm.power[1]) || !isfinite(bm.power[2]) || !isfinite(bm.length)) {
+        lp->tb->nonfinite++;
+        return;
+    }
+    if (beam_buf_push(&lp->tb->beams, &bm)) lp->tb->oom = 1;
+    else lp->pc->n_beams++;
+}
+
+
 /* The records of the camera's mirror images at the current vertex: the same record with the focus moved. */
 static void mirror_records(light_path *lp, const medium *m)
 {
@@ -111,7 +159,7 @@ static int medium_segment(light_path *lp, double tmax)
     const medium *m = &lp->s->media[lp->med];
     /* nothing to aim where nothing scatters, or once no volume photon can be stored */
     int darts = aims_at_volume(lp) && medium_scatters(m);
-    if (darts && g->enable_elliptical) {
+    if (darts && g->enable_elliptical && !lp->in->beams) { /* beams cover the segment: no control vertex */
         double t, pdf;
         double sigma = v3_avg(m->sigma_t), u1 = rng_uniform(lp->rng), u2 = rng_uniform(lp->rng);
         int made;
@@ -191,7 +239,7 @@ static int medium_event(light_path *lp, const medium *m, double t, int darts)
     if (++lp->medium_events > m->max_bounces) return -1;
     /* classic photons (no control vertices); low_order_scattering off: none at the first vertex after a
      * light or surface */
-    if (lp->volume_open && !(darts && g->enable_elliptical) && (in->low_order_scattering || lp->medium_events > 1))
+    if (lp->volume_open && !in->beams && !(darts && g->enable_elliptical) && (in->low_order_scattering || lp->medium_events > 1))
         store(lp, &lp->tb->vol, &lp->pc->n_vol, lp->o, lp->d, lp->beta, lp->bounce, lp->time);
     new_vertex(lp);
     const eda_table *et = darts && in->eda ? in->eda->table[lp->med] : NULL;
@@ -282,18 +330,23 @@ void trace_light_path(const scene *s, const photon_pass_input *in, int volume_op
             return;
         }
         hit_record h;
+        beam_start bs = beam_begin(&lp);
         int hit = 0, ev = lp.med != MEDIUM_VACUUM ? free_flight_first(&lp, &h, &hit) : 2;
         if (ev < 0) return;
-        if (ev == 1) continue;
         if (ev == 2) {
             hit = scene_intersect(s, lp.o, lp.d, INFINITY, &h);
             if (lp.med != MEDIUM_VACUUM) {
                 ev = medium_segment(&lp, hit ? h.t : INFINITY);
                 if (ev < 0) return;
-                if (ev > 0) continue;
             }
         }
+        if (ev == 1) { /* a medium event: lp moved to it along the segment; a long beam goes on to the surface
+                        * (DARTS: the segment was traced to it first, in the ev == 2 branch) */
+            beam_end(&lp, &bs, bs.long_beam ? (hit ? h.t : INFINITY) : v3_dot(v3_sub(lp.o, bs.o), bs.d));
+            continue;
+        }
         if (!hit) return;
+        beam_end(&lp, &bs, h.t);
         lp.time += medium_eta(s, lp.med) * h.t;
         if (!surface_event(&lp, &h)) return;
     }
@@ -308,6 +361,7 @@ typedef struct {
 typedef struct {
     budget_state bv, bsf;
     photon_buf vol, surf;
+    beam_buf beams;    /* photon_pass_input.beams: under the volume budget (bv) */
     long next;         /* independent light paths traced */
     long early, aimed;
     int interrupted;
@@ -328,6 +382,20 @@ static int merge_path(photon_buf *dst, budget_state *bs, const photon_buf *src, 
     return 0;
 }
 
+/* merge_path for beams: the path's beams under the volume budget */
+static int merge_beams(beam_buf *dst, budget_state *bs, const beam_buf *src, size_t off, uint32_t n)
+{
+    if (bs->full) return 0;
+    if (dst->n + n > bs->budget) {
+        bs->full = 1;
+        return 0;
+    }
+    for (uint32_t i = 0; i < n; i++)
+        if (beam_buf_push(dst, &src->p[off + i])) return -1;
+    bs->paths++;
+    return 0;
+}
+
 static void scale_powers(photon *p, size_t n, long paths)
 {
     float inv = paths > 0 ? (float)(1.0 / paths) : 0.0f;
@@ -343,6 +411,7 @@ void photon_pass_input_init(photon_pass_input *in, const scene *s, const render_
                               .max_bounces = p->bounces.max,
                               .t_end = p->window.gated ? time_window_end(&p->window) : INFINITY,
                               .include_surfaces = p->include_surfaces, .low_order_scattering = p->low_order_scattering,
+                              .beams = p->volume_photon_type == VOLUME_PHOTON_BEAMS,
                               .surface_chains = p->surface_chains,
                               .surface_slack = plan_surface_slack(p, iteration), .shading = p->shading,
                               .eda = eda, .seed = seed,
@@ -366,12 +435,13 @@ static int independent_paths(const scene *s, const photon_pass_input *in, int nt
 #pragma omp parallel num_threads(nt)
         {
             thread_bufs *mine = &tb[omp_get_thread_num()];
-            mine->vol.n = mine->surf.n = 0;
+            mine->vol.n = mine->surf.n = mine->beams.n = 0;
 #pragma omp for schedule(dynamic, 64) /* paths differ in length; any thread may trace any path */
             for (long i = 0; i < nb; i++) {
                 dp_rng rng = rng_stream(in->seed ^ 0x70686f746f6eULL, (uint64_t)in->iteration, (uint64_t)(next + i));
                 /* counted in a local and stored once: neighbouring entries belong to other threads */
-                path_count c = {.thread = omp_get_thread_num(), .off_vol = mine->vol.n, .off_surf = mine->surf.n};
+                path_count c = {.thread = omp_get_thread_num(), .off_vol = mine->vol.n, .off_surf = mine->surf.n,
+                                .off_beams = mine->beams.n};
                 trace_light_path(s, in, open, &rng, mine, &c);
                 pc[i] = c;
             }
@@ -379,7 +449,8 @@ static int independent_paths(const scene *s, const photon_pass_input *in, int nt
         for (long i = 0; i < nb && !rc; i++) { /* merge in path order */
             const thread_bufs *src = &tb[pc[i].thread];
             pt->early += pc[i].early_exit;
-            rc |= merge_path(&pt->vol, &pt->bv, &src->vol, pc[i].off_vol, pc[i].n_vol);
+            if (in->beams) rc |= merge_beams(&pt->beams, &pt->bv, &src->beams, pc[i].off_beams, pc[i].n_beams);
+            else rc |= merge_path(&pt->vol, &pt->bv, &src->vol, pc[i].off_vol, pc[i].n_vol);
             rc |= merge_path(&pt->surf, &pt->bsf, &src->surf, pc[i].off_surf, pc[i].n_surf);
         }
         pt->next += nb;
@@ -459,12 +530,14 @@ int photon_pass(const scene *s, const photon_pass_input *in, photon_set *out, dp
         rc |= tb[t].oom ? -1 : 0;
         free(tb[t].vol.p);
         free(tb[t].surf.p);
+        free(tb[t].beams.p);
     }
     free(tb);
     free(pc);
     if (rc) {
         free(pt.vol.p);
         free(pt.surf.p);
+        free(pt.beams.p);
         return dp_fail_kind(err, DP_ERROR_MEMORY, "%s: out of memory in the photon pass", s->path);
     }
     out->paths = pt.next + pt.chains.traced;
@@ -475,6 +548,9 @@ int photon_pass(const scene *s, const photon_pass_input *in, photon_set *out, dp
     /* the independent paths count once each, the chains as the paths they traced */
     out->surf_paths = (pt.bsf.full && !pt.chains.traced ? pt.bsf.paths : pt.next) + pt.chains.traced;
     scale_powers(pt.vol.p, pt.vol.n, out->vol_paths);
+    float inv_paths = out->vol_paths > 0 ? (float)(1.0 / out->vol_paths) : 0.0f;
+    for (size_t i = 0; i < pt.beams.n; i++)
+        for (int c = 0; c < 3; c++) pt.beams.p[i].power[c] *= inv_paths;
     scale_powers(pt.surf.p, n_independent, out->surf_paths);
     if (pt.chains.states > 0) { /* P̂(V)·traced/states: the chain states stand for the paths they replace */
         double p_visible = (double)pt.chains.visible / (double)pt.chains.large;
@@ -486,6 +562,8 @@ int photon_pass(const scene *s, const photon_pass_input *in, photon_set *out, dp
     out->n_vol = pt.vol.n;
     out->surf = pt.surf.p;
     out->n_surf = pt.surf.n;
+    out->beams = pt.beams.p;
+    out->n_beams = pt.beams.n;
     return 0;
 }
 
@@ -498,8 +576,18 @@ double photon_array_bytes(double n)
     return cap * sizeof(photon);
 }
 
+double photon_beam_array_bytes(double n)
+{
+    if (!(n > 0)) return 0;
+    if (!isfinite(n)) return HUGE_VAL;
+    double cap = PHOTON_BUF_FIRST;
+    while (cap < n) cap *= 2;
+    return cap * sizeof(photon_beam);
+}
+
 void photon_set_free(photon_set *ps)
 {
+    free(ps->beams);
     free(ps->vol);
     free(ps->surf);
     memset(ps, 0, sizeof *ps);

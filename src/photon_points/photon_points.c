@@ -1,6 +1,7 @@
 /* Progressive photon points, one iteration: photon pass → photon maps (radii of this iteration) →
  * sensor pass → film. Iterations are independent draws; the film keeps their mean. */
 #include "dartspp/gather.h"
+#include "dartspp/photon_beams.h"
 #include "dartspp/photon_points.h"
 
 void photon_points_last_radii(const render_plan *p, long passes, render_stats *st)
@@ -31,8 +32,11 @@ int photon_points_pass(const scene *s, const render_plan *p, const eda_set *eda,
     double t1 = dp_seconds();
     volume_photon_map *vm = NULL;
     surface_photon_map *sm = NULL;
+    beam_map *bm = NULL; /* volume_photon_type "beams": the pass kept beams instead of volume photons */
+    beam_gather bg = {.r = g.r_vol, .bounces = p->bounces, .camera_unwarp = p->window.camera_unwarp};
     int rc = 0;
     if (ps.n_vol > 0 && !(vm = volume_map_build(ps.vol, ps.n_vol, g.r_vol, err))) rc = -1;
+    if (!rc && ps.n_beams > 0 && !(bm = beam_map_build(ps.beams, ps.n_beams, g.r_vol, err))) rc = -1;
     if (!rc && ps.n_surf > 0 && !(sm = surface_map_build(ps.surf, ps.n_surf, err))) rc = -1;
     double t2 = dp_seconds();
     if (!rc) {
@@ -41,6 +45,8 @@ int photon_points_pass(const scene *s, const render_plan *p, const eda_set *eda,
         g.surf_photons = ps.surf;
         g.vol_photons = ps.vol;
         g.n_vol = ps.n_vol;
+        bg.map = bm;
+        g.beams = bm ? &bg : NULL;
         render_stats pass = {.rays = gather_pass(s, &g, f, seed, iteration),
                              .photon_paths = (double)ps.paths,
                              .early_exits = (double)ps.early_exits,
@@ -50,7 +56,7 @@ int photon_points_pass(const scene *s, const render_plan *p, const eda_set *eda,
                              .chain_visible = (double)ps.chain.visible,
                              .chain_small = (double)ps.chain.small,
                              .chain_accepted = (double)ps.chain.accepted,
-                             .stored_photons = (double)(ps.n_vol + ps.n_surf),
+                             .stored_photons = (double)(ps.n_vol + ps.n_surf + ps.n_beams),
                              .r_vol = g.r_vol,
                              .r_surf = g.r_surf,
                              .t_photon = t1 - t0,
@@ -60,6 +66,7 @@ int photon_points_pass(const scene *s, const render_plan *p, const eda_set *eda,
         render_stats_add(st, &pass);
     }
     volume_map_free(vm);
+    beam_map_free(bm);
     surface_map_free(sm);
     photon_set_free(&ps);
     return rc;

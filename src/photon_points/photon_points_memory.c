@@ -5,6 +5,7 @@
  * the budgets cap the extrapolation. */
 #include "dartspp/gather.h"
 #include "dartspp/photon.h"
+#include "dartspp/photon_beams.h"
 #include "dartspp/photon_points.h"
 
 /* One photon pass of a single batch of light paths (a few milliseconds), without EDA tables and without
@@ -30,28 +31,31 @@ static int pilot_pass(const scene *s, const render_plan *p, photon_set *ps, int 
 void photon_points_memory(const scene *s, const render_plan *p, memory_estimate *m)
 {
     memory_item_add(m, "EDA tables", "integrator.eda_shape", (double)eda_set_bytes(s, &p->darts));
-    double V = p->volume_photon_count, S = p->photon_count, batch_photons = 1.0;
+    double V = p->volume_photon_count, S = p->photon_count, batch_photons = 1.0, batch_beams = 0.0;
     photon_set pilot;
     int chains, piloted = pilot_pass(s, p, &pilot, &chains);
     /* the budgets cap what the light paths store; surface chains start once the volume budget is full, which
      * the pilot's single batch never sees, and can fill the surface budget: counted full */
     if (piloted) {
-        V = dp_fmin(V, (double)pilot.n_vol / pilot.paths * p->photon_count);
+        V = dp_fmin(V, (double)(pilot.n_vol + pilot.n_beams) / pilot.paths * p->photon_count);
         if (!chains) S = dp_fmin(S, (double)pilot.n_surf / pilot.paths * p->photon_count);
         batch_photons = dp_fmax((double)(pilot.n_vol + pilot.n_surf) / pilot.paths * PHOTON_PASS_BATCH, 1.0);
+        batch_beams = (double)pilot.n_beams / pilot.paths * PHOTON_PASS_BATCH;
     }
     /* each set's array at its capacity, and its map: volume_map_bytes is about (16 + 56) B a photon plus the
      * nodes (the surface map is the same tree); in double for huge budgets */
     double per_mapped = (double)volume_map_bytes(1 << 20) / (1 << 20);
-    int volume = s->medium_count > 0;
-    if (volume)
+    int volume = s->medium_count > 0, beams = p->volume_photon_type == VOLUME_PHOTON_BEAMS;
+    if (volume && beams) /* beams: no volume photons, and the sensor pass queries the beam map per segment */
+        photon_beams_memory(piloted ? pilot.beams : NULL, piloted ? pilot.n_beams : 0, schedule_radius(&p->r_vol, 0), V, m);
+    if (volume && !beams)
         memory_item_add(m, "volume photons and their map", "integrator.volume_photon_count", photon_array_bytes(V) + V * per_mapped);
-    if (volume) /* the first pass's radius is the largest: the most footprint entries */
+    if (volume && !beams) /* the first pass's radius is the largest: the most footprint entries */
         memory_item_add(m, "primary lines and splat of the sensor pass", "camera.resolution",
             gather_pass_bytes(s, p->volume_gather == VOLUME_GATHER_SPLAT, piloted ? pilot.vol : NULL, piloted ? pilot.n_vol : 0,
                               schedule_radius(&p->r_vol, 0), V));
     if (p->include_surfaces || !volume)
         memory_item_add(m, "surface photons and their map", "integrator.photon_count", photon_array_bytes(S) + S * per_mapped);
-    memory_item_add(m, "photon batch buffers", NULL, photon_array_bytes(batch_photons));
+    memory_item_add(m, "photon batch buffers", NULL, photon_array_bytes(batch_photons) + photon_beam_array_bytes(batch_beams));
     if (piloted) photon_set_free(&pilot);
 }

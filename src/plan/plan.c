@@ -27,7 +27,11 @@ static void resolve_photon_points(const integrator_settings *in, render_plan *p)
     p->photon_count = in->photon_count;
     p->volume_photon_count = in->volume_photon_count;
     p->gather_photon_count = (int)in->gather_photon_count;
-    p->r_vol = (radius_schedule){in->volume_gather_radius, in->volume_alpha, in->radius_schedule == RADIUS_SCHEDULE_3D ? 3 : 2};
+    p->volume_photon_type = in->volume_photon_type;
+    /* the kernel's dimension: 2 for points, 1 for beams (the 1-D kernel of src/photon_beams); "3d" is the
+     * authors' cube root for either */
+    int dims = in->radius_schedule == RADIUS_SCHEDULE_3D ? 3 : in->volume_photon_type == VOLUME_PHOTON_BEAMS ? 1 : 2;
+    p->r_vol = (radius_schedule){in->volume_gather_radius, in->volume_alpha, dims};
     p->r_surf = (radius_schedule){in->gather_radius, in->alpha, 2};
     p->include_surfaces = in->include_surfaces;
     p->low_order_scattering = in->low_order_scattering;
@@ -44,8 +48,6 @@ int plan_resolve(const scene *s, render_plan *p, dp_error *err)
 {
     const integrator_settings *in = &s->integrator;
     memset(p, 0, sizeof *p);
-    if (in->volume_photon_type == VOLUME_PHOTON_BEAMS)
-        return dp_fail(err, "%s: integrator.volume_photon_type: 'beams' is not supported (supported: points)", s->path);
     p->type = in->type;
     snprintf(p->type_name, sizeof p->type_name, "%s", in->type_name);
     p->window = in->window;
@@ -88,6 +90,8 @@ double plan_pass_weight(const render_plan *p, long iteration)
     if (p->pass_weights == PASS_WEIGHTS_EQUAL) return 1.0;
     const radius_schedule *r = p->include_surfaces ? &p->r_surf : &p->r_vol;
     double q = schedule_radius(r, iteration) / r->r0;
+    /* beams' 1-D kernel: variance about ∝ 1/r, so the weight is the kernel's width */
+    if (!p->include_surfaces && p->volume_photon_type == VOLUME_PHOTON_BEAMS) return q;
     return q * q;
 }
 

@@ -53,6 +53,9 @@ static void print_media(const scene *s, const render_plan *p)
 void summary_print_photon_pass(const scene *s, const render_plan *p)
 {
     const darts_plan *d = &p->darts;
+    if (p->volume_photon_type == VOLUME_PHOTON_BEAMS) /* docs/beams.md */
+        printf("volume: photon beams, 1-D kernel, %s; radius r0*gamma_i\n",
+               d->active ? "long beams (to the next surface: DA distances)" : "short beams (to the next vertex)");
     if (!d->active) {
         printf("photon pass: baseline (free-flight distances, photons at scattering vertices)%s\n",
                (d->enable_guiding || d->enable_elliptical_asked) ? "; DARTS samplers off: the scene has no medium or no gate" : "");
@@ -60,7 +63,9 @@ void summary_print_photon_pass(const scene *s, const render_plan *p)
     }
     printf("photon pass: DARTS, %s target bins; DA distance sampling %s; elliptical control vertices %s (residual %s); "
            "strict time %s", p->window.frame_count ? "per-frame" : "gate", d->enable_guiding ? "on" : "off",
-           p->window.camera_unwarp ? "off (camera-unwarped time)" : d->enable_elliptical ? "on"
+           p->window.camera_unwarp ? "off (camera-unwarped time)"
+           : p->volume_photon_type == VOLUME_PHOTON_BEAMS ? "off (beams cover their segments)"
+           : d->enable_elliptical ? "on"
            : d->enable_elliptical_asked ? "off: refractive index not uniform" : "off",
            d->ellipse_residual == RESIDUAL_EXPONENTIAL ? "exponential" : "uniform", d->strict_time_width ? "on" : "off");
     if (d->side.seen && d->darts_mirrors == DARTS_MIRRORS_FULL) print_continued_surfaces(s, d);

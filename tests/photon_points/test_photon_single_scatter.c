@@ -336,7 +336,9 @@ static void test_darts_single_scatter_total(void **state)
 
 /* Two programs from this file: test_photon_single_scatter (quick tier) holds the gated totals of baseline and
  * DARTS photon points; test_photon_single_scatter_modes (tests/photon_points/test_photon_single_scatter_modes.c,
- * `make test`) includes this file with SINGLE_SCATTER_MODES for camera-unwarped time. */
+ * `make test`) includes this file with SINGLE_SCATTER_MODES for camera-unwarped time. A third,
+ * tests/photon_beams/test_photon_beams.c, includes it with SINGLE_SCATTER_NO_MAIN for its quadrature. */
+#ifndef SINGLE_SCATTER_NO_MAIN /* tests/photon_beams/test_photon_beams.c shares the quadrature, with a main of its own */
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -351,3 +353,4 @@ int main(void)
     if (getenv("DARTSPP_TEST_FILTER")) cmocka_set_test_filter(getenv("DARTSPP_TEST_FILTER"));
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
+#endif

@@ -1,6 +1,6 @@
 /* tier: quick */
 /* The paper's own scene files load with the values written in them: the Cornell box of cbox-trans (its four
- * files, volume beams refused when rendered) and the three dragon files (textures, conductors, smooth mesh).
+ * files, volume beams resolved as beams) and the three dragon files (textures, conductors, smooth mesh).
  * Skipped when the paper's scenes are not beside the checkout (see test_need_paper_files). Expected values are
  * worked out by hand from the scene files and docs/scene-format.md. */
 #include "fixtures.h"
@@ -44,8 +44,8 @@ static void test_shared_scenes_load(void **state)
     for (size_t i = 0; i < count; i++) {
         const char *path = paths[i];
         char *text = read_all(path, NULL);
-        /* Volume beams are not implemented (DESIGN: a photon-points renderer); a scene asking for them must
-         * be refused with a message naming the key, not silently rendered with points. */
+        /* The authors' beams scene (volume_photon_type "beams", baseline photon pass): the plan takes beams,
+         * not points (src/photon_beams; rendering it is tests/photon_points/test_photon_beams.c's). */
         int beams = strstr(text, "\"volume_photon_type\": \"beams\"") != NULL;
         free(text);
         scene *s = fx_slot();
@@ -54,17 +54,12 @@ static void test_shared_scenes_load(void **state)
         int rc = scene_load(path, NULL, s, &err);
         if (rc == 0) fx_mark(s, 1);
         if (rc) fail_msg("scene_load(%s) failed: %s", path, err.msg);
-        if (beams) { /* loads, but rendering it is refused with the key named */
-            render_options ro = {.spp = 1, .time_limit = 0};
-            film f;
-            render_stats st;
-            if (render_scene(s, &ro, &f, &st, &err) == 0) {
-                film_free(&f);
-                fail_msg("%s asks for volume beams, yet it rendered", path);
-            }
-            ASSERT_CONTAINS(err.msg, path);
-            ASSERT_CONTAINS(err.msg, "volume_photon_type");
-            ASSERT_CONTAINS(err.msg, "beams");
+        if (beams) {
+            render_plan p;
+            if (plan_resolve(s, &p, &err)) fail_msg("%s: %s", path, err.msg);
+            assert_int_equal(p.volume_photon_type, VOLUME_PHOTON_BEAMS);
+            assert_int_equal(p.r_vol.dims, 1);
+            plan_free(&p);
         }
         assert_true(s->surface_count >= 7); /* back, ceiling, floor, 2 walls, 2 boxes */
         assert_int_equal(s->light_count, 1);
