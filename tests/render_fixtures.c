@@ -172,6 +172,21 @@ void box_scene_text_cam(char *text, size_t len, int res, const char *integrator,
              g, camera_in_fog ? "" : fog_cube, res, res, camera_in_fog ? ", \"medium\": \"fog\"" : "", integrator);
 }
 
+/* The fog box's walls, fog and camera at 16² with `lights` (JSON primitives) in place of its point light. */
+void lamp_box_text(char *text, size_t len, const char *integrator, const char *lights)
+{
+    snprintf(text, len,
+             "{ \"media\": [ { \"name\": \"fog\", \"type\": \"homogeneous\", \"sigma_s\": [0.45, 0.4, 0.5],"
+             "    \"sigma_a\": [0.05, 0.08, 0.03], \"phase_function\": { \"type\": \"henyey_greenstein\", \"g\": 0.3 } } ],"
+             BOX_WALLS
+             "%s ],"
+             "  \"camera\": { \"type\": \"pinhole\", \"resolution\": [16, 16], \"fov\": 45, \"medium\": \"fog\","
+             "    \"transform\": { \"position\": [0, 1, -3], \"look_at\": [0, 1, 0], \"up\": [0, 1, 0] } },"
+             "  \"integrator\": { %s },"
+             "  \"renderer\": { \"spp\": 1 } }",
+             lights, integrator);
+}
+
 void box_scene_text(char *text, size_t len, int res, const char *integrator)
 {
     box_scene_text_cam(text, len, res, integrator, 0.3, 1);

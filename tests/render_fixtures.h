@@ -119,6 +119,9 @@ void cell_render(const char *text, long passes, uint64_t seed, int frames, cell_
 /* The fog box (render_fixtures.c tells its design): res × res pixels, the integrator's keys, HG g, the
  * camera in the fog or in vacuum outside an index-matched fog cube. */
 void box_scene_text_cam(char *text, size_t len, int res, const char *integrator, double g, int camera_in_fog);
+/* The fog box (16², camera in HG fog) with `lights`, JSON primitives, in place of its point light: the emitter
+ * and beams tiles. */
+void lamp_box_text(char *text, size_t len, const char *integrator, const char *lights);
 /* The fog box with g = 0.3 and the camera in the fog. */
 void box_scene_text(char *text, size_t len, int res, const char *integrator);
 /* The box's fog made grey (σs 0.45, σa 0.05 in every channel), in place. */

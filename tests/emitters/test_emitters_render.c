@@ -195,20 +195,6 @@ static void test_beam_single_scatter(void **state)
 
 /* ---- the fog box lit by the new emitters, per tile ---- */
 
-/* The fog box of render_fixtures.c (walls, camera in HG fog at 16²) with `lights` for its point light. */
-static void lamp_box_text(char *text, size_t len, const char *integrator, const char *lights)
-{
-    snprintf(text, len,
-             "{ \"media\": [ { \"name\": \"fog\", \"type\": \"homogeneous\", \"sigma_s\": [0.45, 0.4, 0.5],"
-             "    \"sigma_a\": [0.05, 0.08, 0.03], \"phase_function\": { \"type\": \"henyey_greenstein\", \"g\": 0.3 } } ],"
-             BOX_WALLS
-             "%s ],"
-             "  \"camera\": { \"type\": \"pinhole\", \"resolution\": [16, 16], \"fov\": 45, \"medium\": \"fog\","
-             "    \"transform\": { \"position\": [0, 1, -3], \"look_at\": [0, 1, 0], \"up\": [0, 1, 0] } },"
-             "  \"integrator\": { %s },"
-             "  \"renderer\": { \"spp\": 1 } }",
-             lights, integrator);
-}
 
 /* A ceiling panel facing down (box pulse) and a spot beside the camera in a clear pocket (Gaussian pulse),
  * aimed into the box: the gated camera's flash. */

@@ -205,21 +205,6 @@ static double tiles_z(const char *label, const cell_totals *ref, const cell_tota
  * Broken variant: the phase function evaluated towards +d (the camera ray's direction) instead of −d: total
  * −35.8 %, max |z| 27.9. The beams' bounce one too high (order 6 lost) passes here (−0.81 %, max |z| 1.71):
  * the single-scattering check catches it. */
-/* The fog box with `lights` (JSON primitives) instead of its point light, as tests/emitters/test_emitters_render.c
- * builds it: the same walls, fog and camera. */
-static void lamp_box_text(char *text, size_t len, const char *integrator, const char *lights)
-{
-    snprintf(text, len,
-             "{ \"media\": [ { \"name\": \"fog\", \"type\": \"homogeneous\", \"sigma_s\": [0.45, 0.4, 0.5],"
-             "    \"sigma_a\": [0.05, 0.08, 0.03], \"phase_function\": { \"type\": \"henyey_greenstein\", \"g\": 0.3 } } ],"
-             BOX_WALLS
-             "%s ],"
-             "  \"camera\": { \"type\": \"pinhole\", \"resolution\": [16, 16], \"fov\": 45, \"medium\": \"fog\","
-             "    \"transform\": { \"position\": [0, 1, -3], \"look_at\": [0, 1, 0], \"up\": [0, 1, 0] } },"
-             "  \"integrator\": { %s },"
-             "  \"renderer\": { \"spp\": 1 } }",
-             lights, integrator);
-}
 
 /* Per tile (and frame) against the path tracer: the fog box with its point light, or with `lights` instead. */
 static void tiles_check_lights(const char *label, const char *lights, const char *extra, int frames, long pt_passes,
