@@ -16,6 +16,9 @@
 #   darts_pp    DARTS photon points (DA + elliptical control vertices)
 #   pb          baseline progressive transient photon beams (1-D kernel; docs/beams.md), not in the default set
 #   darts_pb    DARTS photon beams (long beams from the DARTS photon pass), not in the default set
+#   balls volumes hypervolumes volumes_balls mis_volumes_balls planes planes_1d
+#               Liu et al. 2022's temporally sliced photon primitives (docs/sliced_primitives.md), baseline
+#               photon pass, not in the default set
 # The scene's own integrator keys (photon
 # counts, radii, bounces, gate) are kept; only the method's keys are set. Images, logs and error-against-time
 # rows (with REFERENCE, one per second) go to bench/results/NAME/; the table to
@@ -33,6 +36,7 @@ table=bench/results/$name-methods-${secs}s.md
 pt="--set type=path_tracer"
 pp="--set type=progressive_transient_photon_map --set volume_photon_type=points"
 pb="--set type=progressive_transient_photon_map --set volume_photon_type=beams"
+sliced="--set type=progressive_transient_photon_map --set volume_photon_type"
 off="--set enable_guiding=false --set enable_elliptical=false --set eda=false"
 on="--set enable_guiding=true --set enable_elliptical=true"
 methods="uniform_pt|$pt $off --set time_sampling=uniform
@@ -42,7 +46,14 @@ darts_pt|$pt $on
 darts_pt_eda|$pt --set enable_guiding=false --set enable_elliptical=true --set eda=true
 darts_pp|$pp $on
 pb|$pb $off
-darts_pb|$pb $on"
+darts_pb|$pb $on
+balls|$sliced=balls $off
+volumes|$sliced=volumes $off
+hypervolumes|$sliced=hypervolumes $off
+volumes_balls|$sliced=volumes_balls $off
+mis_volumes_balls|$sliced=mis_volumes_balls $off
+planes|$sliced=planes $off
+planes_1d|$sliced=planes_1d $off"
 only=${METHODS:-uniform_pt pt pp darts_pt darts_pp}
 s=1
 while [ "$s" -le "$seeds" ]; do
@@ -73,6 +84,8 @@ paper() {
     darts_pp) echo "< 1 (paper §6.1: DARTS PP further increased the gap)" ;;
     pb) echo "> 1 (paper §6.1, Fig. 7: 1-D progressive transient photon beams behind DARTS PT and PP)" ;;
     darts_pb) echo "below pb, above darts_pp (supplement §C.3, Fig. VI)" ;;
+    mis_volumes_balls) echo "(Liu et al. 2022 §6: 20–40× less variance than pb on SUBSURFACE, 2–4× on CORNELL BOX)" ;;
+    balls|volumes|hypervolumes|volumes_balls|planes|planes_1d) echo "(not in the paper)" ;;
     esac
 }
 {
