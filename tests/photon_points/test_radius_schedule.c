@@ -126,7 +126,7 @@ static void test_glossy_regularization_schedule(void **state)
  * γ_i, without surfaces, and (R_i/R₀)²·w_i/w₀ with them. After N passes the film's gate is the box of
  * iteration N − 1 centred on the gate, and the figures say so. Broken variants (2026-11-28): the width not
  * shrinking (plan_gate_width returning w₀): w_1 0.5 against 0.4472 at α 0.6; the beams' exponent 1 instead of
- * 1/2 (dims 1): r_1 0.04 against 0.04472; the pass weight without w_i/w₀: 0.8944 against 0.8. */
+ * 1/2 (dims 1): w_1 0.4 against 0.4472; the pass weight without w_i/w₀: 0.8944 against 0.8. */
 static void delta_schedule_case(const char *type, int dims, int surfaces)
 {
     char integ[2048], text[8192];
