@@ -34,6 +34,18 @@ void film_free(film *f);
 void film_copy_sums(film *to, const film *from);
 /* A new film `to` (film_init) holding the completed passes of `from`. 0, or -1 with err (out of memory). */
 int film_copy(film *to, const film *from, dp_error *err);
+/* Under a delta gate (window.delta), the box of the pass in progress: [center − w/2, center + w/2) with weight
+ * 1/w, the temporal kernel K_τ of this iteration (plan_gate_width); every reader of f->window (film_time_slot,
+ * the estimators' time pruning) then sees it. Nothing for a box gate. The sums stay comparable across passes
+ * (each contribution is weighted when it is splatted), so a film's reduction, copy and checkpoint do not
+ * depend on it. */
+static inline void film_set_pass_gate(film *f, double w)
+{
+    if (!f->window.delta) return;
+    f->window.width = w;
+    f->window.start = f->window.center - 0.5 * w;
+}
+
 /* Where a contribution arriving at path time t (tagged with frame, as film_splat) lands: decided once, so
  * that an estimator adding many contributions of one time (a photon splatted into many pixels) divides
  * once. */

@@ -101,6 +101,10 @@ typedef struct {
                         * sensor (docs/time.md §2.2); 0: camera-warped (the default) */
     int orders;        /* integrator key bounce_orders K: K + 1 more layers of the gate image or of every frame, the
                         * paths of 0, 1, ..., K − 1 and of K or more scattering events (docs/time.md §7); 0: none */
+    int delta;         /* delta_time_gate: the gate is a Dirac delta at `center` (docs/time.md §3.1); start and width
+                        * hold the box of the first iteration, [center − w₀/2, center + w₀/2), and a film holds the box
+                        * of its pass in progress (film_set_pass_gate); never with frames */
+    double center;     /* the delta gate's instant (transient_time_center); 0 without a delta gate */
 } time_window;
 
 /* The film's float layers: the frames, then per order the frames (the gate image when there are none). */
@@ -112,6 +116,13 @@ static inline int time_window_layers(const time_window *tw)
 static inline double time_window_end(const time_window *tw)
 {
     return tw->start + tw->width * (tw->frame_count > 0 ? tw->frame_count : 1);
+}
+
+/* The bounds an image's header gives: [start, end) of a box gate; a delta gate's instant twice. */
+static inline void time_window_bounds(const time_window *tw, double *start, double *end)
+{
+    *start = tw->delta ? tw->center : tw->start;
+    *end = tw->delta ? tw->center : time_window_end(tw);
 }
 
 /* ---- settings ----
