@@ -324,6 +324,30 @@ static int parse_primitives(json_ctx *c, const cJSON *root, scene *s, const cJSO
 
 /* ---- camera ---- */
 
+/* Tungsten's PinholeCamera: the horizontal field of view in degrees. */
+static int parse_pinhole(json_ctx *c, const cJSON *v, camera *cam)
+{
+    if (jget_number(c, v, "camera", "fov", 60.0, &cam->fov_deg)) return -1;
+    if (!(cam->fov_deg > 0 && cam->fov_deg < 180)) return jfail(c, "camera", "fov", "must be in (0, 180) degrees (got %g)", cam->fov_deg);
+    /* a positive fov so small that the image plane's distance 1/tan(fov/2) overflows gave NaN ray directions */
+    if (cam->fov_deg < 1e-6)
+        return jfail(c, "camera", "fov", "is too small (got %g; the smallest supported is 1e-6 degrees)", cam->fov_deg);
+    return 0;
+}
+
+/* Tungsten's OrthographicCamera: orthographic_size, half the film's height in scene units (default 1, as
+ * Tungsten's); the film's width follows the resolution's aspect. It reads no fov (a fov in the file is unread,
+ * as in Tungsten). */
+static int parse_orthographic(json_ctx *c, const cJSON *v, camera *cam)
+{
+    if (jget_number(c, v, "camera", "orthographic_size", 1.0, &cam->ortho_size)) return -1;
+    if (!(cam->ortho_size > 0 && cam->ortho_size < 1e30))
+        return jfail(c, "camera", "orthographic_size", "must be a positive length, half the film's height in scene "
+                     "units (got %g)", cam->ortho_size);
+    cam->fov_deg = 0.0;
+    return 0;
+}
+
 static int parse_camera(json_ctx *c, const cJSON *root, scene *s)
 {
     const cJSON *v = jget_item(c, root, "camera");
@@ -331,8 +355,10 @@ static int parse_camera(json_ctx *c, const cJSON *root, scene *s)
     size_t mark = jread_mark(c);
     const char *type = "pinhole";
     if (jget_string(c, v, "camera", "type", &type) < 0) return -1;
-    if (strcmp(type, "pinhole")) return jfail(c, "camera", "type", "unsupported camera '%s' (supported: pinhole)", type);
     camera *cam = &s->cam;
+    if (!strcmp(type, "pinhole")) cam->type = CAMERA_PINHOLE;
+    else if (!strcmp(type, "orthographic")) cam->type = CAMERA_ORTHOGRAPHIC;
+    else return jfail(c, "camera", "type", "unsupported camera '%s' (supported: pinhole, orthographic)", type);
     cam->width = 512;
     cam->height = 512;
     const cJSON *res = jget_item(c, v, "resolution");
@@ -352,18 +378,14 @@ static int parse_camera(json_ctx *c, const cJSON *root, scene *s)
         cam->width = (int)w;
         cam->height = (int)h;
     }
-    if (jget_number(c, v, "camera", "fov", 60.0, &cam->fov_deg)) return -1;
-    if (!(cam->fov_deg > 0 && cam->fov_deg < 180)) return jfail(c, "camera", "fov", "must be in (0, 180) degrees (got %g)", cam->fov_deg);
-    /* a positive fov so small that the image plane's distance 1/tan(fov/2) overflows gave NaN ray directions */
-    if (cam->fov_deg < 1e-6)
-        return jfail(c, "camera", "fov", "is too small (got %g; the smallest supported is 1e-6 degrees)", cam->fov_deg);
+    if (cam->type == CAMERA_ORTHOGRAPHIC ? parse_orthographic(c, v, cam) : parse_pinhole(c, v, cam)) return -1;
     xform T;
     if (xform_parse(c, jget_item(c, v, "transform"), "camera", &T)) return -1;
     cam->pos = T.pos;
     cam->right = v3_neg(v3_norm(T.x)); /* Tungsten negates the camera's x axis */
     cam->up = v3_norm(T.y);
     cam->forward = v3_norm(T.z);
-    cam->plane_dist = 1.0 / tan(0.5 * cam->fov_deg * M_PI / 180.0);
+    if (cam->type == CAMERA_PINHOLE) cam->plane_dist = 1.0 / tan(0.5 * cam->fov_deg * M_PI / 180.0);
     cam->medium = MEDIUM_VACUUM;
     const cJSON *m = jget_item(c, v, "medium");
     if (m && medium_ref(c, s, m, "camera", "medium", &cam->medium)) return -1;
@@ -417,7 +439,7 @@ static void warn_dark_scene(json_ctx *c, const scene *s)
         if (L->pulse.shape == PULSE_GAUSSIAN && L->pulse.width > 0.0) return; /* no earliest emission */
         if (s->cam.response.on) return; /* the response can move a detection earlier */
         /* the nearest emitting point is at most `extent` nearer than the light's reference point */
-        double d = tw->camera_unwarp ? 0.0 : dp_fmax(0.0, v3_len(v3_sub(L->pos, s->cam.pos)) - L->extent);
+        double d = tw->camera_unwarp ? 0.0 : dp_fmax(0.0, camera_distance(&s->cam, L->pos) - L->extent);
         double t = L->pulse.start + d * eta;
         if (t < earliest) earliest = t, dist = d, first = L;
     }
