@@ -252,6 +252,35 @@ static void warn_mixed_winding(json_ctx *c, const scene *s, const cJSON *v, cons
           medium_name(s, sf->ext_medium), flipped, shared);
 }
 
+/* Liu et al.'s fork of Tungsten (Primitive::selectSpeedOfLight): int_speed_of_light / ext_speed_of_light set the
+ * speed of light on the back / front side of a surface when that side has no medium (a side's medium keeps its
+ * own speed_of_light; a value <= 0 means none, the fork's default -1). dartspp gives such a side a clear region,
+ * a medium with σs = σa = 0 and η = 1/speed (media_load.c): Liu's volumetric-caustic times the glass lens this
+ * way. The fork also changes the speed on a surface that sets no medium, keeping the medium: not representable
+ * here (a region is one medium with one η), refused. */
+static int side_speed(json_ctx *c, scene *s, const cJSON *v, const char *where, const char *key, const surface *sf,
+                      int *side)
+{
+    if (!jget_item(c, v, key)) return 0;
+    double speed;
+    if (jget_number(c, v, where, key, -1.0, &speed)) return -1;
+    if (!(speed > 0)) {
+        jwarn(c, "%s: %s %g is not positive: no speed is set (as in Liu et al.'s fork, whose default is -1)", where,
+              key, speed);
+        return 0;
+    }
+    if (!sf->overrides_media)
+        return jfail(c, where, key, "changes the speed of light without int_medium or ext_medium on the surface: "
+                     "not supported (dartspp's regions are media, each with its speed_of_light; give the surface "
+                     "int_medium and ext_medium, or a medium with speed_of_light %g)", speed);
+    if (*side != MEDIUM_VACUUM) {
+        jwarn(c, "%s: %s %g is ignored: that side has medium '%s', whose speed_of_light %g applies (as in Liu et al.'s "
+              "fork)", where, key, speed, s->media[*side].name, 1.0 / s->media[*side].eta);
+        return 0;
+    }
+    return clear_region(c, s, speed, where, key, side);
+}
+
 static int parse_surface(json_ctx *c, scene *s, const cJSON *names, const cJSON *v, const char *where,
                          const char *type, const xform *T)
 {
@@ -266,6 +295,9 @@ static int parse_surface(json_ctx *c, scene *s, const cJSON *names, const cJSON 
     sf.overrides_media = im || em;
     if (im && medium_ref(c, s, im, where, "int_medium", &sf.int_medium)) return -1;
     if (em && medium_ref(c, s, em, where, "ext_medium", &sf.ext_medium)) return -1;
+    if (side_speed(c, s, v, where, "int_speed_of_light", &sf, &sf.int_medium) ||
+        side_speed(c, s, v, where, "ext_speed_of_light", &sf, &sf.ext_medium))
+        return -1;
     tri_mesh m = {0};
     unsigned flags;
     int rc = load_shape(c, s, v, where, type, &m, &flags);
@@ -451,9 +483,10 @@ static void warn_dark_scene(json_ctx *c, const scene *s)
               first->name);
     else
         jwarn(c, "integrator: the time %s ends at %g, before any light path can reach the camera: the earliest "
-                 "arrival is %g (light '%s': pulse_start %g + distance to the camera %g x the smallest time per "
-                 "length %g): the image will be black", tw->frame_count > 0 ? "window of the frames" : "gate", end,
-              earliest, first->name, first->pulse.start, dist, eta);
+                 "arrival is %g (light '%s': pulse_start %g + distance to the camera%s %g x the smallest time per "
+                 "length %g): the image will be black; a file written for a renderer that does not time the camera "
+                 "segment (Liu et al.'s) renders with camera_unwarp true", tw->frame_count > 0 ? "window of the frames" : "gate", end,
+              earliest, first->name, first->pulse.start, s->cam.type == CAMERA_ORTHOGRAPHIC ? "'s plane" : "", dist, eta);
 }
 
 /* A light whose paths start in vacuum (no ext_medium) while the camera is in a medium and no surface sets
