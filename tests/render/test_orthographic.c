@@ -18,7 +18,11 @@
  * - Per 4 × 4 tile: the fog box (render_fixtures.c) seen by an orthographic camera in the fog whose film is the
  *   box's opening (2 × 2), gated [3.2, 5.2): the plain path tracer against baseline photon points (volume
  *   splat on parallel lines) with the 3 % bias budget of the photon-points tiles (tests/emitters), and in the
- *   stress group photon beams, the DARTS and the uniform-time path tracers, unwarped photon points.
+ *   stress group photon beams, the DARTS and the uniform-time path tracers, unwarped photon points and the
+ *   unwarped DARTS path tracer (one path-tracer reference per time mode, shared by its cases).
+ *   Measured (2026-11-28, under ASan at load 4–8): photon points −0.23 % to −0.74 %, max |z| 1.05–1.50;
+ *   beams −0.56 %, 1.15; DARTS PT −0.10 %, 2.43; uniform-time PT −1.03 %, 1.86; unwarped photon points
+ *   +0.34 %, 1.28; unwarped DARTS PT −0.04 %, 2.09 (3000 passes each then).
  * - The DARTS photon pass with it is refused, naming the key. */
 #include "fixtures.h"
 #include "render_fixtures.h"
@@ -169,22 +173,41 @@ static double tiles_z(const char *label, const cell_totals *ref, const cell_tota
     return zmax;
 }
 
+/* The plain path tracer's tiles with `extra`, rendered once per (extra, passes) and kept for the next case. */
+static const cell_totals *pt_reference(const char *extra, long passes, double *seconds)
+{
+    static cell_totals ref;
+    static char key[256];
+    static long key_passes;
+    static double key_seconds;
+    if (ref.x && key_passes == passes && !strcmp(key, extra)) {
+        *seconds = key_seconds;
+        return &ref;
+    }
+    free(ref.x);
+    char text[16384], k[2048];
+    snprintf(k, sizeof k, BOX_PT "%s", extra);
+    ortho_box_text(text, sizeof text, k);
+    cell_render(text, passes, 11, 0, &ref, &key_seconds);
+    snprintf(key, sizeof key, "%s", extra);
+    key_passes = passes;
+    *seconds = key_seconds;
+    return &ref;
+}
+
 /* The method `keys` (with `extra`) against the plain path tracer (with `extra`), per tile. */
 static void tiles_check(const char *label, const char *keys, const char *extra, double bias, long pt_passes,
                         long passes)
 {
     char text[16384], k[2048];
-    cell_totals ref, m;
+    cell_totals m;
     double t_ref, t_m;
-    snprintf(k, sizeof k, BOX_PT "%s", extra);
-    ortho_box_text(text, sizeof text, k);
-    cell_render(text, pt_passes, 11, 0, &ref, &t_ref);
+    const cell_totals *ref = pt_reference(extra, pt_passes, &t_ref);
     snprintf(k, sizeof k, "%s%s", keys, extra);
     ortho_box_text(text, sizeof text, k);
     cell_render(text, passes, 29, 0, &m, &t_m);
-    double z = tiles_z(label, &ref, &m, bias);
+    double z = tiles_z(label, ref, &m, bias);
     print_message("  seconds: path tracer %.1f, %s %.1f\n", t_ref, label, t_m);
-    free(ref.x);
     free(m.x);
     assert_true(z < Z_MAX);
 }
@@ -201,22 +224,22 @@ static void test_tiles_beams(void **state)
 {
     (void)state;
     tiles_check("photon beams", BOX_PP ", \"volume_photon_type\": \"beams\", \"volume_gather_radius\": 0.05", "", PP_BIAS,
-                3000, 150);
+                2000, 150);
 }
 
 static void test_tiles_path_tracers(void **state)
 {
     (void)state;
-    tiles_check("DARTS path tracer", BOX_PT ", \"enable_guiding\": true, \"enable_elliptical\": true", "", 0.0, 3000, 3000);
-    tiles_check("uniform-time path tracer", BOX_PT ", \"time_sampling\": \"uniform\"", "", 0.0, 3000, 1500);
+    tiles_check("DARTS path tracer", BOX_PT ", \"enable_guiding\": true, \"enable_elliptical\": true", "", 0.0, 2000, 2000);
+    tiles_check("uniform-time path tracer", BOX_PT ", \"time_sampling\": \"uniform\"", "", 0.0, 2000, 1500);
 }
 
 static void test_tiles_unwarped(void **state)
 {
     (void)state;
-    tiles_check("unwarped photon points", BOX_PP, ", \"camera_unwarp\": true", PP_BIAS, 3000, 150);
+    tiles_check("unwarped photon points", BOX_PP, ", \"camera_unwarp\": true", PP_BIAS, 2000, 150);
     tiles_check("unwarped DARTS path tracer", BOX_PT ", \"enable_guiding\": true, \"enable_elliptical\": true",
-                ", \"camera_unwarp\": true", 0.0, 3000, 3000);
+                ", \"camera_unwarp\": true", 0.0, 2000, 1000);
 }
 
 /* The DARTS photon pass aims at the camera's position: refused with an orthographic camera, naming the key;
