@@ -170,8 +170,9 @@ static inline void film_pixel_splat(film_pixel *p, double t, vec3 c, int frame, 
     if (!film_splat(p->f, p->px, t, c, frame, order)) p->nonfinite++;
 }
 
-/* One camera sample: dir is the jittered primary ray, rng the pixel's stream after the jitter. */
-typedef void (*film_sample_fn)(void *ctx, film_pixel *pixel, vec3 dir, dp_rng *rng);
+/* One camera sample: o and dir are the jittered primary ray (camera_ray: o is the camera's position for a
+ * pinhole, the film point for an orthographic camera), rng the pixel's stream after the jitter. */
+typedef void (*film_sample_fn)(void *ctx, film_pixel *pixel, vec3 o, vec3 dir, dp_rng *rng);
 
 /* One sample of every pixel into the pass layer; rows not started once stop is set are skipped (the pass is
  * then incomplete). Returns the rays traced; the non-finite contributions are added to f->nonfinite. */

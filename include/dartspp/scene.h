@@ -77,19 +77,35 @@ static inline int surface_next_medium(const surface *s, int current, vec3 d, vec
     return v3_dot(d, ng) < 0.0 ? s->int_medium : s->ext_medium;
 }
 
+typedef enum { CAMERA_PINHOLE, CAMERA_ORTHOGRAPHIC } camera_type;
+
 typedef struct {
     int width, height;
-    double fov_deg;         /* horizontal */
+    int type;               /* camera_type */
+    double fov_deg;         /* pinhole: horizontal */
     vec3 pos;
     vec3 right, up, forward; /* world axes of the image plane: +right = screen right, +up = screen up */
-    double plane_dist;      /* 1 / tan(fov/2): image plane spans x in [-1,1] */
+    double plane_dist;      /* pinhole: 1 / tan(fov/2): image plane spans x in [-1,1] */
+    double ortho_size;      /* orthographic (Tungsten's orthographic_size): half the film's height in scene units;
+                             * the film is 2·ortho_size·width/height × 2·ortho_size, centred on pos, in the plane
+                             * through pos perpendicular to forward (the camera's plane) */
     int medium;
     sensor_response response; /* its time response, from the integrator's sensor_* keys (sensor.h) */
 } camera;
 
-/* Direction of the camera ray through the image-plane point (px, py) in pixel units: pixel (x, y) covers
- * [x, x+1) × [y, y+1), row 0 at the top; px = x + u with u uniform in [0,1) is the box filter. */
+/* The camera ray through the image-plane point (px, py) in pixel units: pixel (x, y) covers [x, x+1) × [y, y+1),
+ * row 0 at the top; px = x + u with u uniform in [0,1) is the box filter. Pinhole: every ray starts at pos, its
+ * direction through Tungsten's image plane at distance plane_dist. Orthographic (Tungsten's
+ * OrthographicCamera): the rays are parallel to forward and start on the camera's plane, at the film point of
+ * (px, py). Sets *o and returns the unit direction. */
+vec3 camera_ray(const camera *c, double px, double py, vec3 *o);
+/* Its direction alone (the same for every pixel of an orthographic camera). */
 vec3 camera_ray_dir(const camera *c, double px, double py);
+/* The least distance light at p travels to reach the sensor: to pos (pinhole), to the camera's plane
+ * (orthographic: a lower bound, the film being part of that plane). */
+double camera_distance(const camera *c, vec3 p);
+/* The side of one pixel on an orthographic camera's film, in scene units (2·ortho_size / height). */
+static inline double camera_ortho_pixel(const camera *c) { return 2.0 * c->ortho_size / c->height; }
 
 /* ---- time ---- */
 typedef struct {
