@@ -52,7 +52,8 @@ class Result:
     passes       completed passes (iterations)
     seconds      render time (s), loading and checks excluded
     stats        dict of the run summary's figures: camera_rays, rays, photon_paths, stored_photons, r_vol,
-                 r_surf, t_photon, t_maps, t_gather, nonfinite_pixels (render.h's RENDER_FIGURES for the API)
+                 r_surf, w_gate (a delta gate's last box width, else 0), t_photon, t_maps, t_gather,
+                 nonfinite_pixels (integrator.h's RENDER_FIGURES for the API)
     log          error log rows against the reference (list of dicts, the CSV columns of `--log`); [] without one
     warnings     the scene's warnings (list of str)
     interrupted  True when stopped early (the progress callback asked, or Ctrl-C)

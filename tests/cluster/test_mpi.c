@@ -65,6 +65,14 @@ static void test_same_image_as_one_process(void **state)
     snprintf(sets, sizeof sets, "%s --set volume_photon_type=beams --set frame_num=2 --set start_time=15.95 "
              "--set transient_time_width=0.1", small);
     one_vs_three("darts-beams-frames", sets, 2);
+    /* a delta gate (docs/time.md §3.1): each rank sets its film's box to the width of the iteration it renders
+     * (k·N + r), and the pass weights follow the iteration index, so 3 ranks sum to one process's passes */
+    const char *delta = "--set delta_time_gate=true --set transient_time_width=0.4 --set enable_guiding=false "
+                        "--set enable_elliptical=false --set strict_time_width=false";
+    snprintf(sets, sizeof sets, "%s --set volume_photon_type=beams %s", small, delta);
+    one_vs_three("beams-delta", sets, 0);
+    snprintf(sets, sizeof sets, "%s --set volume_photon_type=points %s", small, delta);
+    one_vs_three("points-delta", sets, 0);
     one_vs_three("path-tracer-frames", "--set type=path_tracer --set frame_num=2 --set start_time=14 --set transient_time_width=2", 2);
 }
 

@@ -2,6 +2,7 @@
 error log, progress, warnings, the GIL, and nothing printed (docs/python.md)."""
 import json
 import os
+import struct
 import subprocess
 import threading
 import time
@@ -49,6 +50,44 @@ def test_same_image_as_cli(cli, tmp_path, method):
     assert r.frames.shape == (4, 30, 40, 3)
     assert np.array_equal(r.frames, cube)
     np.testing.assert_allclose(r.frame_times, [[6.3 + 0.1 * k, 6.4 + 0.1 * k] for k in range(4)], rtol=1e-12)
+
+
+def exr_double(path, name):
+    """The double attribute `name` of an EXR header (name, type, size, value: the file format's layout)."""
+    data = open(path, "rb").read(1 << 16)
+    tag = name.encode() + b"\0double\0"
+    at = data.index(tag) + len(tag)
+    assert struct.unpack("<i", data[at:at + 4])[0] == 8
+    return struct.unpack("<d", data[at + 4:at + 12])[0]
+
+
+@pytest.mark.parametrize("vtype,dims", [("beams", 2), ("points", 3)])
+@pytest.mark.filterwarnings("ignore:.*does not read this key")
+def test_delta_gate_same_image_as_cli(cli, tmp_path, vtype, dims):
+    """A delta gate (docs/time.md §3.1): the image equals the CLI's bit for bit; the result's gate is the instant
+    twice, as the CLI's EXR header; the last box width w_2 = w0·γ_2^(1/d) with the scene file's τ = 6.5, w0 = 0.2,
+    α = volume_alpha 0.8, d = 2 (beams) or 3 (points), γ_i = Π_{k=1..i} (k + α)/(k + 1)."""
+    sets = ["volume_photon_type=" + vtype, "delta_time_gate=true", "transient_time_width=0.2",
+            "enable_guiding=false", "enable_elliptical=false", "strict_time_width=false"]
+    scene = small_fogbox()
+    path = tmp_path / "scene.json"
+    path.write_text(json.dumps(scene))
+    exr = tmp_path / "cli.exr"
+    cmd = [cli, "render", str(path), "--spp", "3", "--seed", "7", "--threads", "2", "--quiet", "--no-viewer",
+           "--output", str(exr)]
+    for s in sets:
+        cmd += ["--set", s]
+    subprocess.run(cmd, check=True, capture_output=True)
+    r = dartspp.render(scene, spp=3, seed=7, threads=2, set=sets)
+    assert r.passes == 3 and r.image.mean() > 0 and r.frames is None
+    assert np.array_equal(r.image, dartspp.read_image(exr))
+    gamma = (1 + 0.8) / 2 * (2 + 0.8) / 3
+    assert r.stats["w_gate"] == pytest.approx(0.2 * gamma ** (1 / dims), rel=1e-12)
+    gate = {k: r.plan["delta_gate"][k] for k in ("center", "width0", "alpha", "dims")}
+    assert gate == pytest.approx({"center": 6.5, "width0": 0.2, "alpha": 0.8, "dims": dims})
+    mine = r.write_exr(tmp_path / "py.exr")[0]
+    for p in (exr, mine):
+        assert exr_double(p, "dartspp.gateStart") == 6.5 and exr_double(p, "dartspp.gateEnd") == 6.5
 
 
 def test_seed_and_threads(fogbox):

@@ -164,6 +164,13 @@ static void test_path_tracer_frames_stopped(void **state)
 {
     check_resume(*state, "--set type=path_tracer " FRAMES(2), 0, 2, ".exr", 2);
 }
+/* A delta gate (docs/time.md §3.1): pass i's box width w_i and weight follow the iteration index, so the resumed
+ * passes must continue the schedule at the checkpoint's pass count, not restart it. Broken variant: the width
+ * of the run's own pass count (iteration − resumed passes) fails both (the images differ). */
+#define DELTA(type) "--set volume_photon_type=" type " --set delta_time_gate=true --set transient_time_width=0.2 " \
+                    "--set enable_guiding=false --set enable_elliptical=false --set strict_time_width=false"
+static void test_delta_beams_stopped(void **state) { check_resume(*state, DELTA("beams"), 0, 3, ".exr", 0); }
+static void test_delta_points_killed(void **state) { check_resume(*state, DELTA("points"), 1, 0, ".pfm", 0); }
 
 /* A checkpoint of 3 passes, then --resume with a different plan, seed, resolution or frame count, a pass
  * count below the checkpoint's, or without a state: each refused (exit 2) with a message naming the state
@@ -273,6 +280,8 @@ int main(void)
         cmocka_unit_test_setup_teardown(test_frames_killed, setup_dir, test_teardown_tmpdir),
         cmocka_unit_test_setup_teardown(test_photon_points_stopped_exr, setup_dir, test_teardown_tmpdir),
         cmocka_unit_test_setup_teardown(test_path_tracer_frames_stopped, setup_dir, test_teardown_tmpdir),
+        cmocka_unit_test_setup_teardown(test_delta_beams_stopped, setup_dir, test_teardown_tmpdir),
+        cmocka_unit_test_setup_teardown(test_delta_points_killed, setup_dir, test_teardown_tmpdir),
         cmocka_unit_test_setup_teardown(test_mismatch_refused, setup_dir, test_teardown_tmpdir),
         cmocka_unit_test_setup_teardown(test_overwrite_refused, setup_dir, test_teardown_tmpdir),
     };
