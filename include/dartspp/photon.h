@@ -36,7 +36,7 @@ typedef struct {
     int frame;        /* DARTS frame mode: the only frame it may be gathered in; -1: any */
     int long_beam;    /* 1: flux power·T(s) (DARTS pass); 0: power·T(s)/P(s) (short beam) */
     int bounce;       /* path segments from the light to a scattering point on the beam (this segment's index) */
-    unsigned start;   /* PATH_VERTEX_* of the light-path vertex the segment leaves (a null surface is no vertex):
+    unsigned from;    /* PATH_VERTEX_* of the light-path vertex the segment leaves (a null surface is no vertex):
                        * which sliced primitive serves the paths it would complete (src/sliced_primitives) */
     double time;      /* light-to-start path time */
 } photon_beam;

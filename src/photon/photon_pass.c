@@ -140,7 +140,7 @@ static void beam_end(light_path *lp, const beam_start *b, double length)
                       .dir = {(float)b->d.x, (float)b->d.y, (float)b->d.z},
                       .power = {(float)b->beta.x, (float)b->beta.y, (float)b->beta.z},
                       .length = (float)length, .eta = (float)eta, .medium = b->med, .frame = lp->bin.frame,
-                      .long_beam = b->long_beam, .bounce = b->bounce, .start = b->vflags, .time = b->time};
+                      .long_beam = b->long_beam, .bounce = b->bounce, .from = b->vflags, .time = b->time};
     if (!isfinite(bm.power[0]) || !isfinite(bm.power[1]) || !isfinite(bm.power[2]) || !isfinite(bm.length)) {
         lp->tb->nonfinite++;
         return;

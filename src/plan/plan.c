@@ -1,4 +1,5 @@
 /* The render plan: every decision derived from the integrator and renderer keys, taken once. */
+#include "dartspp/sliced_primitives.h"
 #include "dartspp/plan.h"
 
 #include <cjson/cJSON.h>
@@ -59,6 +60,7 @@ int plan_resolve(const scene *s, render_plan *p, dp_error *err)
     p->time_angular_share = in->time_angular_share;
     p->uniform_time = resolve_uniform_time(s, p);
     if (darts_plan_resolve(s, p->type, &p->shading, &p->darts, err)) return -1;
+    if (sliced_primitives_check(s, p, err)) return -1; /* what the sliced primitives do not support */
     p->spp = s->renderer.spp;
     p->timeout = s->renderer.timeout;
     p->checkpoint_interval = s->renderer.checkpoint_interval;

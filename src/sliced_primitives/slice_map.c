@@ -156,3 +156,9 @@ void slice_map_query(const slice_map *m, vec3 o, vec3 d, double tmax, double t_c
         stack[top++] = (uint32_t)(nd - m->nodes) + 1;
     }
 }
+
+void sliced_primitives_memory(int type, double V, memory_estimate *m)
+{
+    memory_item_add(m, "light-path vertices, sliced primitives and their map", "integrator.volume_photon_count",
+                    path_vertex_array_bytes(V) + slice_map_bytes(type, V));
+}

@@ -75,3 +75,24 @@ const char *slice_type_summary(int type)
     const slice_type_row *r = row_of(type);
     return r ? r->summary : "";
 }
+
+int sliced_primitives_check(const scene *s, const render_plan *p, dp_error *err)
+{
+    if (p->type != INTEGRATOR_PHOTON_POINTS || !volume_type_sliced(p->volume_photon_type)) return 0;
+    const scene_key *k = scene_key_find("volume_photon_type");
+    const char *name = k ? k->choices[p->volume_photon_type] : "this type";
+    if (!p->window.gated || !(p->window.width > 0.0))
+        return dp_fail(err, "%s: integrator.volume_photon_type: %s slices the path space at a time in a gate: it "
+                       "needs transient_time_width > 0 (steady state has no time to slice)", s->path, name);
+    if (p->darts.active)
+        return dp_fail(err, "%s: integrator.volume_photon_type: %s is built from the baseline photon pass: set "
+                       "enable_guiding, enable_elliptical and eda to false (DARTS samplers and sliced primitives are "
+                       "not combined)", s->path, name);
+    if (!p->low_order_scattering)
+        return dp_fail(err, "%s: integrator.low_order_scattering: false is not supported with volume_photon_type %s "
+                       "(its primitives serve the first medium vertex's paths too)", s->path, name);
+    if (!scene_eta_uniform(s))
+        return dp_fail(err, "%s: integrator.volume_photon_type: %s solves the time constraint with one refractive "
+                       "index along the displaced segments; this scene's regions differ in speed_of_light", s->path, name);
+    return 0;
+}
