@@ -79,6 +79,7 @@ static void test_balls_unwarped_single_scatter(void **state)
 static double tiles_z(const char *label, const cell_totals *ref, const cell_totals *m, double bias)
 {
     double zmax = 0.0, tot_r = 0, tot_m = 0, var_r = 0, var_m = 0;
+    int worst = 0;
     for (int v = 0; v < NT + m->frames; v++) {
         double mr, sr, mm, sm;
         cell_mean_se(ref, v, &mr, &sr);
@@ -86,31 +87,38 @@ static double tiles_z(const char *label, const cell_totals *ref, const cell_tota
         assert_true(mr > 0.0 && mm > 0.0);
         tot_r += mr, tot_m += mm, var_r += sr * sr, var_m += sm * sm;
         double d = fmax(0.0, fabs(mm - mr) - bias * mr);
-        zmax = fmax(zmax, d / sqrt(sr * sr + sm * sm));
+        if (d / sqrt(sr * sr + sm * sm) > zmax) zmax = d / sqrt(sr * sr + sm * sm), worst = v;
     }
+    double mr, sr, mm, sm;
+    cell_mean_se(ref, worst, &mr, &sr);
+    cell_mean_se(m, worst, &mm, &sm);
+    print_message("  worst cell %d: %.5g (se %.2g) vs path tracer %.5g (se %.2g), %+.2f %%\n", worst, mm, sm, mr, sr,
+                  100.0 * (mm - mr) / mr);
     print_message("  %-34s total %.5g (se %.2g) vs path tracer %.5g (se %.2g), %+.2f %%; max |z| %.2f over %d cells\n",
                   label, tot_m, sqrt(var_m), tot_r, sqrt(var_r), 100.0 * (tot_m - tot_r) / tot_r, zmax, NT + m->frames);
     return zmax;
 }
 
-/* Per tile (and frame) against the path tracer on the fog box (its point light, or `lights`), the type's keys
- * in `type_keys`; bias: the budget of the paths the beams fallback serves. */
-static void tiles_check(const char *label, const char *lights, const char *type_keys, int frames, long pt_passes,
-                        long passes, double bias)
+/* Per tile (and frame) against the path tracer on the fog box (its point light, or `lights`) with volume_photon_type
+ * `type` and `extra` keys (both renders; frames: 2 frames of width 2 from 3.2); bias: the budget of the paths the
+ * beams fallback serves (0 where the type leaves them none). */
+static void tiles_check(const char *label, const char *lights, const char *type, const char *extra, int frames,
+                        long pt_passes, long passes, double bias)
 {
     char text[16384], keys[2048];
     cell_totals ref, m;
     double t_ref, t_m;
-    snprintf(keys, sizeof keys, BOX_PT "%s", frames ? ", \"start_time\": 3.2, \"frame_num\": 2" : "");
+    const char *fr = frames ? ", \"start_time\": 3.2, \"frame_num\": 2" : "";
+    snprintf(keys, sizeof keys, BOX_PT "%s%s", extra, fr);
     if (lights) lamp_box_text(text, sizeof text, keys, lights);
     else box_scene_text(text, sizeof text, 16, keys);
     cell_render(text, pt_passes, 11, frames, &ref, &t_ref);
-    snprintf(keys, sizeof keys, BOX_SLICED ", %s%s", type_keys, frames ? ", \"start_time\": 3.2, \"frame_num\": 2" : "");
+    snprintf(keys, sizeof keys, BOX_SLICED ", \"volume_photon_type\": \"%s\"%s%s", type, extra, fr);
     if (lights) lamp_box_text(text, sizeof text, keys, lights);
     else box_scene_text(text, sizeof text, 16, keys);
     cell_render(text, passes, 29, frames, &m, &t_m);
     double z = tiles_z(label, &ref, &m, bias);
-    print_message("  seconds: path tracer %.1f, %s %.1f\n", t_ref, label, t_m);
+    print_message("  seconds: path tracer %.1f, %s %.1f\n", t_ref, type, t_m);
     free(ref.x);
     free(m.x);
     assert_true(z < 4.2); /* Bonferroni over 16 tiles */
@@ -119,14 +127,90 @@ static void tiles_check(const char *label, const char *lights, const char *type_
 static void test_balls_tiles(void **state)
 {
     (void)state;
-    tiles_check("balls vs path tracer", NULL, "\"volume_photon_type\": \"balls\"", 0, 1500, 100, 0.0);
+    tiles_check("balls vs path tracer", NULL, "balls", "", 0, 1500, 100, 0.0);
 }
 
 static void test_balls_tiles_unwarped(void **state)
 {
     (void)state;
-    tiles_check("unwarped balls vs path tracer", NULL, "\"volume_photon_type\": \"balls\", \"camera_unwarp\": true", 0,
-                1500, 100, 0.0);
+    tiles_check("unwarped balls vs path tracer", NULL, "balls", ", \"camera_unwarp\": true", 0, 1500, 100, 0.0);
+}
+
+/* volumes: parallelepipeds where x2 and x1 scatter in the fog, beams (3 % budget) for the rest. */
+static void test_volumes_tiles(void **state)
+{
+    (void)state;
+    tiles_check("volumes vs path tracer", NULL, "volumes", "", 0, 1500, 300, SLICE_TILE_BIAS);
+}
+
+/* The orders only parallelepipeds serve in the fog (through the order keys: min_bounces 4 leaves the paths of
+ * at least 4 segments, x3 → x2 → x1 → x0 → camera), with no budget: where x2 or x1 is a wall the beams serve, so
+ * the bias budget stays for those. */
+static void test_volumes_high_orders(void **state)
+{
+    (void)state;
+    tiles_check("volumes, orders >= 4 segments", NULL, "volumes", ", \"min_bounces\": 4", 0, 1500, 100,
+                SLICE_TILE_BIAS);
+}
+
+static void test_mis_volumes_balls_tiles(void **state)
+{
+    (void)state;
+    tiles_check("mis_volumes_balls vs path tracer", NULL, "mis_volumes_balls", "", 0, 1500,
+                100, 0.0);
+}
+
+static void test_volumes_balls_tiles(void **state)
+{
+    (void)state;
+    tiles_check("volumes_balls vs path tracer", NULL, "volumes_balls", "", 0, 1500, 100,
+                0.0);
+}
+
+static void test_hypervolumes_tiles(void **state)
+{
+    (void)state;
+    tiles_check("hypervolumes vs path tracer", NULL, "hypervolumes", "", 0, 1500, 100,
+                SLICE_TILE_BIAS);
+}
+
+/* ---- MIS weights ---- */
+
+/* The ball's and the parallelepiped's weight of one path sum to 1 (so the MIS of §4.6 is unbiased whatever
+ * the densities), on random paths in the coloured fog, warped, unwarped and in between, and each is in [0, 1]. */
+static void test_mis_weights_sum_to_one(void **state)
+{
+    (void)state;
+    char text[4096];
+    tmp_scene t;
+    ss_scene_text(text, sizeof text, "");
+    tmp_scene_write(&t, text);
+    scene s;
+    load_scene(t.path, NULL, 0, &s);
+    dp_rng rng = rng_stream(77, 1, 2);
+    double worst = 0.0, lo = 1.0, hi = 0.0;
+    for (int i = 0; i < 20000; i++) {
+        vec3 w[3];
+        for (int k = 0; k < 3; k++) {
+            double u1 = rng_uniform(&rng), u2 = rng_uniform(&rng);
+            w[k] = sample_uniform_sphere(u1, u2);
+        }
+        double u1 = rng_uniform(&rng), u2 = rng_uniform(&rng);
+        vec3 psi = sample_uniform_sphere(u1, u2);
+        double t3 = 5.0 * rng_uniform(&rng), t2 = 5.0 * rng_uniform(&rng), t1 = 5.0 * rng_uniform(&rng);
+        double eta = 1.25, eta_c = eta * (i % 3) / 2.0;
+        double wb = slice_mis_weight(&s, 1, t3, t2, t1, w, 0, 0, psi, eta, eta_c);
+        double wp = slice_mis_weight(&s, 0, t3, t2, t1, w, 0, 0, psi, eta, eta_c);
+        worst = fmax(worst, fabs(wb + wp - 1.0));
+        lo = fmin(lo, fmin(wb, wp));
+        hi = fmax(hi, fmax(wb, wp));
+    }
+    print_message("  20000 random paths: max |w_ball + w_pp − 1| = %.3g, weights in [%.3g, %.3g]\n", worst, lo, hi);
+    assert_true(worst < 1e-12);
+    assert_true(lo >= 0.0 && hi <= 1.0);
+    assert_true(lo < 0.01 && hi > 0.99); /* both techniques win somewhere */
+    scene_free(&s);
+    tmp_scene_remove(&t);
 }
 
 /* 1 and 2 threads, bit for bit (vertices merged in path order, primitives built by one thread with their own
@@ -160,6 +244,7 @@ static void test_sliced_thread_independent(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_mis_weights_sum_to_one),
         cmocka_unit_test(test_sliced_thread_independent),
         cmocka_unit_test(test_balls_single_scatter),
     };
@@ -167,6 +252,12 @@ int main(void)
         cmocka_unit_test(test_balls_unwarped_single_scatter),
         cmocka_unit_test(test_balls_tiles),
         cmocka_unit_test(test_balls_tiles_unwarped),
+        cmocka_unit_test(test_volumes_tiles),
+        cmocka_unit_test(test_volumes_high_orders),
+        cmocka_unit_test(test_mis_volumes_balls_tiles),
+        cmocka_unit_test(test_volumes_balls_tiles),
+        cmocka_unit_test(test_hypervolumes_tiles),
     };
+    if (getenv("SLICE_ONLY")) cmocka_set_test_filter(getenv("SLICE_ONLY")); /* TEMP */
     return RUN_TESTS_AND_STRESS(tests, stress);
 }
