@@ -61,60 +61,18 @@ typedef struct {
     size_t next;
 } builder;
 
-/* Morton order: the box centres quantized to 21 bits per axis over their bounds, bits interleaved. */
-static uint64_t spread21(uint32_t v)
-{
-    uint64_t x = v & 0x1fffff;
-    x = (x | x << 32) & 0x1f00000000ffffULL;
-    x = (x | x << 16) & 0x1f0000ff0000ffULL;
-    x = (x | x << 8) & 0x100f00f00f00f00fULL;
-    x = (x | x << 4) & 0x10c30c30c30c30c3ULL;
-    x = (x | x << 2) & 0x1249249249249249ULL;
-    return x;
-}
-
-typedef struct {
-    uint64_t key;
-    uint32_t at;
-} morton_key;
-
-static int key_cmp(const void *a, const void *b)
-{
-    const morton_key *x = a, *y = b;
-    if (x->key != y->key) return x->key < y->key ? -1 : 1;
-    return x->at < y->at ? -1 : x->at > y->at; /* ties by index: a total order, so the tree is deterministic */
-}
-
-/* Sorts box[0, n) into Morton order of the centres. 0, or -1 out of memory. */
+/* Sorts box[0, n) into Morton order of the centres (dp_morton_order). 0, or -1 out of memory. */
 static int morton_sort(beam_box *box, size_t n)
 {
-    float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-    for (size_t i = 0; i < n; i++)
-        for (int k = 0; k < 3; k++) {
-            if (box[i].c[k] < lo[k]) lo[k] = box[i].c[k];
-            if (box[i].c[k] > hi[k]) hi[k] = box[i].c[k];
-        }
-    morton_key *key = malloc(n * sizeof *key);
-    beam_box *tmp = malloc(n * sizeof *tmp);
-    if (!key || !tmp) {
-        free(key);
-        free(tmp);
-        return -1;
-    }
-    for (size_t i = 0; i < n; i++) {
-        uint64_t code = 0;
-        for (int k = 0; k < 3; k++) {
-            double ext = (double)hi[k] - lo[k], u = ext > 0.0 ? ((double)box[i].c[k] - lo[k]) / ext : 0.0;
-            code |= spread21((uint32_t)(u * 2097151.0)) << k;
-        }
-        key[i] = (morton_key){code, (uint32_t)i};
-    }
-    qsort(key, n, sizeof *key, key_cmp);
-    for (size_t i = 0; i < n; i++) tmp[i] = box[key[i].at];
-    memcpy(box, tmp, n * sizeof *box);
-    free(key);
+    if (n == 0) return 0;
+    uint32_t *order = malloc((n ? n : 1) * sizeof *order);
+    beam_box *tmp = malloc((n ? n : 1) * sizeof *tmp);
+    int rc = order && tmp ? dp_morton_order(box[0].c, sizeof *box / sizeof(float), n, order) : -1;
+    for (size_t i = 0; !rc && i < n; i++) tmp[i] = box[order[i]];
+    if (!rc) memcpy(box, tmp, n * sizeof *box);
+    free(order);
     free(tmp);
-    return 0;
+    return rc;
 }
 
 static inline float min_f(float a, float b) { return a < b ? a : b; }

@@ -7,6 +7,7 @@
 #include "dartspp/photon.h"
 #include "dartspp/photon_beams.h"
 #include "dartspp/photon_points.h"
+#include "dartspp/sliced_primitives.h"
 
 /* One photon pass of a single batch of light paths (a few milliseconds), without EDA tables and without
  * budget cuts: how many volume and surface photons a light path stores, and a sample of the volume photons
@@ -45,9 +46,17 @@ void photon_points_memory(const scene *s, const render_plan *p, memory_estimate 
     /* each set's array at its capacity, and its map: volume_map_bytes is about (16 + 56) B a photon plus the
      * nodes (the surface map is the same tree); in double for huge budgets */
     double per_mapped = (double)volume_map_bytes(1 << 20) / (1 << 20);
-    int volume = s->medium_count > 0, beams = p->volume_photon_type == VOLUME_PHOTON_BEAMS;
+    int volume = s->medium_count > 0, beams = p->volume_photon_type != VOLUME_PHOTON_POINTS;
+    int sliced = volume_type_sliced(p->volume_photon_type);
+    double V_beams = V; /* sliced types: V counts vertices, and their paths' beams come with them */
+    if (sliced && piloted) {
+        V = dp_fmin(p->volume_photon_count, (double)pilot.n_verts / pilot.paths * p->photon_count);
+        V_beams = pilot.n_verts ? V * (double)pilot.n_beams / (double)pilot.n_verts : 0.0;
+    }
+    if (volume && sliced) sliced_primitives_memory(p->volume_photon_type, V, m);
     if (volume && beams) /* beams: no volume photons, and the sensor pass queries the beam map per segment */
-        photon_beams_memory(piloted ? pilot.beams : NULL, piloted ? pilot.n_beams : 0, schedule_radius(&p->r_vol, 0), V, m);
+        photon_beams_memory(piloted ? pilot.beams : NULL, piloted ? pilot.n_beams : 0, schedule_radius(&p->r_vol, 0),
+                            V_beams, m);
     if (volume && !beams)
         memory_item_add(m, "volume photons and their map", "integrator.volume_photon_count", photon_array_bytes(V) + V * per_mapped);
     if (volume && !beams) /* the first pass's radius is the largest: the most footprint entries */

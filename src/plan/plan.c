@@ -1,4 +1,5 @@
 /* The render plan: every decision derived from the integrator and renderer keys, taken once. */
+#include "dartspp/sliced_primitives.h"
 #include "dartspp/plan.h"
 
 #include <cjson/cJSON.h>
@@ -30,7 +31,7 @@ static void resolve_photon_points(const integrator_settings *in, render_plan *p)
     p->volume_photon_type = in->volume_photon_type;
     /* the kernel's dimension: 2 for points, 1 for beams (the 1-D kernel of src/photon_beams); "3d" is the
      * authors' cube root for either */
-    int dims = in->radius_schedule == RADIUS_SCHEDULE_3D ? 3 : in->volume_photon_type == VOLUME_PHOTON_BEAMS ? 1 : 2;
+    int dims = in->radius_schedule == RADIUS_SCHEDULE_3D ? 3 : in->volume_photon_type != VOLUME_PHOTON_POINTS ? 1 : 2; /* sliced types: their beams */
     p->r_vol = (radius_schedule){in->volume_gather_radius, in->volume_alpha, dims};
     p->r_surf = (radius_schedule){in->gather_radius, in->alpha, 2};
     p->include_surfaces = in->include_surfaces;
@@ -59,6 +60,7 @@ int plan_resolve(const scene *s, render_plan *p, dp_error *err)
     p->time_angular_share = in->time_angular_share;
     p->uniform_time = resolve_uniform_time(s, p);
     if (darts_plan_resolve(s, p->type, &p->shading, &p->darts, err)) return -1;
+    if (sliced_primitives_check(s, p, err)) return -1; /* what the sliced primitives do not support */
     p->spp = s->renderer.spp;
     p->timeout = s->renderer.timeout;
     p->checkpoint_interval = s->renderer.checkpoint_interval;
@@ -91,7 +93,7 @@ double plan_pass_weight(const render_plan *p, long iteration)
     const radius_schedule *r = p->include_surfaces ? &p->r_surf : &p->r_vol;
     double q = schedule_radius(r, iteration) / r->r0;
     /* beams' 1-D kernel: variance about ∝ 1/r, so the weight is the kernel's width */
-    if (!p->include_surfaces && p->volume_photon_type == VOLUME_PHOTON_BEAMS) return q;
+    if (!p->include_surfaces && p->volume_photon_type != VOLUME_PHOTON_POINTS) return q;
     return q * q;
 }
 

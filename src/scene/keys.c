@@ -94,8 +94,11 @@ static const scene_key table[] = {
      .def = 1, .meaning = "Store and gather surface photons"},
     {.name = "low_order_scattering", IN(low_order_scattering), .type = KEY_BOOL, .read_by = PP,
      .changes_image = 1, .def = 1, .meaning = "Volume photons at the first medium vertex of a light path"},
-    {.name = "volume_photon_type", IN(volume_photon_type), CHOICES("points", "beams"), .read_by = PP, .changes_image = 1,
-     .def = 0, .meaning = "Volume photon kind: points (2-D kernel) or photon beams (1-D kernel; docs/beams.md)"},
+    {.name = "volume_photon_type", IN(volume_photon_type), CHOICES("points", "beams", "balls", "volumes", "hypervolumes", "volumes_balls", "mis_volumes_balls"),
+     .read_by = PP, .changes_image = 1, .def = 0,
+     .meaning = "Volume photon kind: points (2-D kernel), photon beams (1-D kernel; docs/beams.md), or Liu et al. "
+                "2022's temporally sliced primitives with photon beams where they do not serve a path "
+                "(docs/sliced_primitives.md)"},
     {.name = "camera_leg", IN(camera_leg), CHOICES("euclidean", "projected"), .read_by = PP,
      .changes_image = 1, .def = 0, .meaning = "Camera leg length of a volume photon's time: along the ray or projected"},
     {.name = "volume_gather", IN(volume_gather), CHOICES("splat", "beam"), .read_by = PP, .changes_image = 1,
