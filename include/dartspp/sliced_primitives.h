@@ -111,14 +111,23 @@ int slice_solve4(const double a[4][4], const double b[4], double x[4]);
  * fallback: PATH_VERTEX_* on each beam say which. */
 
 /* The primitive kinds, one row each in the table of slice_gather.c (the estimate) and slice_build.c (the fresh directions). */
-typedef enum { SLICE_BALL, SLICE_PARALLELEPIPED, SLICE_PARALLELOTOPE, SLICE_KIND_COUNT } slice_kind;
+typedef enum {
+    SLICE_BALL,
+    SLICE_PARALLELEPIPED,
+    SLICE_PARALLELOTOPE,
+    SLICE_PLANE,    /* §4.2: the box gate analytic, no τ_k drawn (tau: the window's end) */
+    SLICE_PLANE_1D, /* the 1-D-blurred plane (docs/sliced_primitives.md §7.2) */
+    SLICE_KIND_COUNT
+} slice_kind;
 
 /* One delta-sliced primitive of this iteration, built at a light-path vertex. */
 typedef struct {
     uint32_t vertex;   /* index into the vertex array */
     int kind;          /* slice_kind */
-    double tau;        /* its slice time τ_k (a box gate: drawn uniformly in the gate or frames' span) */
-    vec3 w[3];         /* fresh phase-sampled directions: a parallelepiped's ω2, ω1; a parallelotope's ω3, ω2, ω1 */
+    double tau;        /* its slice time τ_k (a box gate: drawn uniformly in the gate or frames' span); planes: the
+                        * window's end (their bound) */
+    vec3 w[3];         /* fresh phase-sampled directions: a parallelepiped's ω2, ω1; a parallelotope's ω3, ω2, ω1;
+                        * a plane's ω1 */
     double pdf;        /* their joint density (1 for a ball) */
 } slice_prim;
 
@@ -130,6 +139,7 @@ typedef struct {
     time_window window;
     uint64_t seed;
     long iteration;
+    double r;          /* planes_1d: the blur's half-width (the iteration's volume radius) */
 } slice_build_input;
 
 /* The primitives of the type at the n vertices (copied) and a BVH over their bounds. NULL + err out of memory.
@@ -153,6 +163,8 @@ int slice_type_builds(int type, int kind, unsigned f);
 int slice_type_gathers_beam(int type, unsigned f);
 /* Whether the type weighs balls against parallelepipeds by score-based MIS (§4.6). */
 int slice_type_mis(int type);
+/* 1: the type's primitives are sliced photon planes, 2: 1-D-blurred planes, 0: neither (their gate is analytic). */
+int slice_type_plane(int type);
 /* The type's line in the render summary. */
 const char *slice_type_summary(int type);
 
@@ -167,6 +179,7 @@ typedef struct {
     bounce_limits bounces;
     surface_shading shading; /* a ball at a surface vertex evaluates its BSDF */
     int camera_unwarp;       /* the camera segment adjacent to the sensor takes no time */
+    double r;                /* planes_1d: the blur's half-width (the iteration's volume radius) */
 } slice_gather;
 
 /* Every primitive's roots on the camera segment o + t·d, 0 <= t <= len, in medium med (thr and t_cam at o, b_cam
