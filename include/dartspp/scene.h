@@ -133,6 +133,8 @@ typedef enum {
     VOLUME_PHOTON_HYPERVOLUMES,
     VOLUME_PHOTON_VOLUMES_BALLS,
     VOLUME_PHOTON_MIS_VOLUMES_BALLS,
+    VOLUME_PHOTON_PLANES,
+    VOLUME_PHOTON_PLANES_1D,
 } volume_photon_type_choice;
 /* Whether a volume photon type is one of the sliced primitives (which also keep beams for their fallback). */
 static inline int volume_type_sliced(int t) { return t >= VOLUME_PHOTON_BALLS; }

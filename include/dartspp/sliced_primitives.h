@@ -3,11 +3,12 @@
  * tests/sliced_primitives/test_slice_geometry.c can check it (tests include no header under src/); then the
  * estimators (below the geometry).
  *
- * The geometry of the temporally sliced photon primitives (../shared/papers/liu-2022-sliced-photon-primitives.txt
- * §4). Each estimator pre-integrates four dimensions against a 4-D spatio-temporal delta δ⁴(g′) (eq. 20–24):
- * these functions find the roots of g′(ξ_a) = 0 for one primitive and one camera segment and give |J|, the absolute 4×4 Jacobian determinant of
- * g′ with respect to the analytic dimensions (eq. 25), camera-warped or unwarped. Pure functions: no scene, no
- * medium, no transmittance — the caller evaluates the path contribution at each root.
+ * The geometry of the temporally sliced photon primitives (Liu et al. 2022 §4; the paper's text:
+ * ../shared/papers/liu-2022-sliced-photon-primitives.txt). Each estimator pre-integrates four dimensions against
+ * a 4-D spatio-temporal delta δ⁴(g′) (eq. 20–24): these functions find the roots of g′(ξ_a) = 0 for one
+ * primitive and one camera segment and give |J|, the absolute 4×4 Jacobian determinant of g′ with respect to
+ * the analytic dimensions (eq. 25), camera-warped or unwarped. Pure functions: no scene, no medium, no
+ * transmittance — the caller evaluates the path contribution at each root.
  *
  * Conventions (all times are optical path lengths, as everywhere in dartspp):
  * - The camera segment is y1 + s·ψ, ψ unit, 0 <= s <= s_max; eta_c is the time per unit length along it
@@ -40,35 +41,54 @@ typedef struct {
     double s;        /* distance along the camera segment */
     vec3 w1;         /* ball only: ω_1*, the direction from x to the root */
     double jacobian; /* |J| at the root, > 0 (roots with |J| below 1e-12 relative are dropped) */
-    double time;     /* planes only (box gates): eta_p·Σt + eta_c·s, the time the root adds to x's */
+    double time;     /* eta_p·Σt + eta_c·s, the time the root adds to x's (= tau for delta-sliced roots; the
+                      * planes' box gate reads it) */
 } slice_root;
 
-/* Sliced ball / VPL, §4.5, ξ_a = {cos θ1, φ1, t1, s1}: the points y1 + s·ψ at distance t1 from x with
- * eta_p·t1 + eta_c·s = tau (a sphere when unwarped, the ellipsoid of Pediredla et al. when warped). Up to 2
- * roots; |J| = t1²·|eta_p·(ω1*·ψ) + eta_c| (our derivation; Liu's eq. below 46 is the eta_c = 0 and eta_c =
- * eta_p cases). */
+/* Sliced ball / VPL, Liu et al. 2022 §4.5, ξ_a = {cos θ1, φ1, t1, s1}: the points y1 + s·ψ at distance t1
+ * from x with eta_p·t1 + eta_c·s = tau (a sphere when unwarped, the ellipsoid of Pediredla et al. 2019 when
+ * eta_c = eta_p, a convex oval between). Up to 2 roots (1 on the ellipsoid); |J| = t1²·|eta_p·(ω1*·ψ) + eta_c|
+ * (docs/sliced_primitives.md §6; Liu's formulas below eq. 46 are its eta_c = 0 and eta_c = eta_p cases). */
 int slice_ball_roots(vec3 x, double eta_p, double tau, const slice_ray *r, slice_root out[2]);
 
-/* Sliced photon plane, §4.2, ξ_a = {t2, t1, s1, τ_k} (box gates: no time constraint): x + t2·ω2 + t1·ω1 =
- * y1 + s·ψ, t2 in [0, len[0]], t1 in [0, len[1]] (short planes: the segments as sampled; pass INFINITY for
- * long). At most 1 root; |J| = |(ω2 × ω1)·ψ| (eq. 30). root.time is set. */
-int slice_plane_root(vec3 x, const vec3 w[2], const double len[2], double eta_p, const slice_ray *r, slice_root *out);
+/* Sliced photon plane, Liu et al. 2022 §4.2, ξ_a = {t2, t1, s1, τ_k} (box gates: no time constraint):
+ * x + t2·ω2 + t1·ω1 = y1 + s·ψ, t2 in [0, len[0]], t1 in [0, len[1]] (short planes: the segments as sampled;
+ * pass INFINITY for long). At most 1 root; |J| = |(ω2 × ω1)·ψ| (eq. 30, warped or not: the τ_k column is
+ * (0, 0, 0, ±1)). root.time is set. */
+int slice_plane_root(vec3 x, const vec3 w[2], const double len[2], double eta_p, const slice_ray *r,
+                     slice_root *out);
 
-/* The 1-D-blurred photon plane (planes_1d; Bitterli and Jarosz 2017's "photon planes 1D" as Liu's code slices
- * it): see slice_geometry.c for its dimensions and kernel. */
+/* The 1-D-blurred photon plane (planes_1d; Bitterli and Jarosz 2017's "photon plane 1D" as Liu's code has it,
+ * made transient with a box gate: docs/sliced_primitives.md §7), ξ_a = {t2, t1, B, τ_k}: x + t2·ω2 + t1·ω1 +
+ * B·n = y1 + s·ψ, n = ω2 × ω1 / |ω2 × ω1|, with a box kernel 1/(2r) on the blur B and s left to the caller
+ * (numerical). Every s of the camera segment has one root; this gives the interval [s0, s1] of those with
+ * 0 <= t2 <= len[0], 0 <= t1 <= len[1], |B| <= r and the root's time eta_p·(t2 + t1) + eta_c·s in
+ * [time_lo, time_hi] (the gate less the light's time at x and the camera's at y1), and the roots as linear
+ * functions of s. |J| = |ω2 × ω1| (the τ_k column (0, 0, 0, ±1), the B column (n, 0)). */
+typedef struct {
+    double s0, s1;        /* the interval, s0 < s1 */
+    double t2[2], t1[2];  /* t2(s) = t2[0] + t2[1]·s, t1(s) likewise */
+    double b[2];          /* B(s) */
+    double jacobian;      /* |ω2 × ω1| */
+} slice_interval;
+int slice_plane1d_interval(vec3 x, const vec3 w[2], const double len[2], double radius, double eta_p,
+                           const slice_ray *r, double time_lo, double time_hi, slice_interval *out);
 
-/* Delta-sliced parallelepiped, §4.3, ξ_a = {t3, t2, t1, s1}: x + t3·ω3 + t2·ω2 + t1·ω1 = y1 + s·ψ with the
- * time constraint (eq. 35–37). At most 1 root; |J| = |det J| of eq. 37 with eta_c in the s column's time
- * entry (eq. 38 is its unwarped value). */
+/* Delta-sliced parallelepiped, Liu et al. 2022 §4.3, ξ_a = {t3, t2, t1, s1}: x + t3·ω3 + t2·ω2 + t1·ω1 =
+ * y1 + s·ψ with the time constraint (eq. 35–37). At most 1 root; |J| = |det J| of eq. 37 with eta_c in the s
+ * column's time entry = |eta_p·ψ·n + eta_c·ω1·(ω2 × ω3)|, n = ω1 × ω2 + ω2 × ω3 + ω3 × ω1 (eq. 38 is its
+ * unwarped value; docs/sliced_primitives.md §6). */
 int slice_parallelepiped_root(vec3 x, const vec3 w[3], double eta_p, double tau, const slice_ray *r,
                               slice_root *out);
 
-/* Delta-sliced parallelotope, §4.4, ξ_a = {t4, t3, t2, t1}: x + Σ t_i·ω_i = y0 (a camera point sampled by
- * the caller) with eta_p·Σt = tau. At most 1 root (s unused); |J| = |det| of eq. 43. */
+/* Delta-sliced parallelotope, Liu et al. 2022 §4.4, ξ_a = {t4, t3, t2, t1}: x + Σ t_i·ω_i = y0 (a camera
+ * point sampled by the caller; warping only moves tau) with eta_p·Σt = tau. At most 1 root (s unused);
+ * |J| = |det| of eq. 43. */
 int slice_parallelotope_root(vec3 x, const vec3 w[4], double eta_p, double tau, vec3 y0, slice_root *out);
 
-/* |J| of each estimator at a given full path, for score-based MIS (§4.6), where the path was found by
- * another estimator: the ball's with t1, ω1 (x1 → x0); the parallelepiped's with its three directions. */
+/* |J| of each estimator at a given full path, for score-based MIS (Liu et al. 2022 §4.6), where the path was
+ * found by another estimator: the ball's with t1, ω1 (x1 → x0); the parallelepiped's with its three
+ * directions. */
 double slice_ball_jacobian(double t1, vec3 w1, vec3 psi, double eta_p, double eta_c);
 double slice_parallelepiped_jacobian(const vec3 w[3], vec3 psi, double eta_p, double eta_c);
 
@@ -91,14 +111,23 @@ int slice_solve4(const double a[4][4], const double b[4], double x[4]);
  * fallback: PATH_VERTEX_* on each beam say which. */
 
 /* The primitive kinds, one row each in the table of slice_gather.c (the estimate) and slice_build.c (the fresh directions). */
-typedef enum { SLICE_BALL, SLICE_PARALLELEPIPED, SLICE_PARALLELOTOPE, SLICE_KIND_COUNT } slice_kind;
+typedef enum {
+    SLICE_BALL,
+    SLICE_PARALLELEPIPED,
+    SLICE_PARALLELOTOPE,
+    SLICE_PLANE,    /* §4.2: the box gate analytic, no τ_k drawn (tau: the window's end) */
+    SLICE_PLANE_1D, /* the 1-D-blurred plane (docs/sliced_primitives.md §7.2) */
+    SLICE_KIND_COUNT
+} slice_kind;
 
 /* One delta-sliced primitive of this iteration, built at a light-path vertex. */
 typedef struct {
     uint32_t vertex;   /* index into the vertex array */
     int kind;          /* slice_kind */
-    double tau;        /* its slice time τ_k (a box gate: drawn uniformly in the gate or frames' span) */
-    vec3 w[3];         /* fresh phase-sampled directions: a parallelepiped's ω2, ω1; a parallelotope's ω3, ω2, ω1 */
+    double tau;        /* its slice time τ_k (a box gate: drawn uniformly in the gate or frames' span); planes: the
+                        * window's end (their bound) */
+    vec3 w[3];         /* fresh phase-sampled directions: a parallelepiped's ω2, ω1; a parallelotope's ω3, ω2, ω1;
+                        * a plane's ω1 */
     double pdf;        /* their joint density (1 for a ball) */
 } slice_prim;
 
@@ -110,6 +139,7 @@ typedef struct {
     time_window window;
     uint64_t seed;
     long iteration;
+    double r;          /* planes_1d: the blur's half-width (the iteration's volume radius) */
 } slice_build_input;
 
 /* The primitives of the type at the n vertices (copied) and a BVH over their bounds. NULL + err out of memory.
@@ -133,6 +163,8 @@ int slice_type_builds(int type, int kind, unsigned f);
 int slice_type_gathers_beam(int type, unsigned f);
 /* Whether the type weighs balls against parallelepipeds by score-based MIS (§4.6). */
 int slice_type_mis(int type);
+/* 1: the type's primitives are sliced photon planes, 2: 1-D-blurred planes, 0: neither (their gate is analytic). */
+int slice_type_plane(int type);
 /* The type's line in the render summary. */
 const char *slice_type_summary(int type);
 
@@ -147,6 +179,7 @@ typedef struct {
     bounce_limits bounces;
     surface_shading shading; /* a ball at a surface vertex evaluates its BSDF */
     int camera_unwarp;       /* the camera segment adjacent to the sensor takes no time */
+    double r;                /* planes_1d: the blur's half-width (the iteration's volume radius) */
 } slice_gather;
 
 /* Every primitive's roots on the camera segment o + t·d, 0 <= t <= len, in medium med (thr and t_cam at o, b_cam

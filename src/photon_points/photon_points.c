@@ -39,8 +39,9 @@ int photon_points_pass(const scene *s, const render_plan *p, const eda_set *eda,
     if (sliced) bg.keep = slice_type_gathers_beam, bg.keep_type = p->volume_photon_type; /* beams where no primitive serves */
     slice_map *slm = NULL; /* a sliced volume_photon_type: the primitives built from the pass's vertices */
     slice_gather sg = {.type = p->volume_photon_type, .bounces = p->bounces, .shading = p->shading,
-                       .camera_unwarp = p->window.camera_unwarp};
-    slice_build_input sbi = {.type = p->volume_photon_type, .window = p->window, .seed = seed, .iteration = iteration};
+                       .camera_unwarp = p->window.camera_unwarp, .r = g.r_vol};
+    slice_build_input sbi = {.type = p->volume_photon_type, .window = p->window, .seed = seed, .iteration = iteration,
+                             .r = g.r_vol};
     int rc = 0;
     if (ps.n_vol > 0 && !(vm = volume_map_build(ps.vol, ps.n_vol, g.r_vol, err))) rc = -1;
     if (!rc && ps.n_beams > 0 && !(bm = beam_map_build(ps.beams, ps.n_beams, g.r_vol, err))) rc = -1;

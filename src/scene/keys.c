@@ -94,7 +94,8 @@ static const scene_key table[] = {
      .def = 1, .meaning = "Store and gather surface photons"},
     {.name = "low_order_scattering", IN(low_order_scattering), .type = KEY_BOOL, .read_by = PP,
      .changes_image = 1, .def = 1, .meaning = "Volume photons at the first medium vertex of a light path"},
-    {.name = "volume_photon_type", IN(volume_photon_type), CHOICES("points", "beams", "balls", "volumes", "hypervolumes", "volumes_balls", "mis_volumes_balls"),
+    {.name = "volume_photon_type", IN(volume_photon_type), CHOICES("points", "beams", "balls", "volumes", "hypervolumes", "volumes_balls", "mis_volumes_balls",
+                                                         "planes", "planes_1d"),
      .read_by = PP, .changes_image = 1, .def = 0,
      .meaning = "Volume photon kind: points (2-D kernel), photon beams (1-D kernel; docs/beams.md), or Liu et al. "
                 "2022's temporally sliced primitives with photon beams where they do not serve a path "

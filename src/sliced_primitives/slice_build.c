@@ -48,7 +48,8 @@ static void simplex_box(vec3 x, double lam, const vec3 *e, int n, slice_box *b)
 }
 
 /* Directions each kind draws, and how many of the base vertex's: a ball none (ω1 is analytic). */
-static const int fresh_count[SLICE_KIND_COUNT] = {0, 2, 3};
+static const int fresh_count[SLICE_KIND_COUNT] = {
+    [SLICE_BALL] = 0, [SLICE_PARALLELEPIPED] = 2, [SLICE_PARALLELOTOPE] = 3, [SLICE_PLANE] = 1, [SLICE_PLANE_1D] = 1};
 
 /* One primitive of kind k at vertex v (index i); 0 when it has no root anywhere (no time left, no direction). */
 static int build_one(const scene *s, const slice_build_input *in, const path_vertex *v, uint32_t i, int k,
@@ -58,6 +59,8 @@ static int build_one(const scene *s, const slice_build_input *in, const path_ver
     double span = tw->width * (tw->frame_count > 0 ? tw->frame_count : 1);
     double u = rng_uniform(rng); /* drawn first, whatever follows: the draws of a vertex do not depend on it */
     *p = (slice_prim){.vertex = i, .kind = k, .tau = tw->start + u * span, .pdf = 1.0};
+    if (k == SLICE_PLANE || k == SLICE_PLANE_1D) p->tau = tw->start + span; /* no τ_k (the gate is analytic): the
+                                                                             * window's end bounds it */
     vec3 dirs[4] = {v->w_out};
     if (k != SLICE_BALL) {
         p->pdf = fresh_directions(slice_sampling_phase(s, v->medium_out), v->w_out, fresh_count[k], rng, p->w);
@@ -73,6 +76,8 @@ static int build_one(const scene *s, const slice_build_input *in, const path_ver
     } else {
         simplex_box(v->pos, lam, dirs, 1 + fresh_count[k], b);
     }
+    if (k == SLICE_PLANE_1D) /* the blur: r along the plane's normal */
+        for (int j = 0; j < 3; j++) b->lo[j] -= (float)in->r, b->hi[j] += (float)in->r;
     b->budget = (float)budget * (1.0f + 1e-6f);
     return 1;
 }

@@ -30,6 +30,17 @@ static vec3 camera_side(const slice_ctx *c, double s, vec3 w)
     return v3_scale(v3_mul(v3_mul(c->thr, v3_exp_neg(v3_scale(m->sigma_t, s))), m->sigma_s), f);
 }
 
+/* Adds val for a path of `segs` light segments beyond vertex v at time t, weighted by the film's gate (or frame)
+ * box: a plane's W_τ (its gate is analytic, Liu et al. 2022 §4.2). */
+static void splat_at(const slice_ctx *c, const path_vertex *v, int segs, double t, vec3 val)
+{
+    int light = v->bounce + segs;
+    film_slot slot = film_time_slot(c->pix->f, t, -1, light + c->b_cam - 1);
+    if (!slot.counts || v3_is_zero(val)) return;
+    if (!film_slot_fits(&slot, val)) c->pix->nonfinite++;
+    else film_slot_add(c->pix->f, c->pix->px, &slot, val);
+}
+
 /* Adds val (already over p·|J|) for a path of `segs` light segments beyond vertex v at time τ_k. */
 static void splat(const slice_ctx *c, const path_vertex *v, int segs, double tau, vec3 val)
 {
@@ -187,6 +198,52 @@ static void eval_parallelotope(slice_ctx *c, const slice_prim *p)
     splat(c, v, 4, p->tau, v3_scale(val, c->len / (rt.jacobian * p->pdf)));
 }
 
+/* ---- photon planes (§4.2) and 1-D-blurred planes (docs/sliced_primitives.md §7) ---- */
+
+/* The plane at x2 = v: ω2 the photon's own sampled direction, ω1 fresh (density p->pdf); long in t2 and t1 (the
+ * chain's transmittance and visibility evaluated), the box gate analytic: the root's path time picks the film's
+ * slot and its box weight W_τ. */
+static void eval_plane(slice_ctx *c, const slice_prim *p)
+{
+    const path_vertex *v = &c->verts[p->vertex];
+    if (!segments_count(c, v, 2)) return;
+    const vec3 w[2] = {v->w_out, p->w[0]};
+    const double len[2] = {INFINITY, INFINITY};
+    slice_ray r = {c->o, c->d, c->len, c->eta_c};
+    slice_root rt;
+    if (!slice_plane_root(v->pos, w, len, medium_eta(c->s, v->medium_out), &r, &rt)) return;
+    vec3 x1 = v3_add(v->pos, v3_scale(w[0], rt.t[0]));
+    int mj[1];
+    vec3 f = chain(c, v, w, &x1, 2, v3_add(c->o, v3_scale(c->d, rt.s)), mj);
+    if (v3_is_zero(f)) return;
+    vec3 val = v3_mul(f, camera_side(c, rt.s, w[1]));
+    splat_at(c, v, 2, v->time + c->t_cam + rt.time, v3_scale(val, 1.0 / (rt.jacobian * p->pdf)));
+}
+
+/* The 1-D-blurred plane: ξ_a = {t2, t1, B, τ_k} with the box kernel 1/(2r) on B; s uniform on the interval of
+ * the segment whose roots lie in the blurred plane and the gate (slice_plane1d_interval), density 1/(s1 − s0).
+ * The light path ends at the plane's point x1 + t1·ω1, the camera's at y1 + s·ψ, B·n apart. */
+static void eval_plane1d(slice_ctx *c, const slice_prim *p)
+{
+    const path_vertex *v = &c->verts[p->vertex];
+    if (!segments_count(c, v, 2) || !(c->g->r > 0.0)) return;
+    const vec3 w[2] = {v->w_out, p->w[0]};
+    const double len[2] = {INFINITY, INFINITY};
+    double eta_p = medium_eta(c->s, v->medium_out), lo = c->pix->f->window.start - v->time - c->t_cam;
+    slice_ray r = {c->o, c->d, c->len, c->eta_c};
+    slice_interval iv;
+    if (!slice_plane1d_interval(v->pos, w, len, c->g->r, eta_p, &r, lo, lo + c->span, &iv)) return;
+    double s = iv.s0 + rng_uniform(c->rng) * (iv.s1 - iv.s0);
+    double t2 = iv.t2[0] + iv.t2[1] * s, t1 = iv.t1[0] + iv.t1[1] * s;
+    vec3 x1 = v3_add(v->pos, v3_scale(w[0], t2));
+    int mj[1];
+    vec3 f = chain(c, v, w, &x1, 2, v3_add(x1, v3_scale(w[1], t1)), mj);
+    if (v3_is_zero(f)) return;
+    vec3 val = v3_mul(f, camera_side(c, s, w[1]));
+    double t = v->time + c->t_cam + eta_p * (t2 + t1) + c->eta_c * s;
+    splat_at(c, v, 2, t, v3_scale(val, (iv.s1 - iv.s0) / (2.0 * c->g->r * iv.jacobian * p->pdf)));
+}
+
 /* The primitive kinds: the one table the estimate dispatches on (slice_kind's order). */
 static const struct {
     const char *name;
@@ -195,6 +252,8 @@ static const struct {
     [SLICE_BALL] = {"ball", eval_ball},
     [SLICE_PARALLELEPIPED] = {"parallelepiped", eval_parallelepiped},
     [SLICE_PARALLELOTOPE] = {"parallelotope", eval_parallelotope},
+    [SLICE_PLANE] = {"plane", eval_plane},
+    [SLICE_PLANE_1D] = {"plane_1d", eval_plane1d},
 };
 
 static void visit(void *ctx, const slice_prim *p) { kinds[p->kind].eval(ctx, p); }

@@ -1,7 +1,8 @@
-/* The geometry of Liu, Jiao and Jarosz 2022's temporally sliced photon primitives (§4): the roots of the 4-D
- * spatio-temporal constraint g′(ξ_a) = 0 and |J|, the absolute Jacobian determinant of g′ with respect to the
- * analytic dimensions ξ_a (eq. 24–25), camera-warped (eta_c > 0) or unwarped (eta_c = 0). Conventions: the
- * module's public header; the derivations of the warped Jacobians: docs/sliced_primitives.md § Jacobians.
+/* The geometry of Liu, Jiao and Jarosz 2022's temporally sliced photon primitives (Liu et al. 2022 §4): the
+ * roots of the 4-D spatio-temporal constraint g′(ξ_a) = 0 and |J|, the absolute Jacobian determinant of g′
+ * with respect to the analytic dimensions ξ_a (eq. 24–25), camera-warped (eta_c > 0) or unwarped (eta_c = 0).
+ * Conventions: the module's public header; the derivations of the warped Jacobians:
+ * docs/sliced_primitives.md §6.
  *
  * g′ = x′_0 − y′_0 (eq. 13) with our time convention: its time entry is eta_p·Σt + eta_c·s − tau (tau: the
  * gate time less the light path's time at the base vertex and the camera path's time at y1), so ∂τ(g′)/∂t_i =
@@ -74,7 +75,7 @@ static void edge_column(double a[4][4], int c, vec3 w, double eta)
     a[0][c] = w.x, a[1][c] = w.y, a[2][c] = w.z, a[3][c] = eta;
 }
 
-/* ---- sliced ball / VPL, §4.5 ---- */
+/* ---- sliced ball / VPL, Liu et al. 2022 §4.5 ---- */
 
 double slice_ball_jacobian(double t1, vec3 w1, vec3 psi, double eta_p, double eta_c)
 {
@@ -132,7 +133,7 @@ int slice_ball_roots(vec3 x, double eta_p, double tau, const slice_ray *r, slice
     return k;
 }
 
-/* ---- delta-sliced parallelepiped, §4.3 ---- */
+/* ---- delta-sliced parallelepiped, Liu et al. 2022 §4.3 ---- */
 
 static void parallelepiped_matrix(const vec3 w[3], vec3 psi, double eta_p, double eta_c, double a[4][4])
 {
@@ -167,7 +168,7 @@ int slice_parallelepiped_root(vec3 x, const vec3 w[3], double eta_p, double tau,
     return 1;
 }
 
-/* ---- delta-sliced parallelotope, §4.4 ---- */
+/* ---- delta-sliced parallelotope, Liu et al. 2022 §4.4 ---- */
 
 int slice_parallelotope_root(vec3 x, const vec3 w[4], double eta_p, double tau, vec3 y0, slice_root *out)
 {
@@ -189,7 +190,7 @@ int slice_parallelotope_root(vec3 x, const vec3 w[4], double eta_p, double tau, 
     return 1;
 }
 
-/* ---- sliced photon plane, §4.2 ---- */
+/* ---- sliced photon plane, Liu et al. 2022 §4.2 ---- */
 
 static double det3(vec3 a, vec3 b, vec3 c) { return v3_dot(a, v3_cross(b, c)); }
 
@@ -208,5 +209,50 @@ int slice_plane_root(vec3 x, const vec3 w[2], const double len[2], double eta_p,
     out->w1 = w[1];
     out->jacobian = fabs(D);
     out->time = eta_p * (t2 + t1) + r->eta_c * s;
+    return 1;
+}
+
+/* ---- the 1-D-blurred photon plane (planes_1d), docs/sliced_primitives.md §7 ---- */
+
+/* Clips [*lo, *hi] to the s where lo_v <= a + b·s <= hi_v. */
+static void clip_linear(double a, double b, double lo_v, double hi_v, double *lo, double *hi)
+{
+    if (b == 0.0) {
+        if (!(a >= lo_v && a <= hi_v)) *hi = -INFINITY;
+        return;
+    }
+    double s_a = (lo_v - a) / b, s_b = (hi_v - a) / b;
+    if (b < 0.0) {
+        double t = s_a;
+        s_a = s_b, s_b = t;
+    }
+    if (s_a > *lo) *lo = s_a;
+    if (s_b < *hi) *hi = s_b;
+}
+
+int slice_plane1d_interval(vec3 x, const vec3 w[2], const double len[2], double radius, double eta_p,
+                           const slice_ray *r, double time_lo, double time_hi, slice_interval *out)
+{
+    if (!(eta_p > 0.0) || !(radius > 0.0) || !(r->eta_c >= 0.0) || !(time_hi > time_lo)) return 0;
+    vec3 c = v3_cross(w[0], w[1]);
+    double area = v3_len(c); /* [ω2, ω1, n] = |ω2 × ω1| */
+    if (!(area > SLICE_MIN_JACOBIAN)) return 0;
+    vec3 n = v3_scale(c, 1.0 / area);
+    /* the dual basis of (ω2, ω1, n): t2 = (p − x)·(ω1 × n)/area, t1 = (p − x)·(n × ω2)/area, B = (p − x)·n */
+    vec3 d2 = v3_scale(v3_cross(w[1], n), 1.0 / area), d1 = v3_scale(v3_cross(n, w[0]), 1.0 / area);
+    vec3 q = v3_sub(r->y1, x); /* p(s) − x = q + s·ψ */
+    out->t2[0] = v3_dot(q, d2), out->t2[1] = v3_dot(r->psi, d2);
+    out->t1[0] = v3_dot(q, d1), out->t1[1] = v3_dot(r->psi, d1);
+    out->b[0] = v3_dot(q, n), out->b[1] = v3_dot(r->psi, n);
+    double lo = 0.0, hi = r->s_max;
+    clip_linear(out->t2[0], out->t2[1], 0.0, len[0], &lo, &hi);
+    clip_linear(out->t1[0], out->t1[1], 0.0, len[1], &lo, &hi);
+    clip_linear(out->b[0], out->b[1], -radius, radius, &lo, &hi);
+    /* the root's time eta_p·(t2 + t1) + eta_c·s */
+    clip_linear(eta_p * (out->t2[0] + out->t1[0]), eta_p * (out->t2[1] + out->t1[1]) + r->eta_c, time_lo, time_hi,
+                &lo, &hi);
+    if (!(hi > lo)) return 0;
+    out->s0 = lo, out->s1 = hi;
+    out->jacobian = area;
     return 1;
 }

@@ -15,6 +15,8 @@ static int pp_serves_x1(unsigned f) { return (f & F_MEDIUM) && (f & F_PREV); }
 /* ... that a parallelotope serves: x1, x2, x3 medium vertices. */
 static int pt_serves_x1(unsigned f) { return (f & F_MEDIUM) && (f & F_PREV) && (f & F_PREV2); }
 static int ball_serves_x1(unsigned f) { return !(f & F_DELTA); }
+/* ... that a plane at x2 serves (its ω2 the photon's own, its ω1 fresh): x1 a medium vertex, any x2. */
+static int plane_serves_x1(unsigned f) { return (f & F_MEDIUM) != 0; }
 
 typedef struct {
     int type;
@@ -24,17 +26,23 @@ typedef struct {
     int ball_yields_pp; /* the ball leaves the parallelepipeds' paths to them */
     int mis;        /* balls and parallelepipeds both, weighted (§4.6) */
     const char *summary;
+    int plane;      /* 1: sliced photon planes, 2: 1-D-blurred planes, at every vertex with a sampled direction */
 } slice_type_row;
 
 static const slice_type_row types[] = {
-    {VOLUME_PHOTON_BALLS, 1, 0, 0, 0, 0, "sliced balls at every non-delta light vertex, beams where x1 is a delta"},
-    {VOLUME_PHOTON_VOLUMES, 0, 1, 0, 0, 0, "sliced parallelepipeds for paths whose x2, x1 scatter in a medium, beams elsewhere"},
+    {VOLUME_PHOTON_BALLS, 1, 0, 0, 0, 0, "sliced balls at every non-delta light vertex, beams where x1 is a delta", 0},
+    {VOLUME_PHOTON_VOLUMES, 0, 1, 0, 0, 0, "sliced parallelepipeds for paths whose x2, x1 scatter in a medium, beams elsewhere", 0},
     {VOLUME_PHOTON_HYPERVOLUMES, 0, 0, 1, 0, 0,
-     "sliced parallelotopes for paths whose x3, x2, x1 scatter in a medium, beams elsewhere"},
+     "sliced parallelotopes for paths whose x3, x2, x1 scatter in a medium, beams elsewhere", 0},
     {VOLUME_PHOTON_VOLUMES_BALLS, 1, 1, 0, 1, 0,
-     "sliced parallelepipeds where x2, x1 scatter in a medium, balls at the other non-delta x1, beams elsewhere"},
+     "sliced parallelepipeds where x2, x1 scatter in a medium, balls at the other non-delta x1, beams elsewhere", 0},
     {VOLUME_PHOTON_MIS_VOLUMES_BALLS, 1, 1, 0, 0, 1,
-     "sliced balls and parallelepipeds, balance-heuristic MIS where both serve, beams where x1 is a delta"},
+     "sliced balls and parallelepipeds, balance-heuristic MIS where both serve, beams where x1 is a delta", 0},
+    {.type = VOLUME_PHOTON_PLANES, .plane = 1,
+     .summary = "sliced photon planes (box gate analytic) for paths whose x1 scatters in a medium, beams elsewhere"},
+    {.type = VOLUME_PHOTON_PLANES_1D, .plane = 2,
+     .summary = "1-D-blurred photon planes (box gate analytic) for paths whose x1 scatters in a medium, beams "
+                "elsewhere"},
 };
 
 static const slice_type_row *row_of(int type)
@@ -52,6 +60,8 @@ int slice_type_builds(int type, int kind, unsigned f)
     case SLICE_BALL: return r->ball && ball_serves_x1(f) && !(r->ball_yields_pp && pp_serves_x1(f));
     case SLICE_PARALLELEPIPED: return r->pp;
     case SLICE_PARALLELOTOPE: return r->pt;
+    case SLICE_PLANE: return r->plane == 1;
+    case SLICE_PLANE_1D: return r->plane == 2;
     default: return 0;
     }
 }
@@ -60,8 +70,15 @@ int slice_type_gathers_beam(int type, unsigned f)
 {
     const slice_type_row *r = row_of(type);
     if (!r) return 1;
-    int served = (r->ball && ball_serves_x1(f)) || (r->pp && pp_serves_x1(f)) || (r->pt && pt_serves_x1(f));
+    int served = (r->ball && ball_serves_x1(f)) || (r->pp && pp_serves_x1(f)) || (r->pt && pt_serves_x1(f)) ||
+                 (r->plane && plane_serves_x1(f));
     return !served;
+}
+
+int slice_type_plane(int type)
+{
+    const slice_type_row *r = row_of(type);
+    return r ? r->plane : 0;
 }
 
 int slice_type_mis(int type)
@@ -81,6 +98,10 @@ int sliced_primitives_check(const scene *s, const render_plan *p, dp_error *err)
     if (p->type != INTEGRATOR_PHOTON_POINTS || !volume_type_sliced(p->volume_photon_type)) return 0;
     const scene_key *k = scene_key_find("volume_photon_type");
     const char *name = k ? k->choices[p->volume_photon_type] : "this type";
+    if (slice_type_plane(p->volume_photon_type) && (!p->window.gated || !(p->window.width > 0.0)))
+        return dp_fail(err, "%s: integrator.transient_time_width: volume_photon_type %s integrates a box gate "
+                       "analytically (Liu et al. 2022 §4.2: the gate is its 4th analytic dimension), so it needs a "
+                       "gate of width > 0; a delta gate or steady state is not supported", s->path, name);
     if (!p->window.gated || !(p->window.width > 0.0))
         return dp_fail(err, "%s: integrator.volume_photon_type: %s slices the path space at a time in a gate: it "
                        "needs transient_time_width > 0 (steady state has no time to slice)", s->path, name);

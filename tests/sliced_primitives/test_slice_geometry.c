@@ -20,6 +20,7 @@
 
 #define N_CONFIG 3000
 #define N_SCAN 20000
+#define N_SCAN_1D 2000 /* the 1-D plane's scan: a 4×4 solve a point */
 #define FD_TOL 1e-5
 #define RES_TOL 1e-9
 #define Z_MAX 4.0
@@ -247,7 +248,8 @@ static void test_ball_roots(void **state)
                rt, fd, mism, ambiguous);
         for (int v = 1; v < BALL_VARIANTS; v++)
             printf("  broken variant \"%s\": largest relative error %.3g%s\n", ball_variant_name[v], broken[v],
-                   broken[v] > FD_TOL ? " (caught)" : (mode == 0 && v != BALL_NO_T1SQ ? " (the same when unwarped)" : ""));
+                   broken[v] > FD_TOL ? " (caught)"
+                                      : (mode == 0 && v != BALL_NO_T1SQ ? " (the same when unwarped)" : ""));
         assert_true(rs < RES_TOL && rt < RES_TOL);
         assert_true(fd < FD_TOL);
         assert_int_equal(mism, 0);
@@ -340,7 +342,7 @@ static int parallelepiped_scan(const geo *c, double *s_at)
 }
 
 /* Eq. 38 (unwarped) and, with our derivation, the warped term: |eta_p·ψ·n + eta_c·ω1·(ω2 × ω3)|,
- * n = ω1 × ω2 + ω2 × ω3 + ω3 × ω1 (docs/sliced_primitives.md § Jacobians). */
+ * n = ω1 × ω2 + ω2 × ω3 + ω3 × ω1 (docs/sliced_primitives.md §6). */
 static double parallelepiped_closed_form(const vec3 w[3], vec3 psi, double eta_p, double eta_c)
 {
     vec3 w3 = w[0], w2 = w[1], w1 = w[2];
@@ -526,6 +528,100 @@ static void test_plane_roots(void **state)
     }
 }
 
+/* ---- the 1-D-blurred photon plane ---- */
+
+/* The point y1 + s·ψ decomposed in (ω2, ω1, n) by a 4×4 solve (the time row a dummy identity), independent of
+ * the dual basis the code uses; whether it is inside the blurred plane and the time window. */
+static int plane1d_inside(const geo *c, const double len[2], double radius, double lo, double hi, double s)
+{
+    vec3 n = v3_norm(v3_cross(c->w[0], c->w[1])), d = v3_sub(ray_at(&c->r, s), c->x);
+    double a[4][4] = {{c->w[0].x, c->w[1].x, n.x, 0}, {c->w[0].y, c->w[1].y, n.y, 0}, {c->w[0].z, c->w[1].z, n.z, 0},
+                      {0, 0, 0, 1}};
+    double b[4] = {d.x, d.y, d.z, 0}, t[4];
+    if (slice_solve4(a, b, t)) return 0;
+    double time = c->eta_p * (t[0] + t[1]) + c->r.eta_c * s;
+    return t[0] >= 0 && t[0] <= len[0] && t[1] >= 0 && t[1] <= len[1] && fabs(t[2]) <= radius && time >= lo &&
+           time <= hi;
+}
+
+/* g′ of the 1-D plane in (t2, t1, B, τ_k) at a fixed s (eq. 28 with the blur B along n) */
+typedef struct {
+    geo g;
+    double s;
+} plane1d_ctx;
+
+static void g_plane1d(const void *ctx, const double xi[4], double g[4])
+{
+    const plane1d_ctx *c = ctx;
+    vec3 n = v3_norm(v3_cross(c->g.w[0], c->g.w[1]));
+    vec3 p = v3_add(v3_add(v3_add(c->g.x, v3_scale(c->g.w[0], xi[0])), v3_scale(c->g.w[1], xi[1])), v3_scale(n, xi[2]));
+    put(g, v3_sub(p, ray_at(&c->g.r, c->s)), c->g.eta_p * (xi[0] + xi[1]) + c->g.r.eta_c * c->s - xi[3]);
+}
+
+/* The interval against a scan of s (every scanned s inside the blurred plane and the window lies in [s0, s1]
+ * and the reverse, but within a step of the ends); the roots' residuals and |J| against finite differences at
+ * three s of the interval. Broken variant: the interval found with the camera's time left out (eta_c = 0) on a
+ * warped ray (the time window slid as Liu's code has it). */
+static void test_plane1d_interval(void **state)
+{
+    (void)state;
+    dp_rng rng = rng_stream(49, 8, 0);
+    for (int mode = 0; mode < 2; mode++) {
+        int found = 0, mism = 0, broken_mism = 0;
+        double rs = 0.0, fd = 0.0;
+        for (int k = 0; k < N_CONFIG / 3; k++) {
+            plane1d_ctx pc;
+            geo *c = &pc.g;
+            rand_ray(&rng, mode, c);
+            rand_dirs(&rng, 2, c->w);
+            double len[2], radius = 0.02 + 0.3 * rng_uniform(&rng);
+            for (int i = 0; i < 2; i++) len[i] = rng_uniform(&rng) < 0.3 ? INFINITY : 0.2 + 1.8 * rng_uniform(&rng);
+            double sx = c->r.s_max * rng_uniform(&rng);
+            c->x = ray_at(&c->r, sx);
+            for (int i = 0; i < 2; i++)
+                c->x = v3_sub(c->x, v3_scale(c->w[i], (isinf(len[i]) ? 1.5 : len[i]) * rng_uniform(&rng)));
+            double lo = c->eta_p * 3.0 * rng_uniform(&rng), hi = lo + c->eta_p * (0.1 + rng_uniform(&rng));
+            slice_interval iv, bad;
+            int n = slice_plane1d_interval(c->x, c->w, len, radius, c->eta_p, &c->r, lo, hi, &iv);
+            slice_ray r0 = c->r;
+            r0.eta_c = 0.0;
+            int nb = slice_plane1d_interval(c->x, c->w, len, radius, c->eta_p, &r0, lo, hi, &bad);
+            double step = c->r.s_max / N_SCAN_1D;
+            for (int i = 0; i <= N_SCAN_1D; i++) {
+                double s = c->r.s_max * i / N_SCAN_1D;
+                int in = plane1d_inside(c, len, radius, lo, hi, s);
+                int claimed = n && s >= iv.s0 && s <= iv.s1;
+                int near = n && (fabs(s - iv.s0) < step || fabs(s - iv.s1) < step);
+                if (in != claimed && !near) mism++;
+                int bclaimed = nb && s >= bad.s0 && s <= bad.s1;
+                int bnear = nb && (fabs(s - bad.s0) < step || fabs(s - bad.s1) < step);
+                if (in != bclaimed && !bnear) broken_mism++;
+            }
+            if (!n) continue;
+            found++;
+            for (int q = 0; q < 3; q++) {
+                pc.s = iv.s0 + (iv.s1 - iv.s0) * (0.1 + 0.4 * q);
+                double xi[4] = {iv.t2[0] + iv.t2[1] * pc.s, iv.t1[0] + iv.t1[1] * pc.s, iv.b[0] + iv.b[1] * pc.s, 0.0};
+                xi[3] = c->eta_p * (xi[0] + xi[1]) + c->r.eta_c * pc.s;
+                double g[4], scale = 1.0 + v3_len(v3_sub(c->x, c->r.y1)) + fabs(xi[0]) + fabs(xi[1]) + pc.s;
+                g_plane1d(&pc, xi, g);
+                rs = fmax(rs, sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]) / scale);
+                assert_true(fabs(xi[2]) <= radius * (1.0 + 1e-9) && xi[3] >= lo - 1e-9 && xi[3] <= hi + 1e-9);
+                double ref = fd_det(g_plane1d, &pc, xi);
+                fd = fmax(fd, fabs(iv.jacobian - ref) / ref);
+            }
+        }
+        printf("planes_1d eta_c %s: %d of %d configurations with an interval; scanned points misplaced %d; "
+               "residuals %.2e; |J| against finite differences %.2e; broken (camera time left out): %d points "
+               "misplaced\n",
+               mode ? "= eta_p" : "0", found, N_CONFIG / 3, mism, rs, fd, broken_mism);
+        assert_int_equal(mism, 0);
+        assert_true(found > 100);
+        assert_true(rs < RES_TOL && fd < FD_TOL);
+        if (mode) assert_true(broken_mism > 100);
+    }
+}
+
 /* ---- change of variables without the Jacobian formula ---- */
 
 /* ξ_a drawn uniformly in a box about the root xi0 that holds the preimage of the 4-D box |g′| < ε (sized from
@@ -655,6 +751,7 @@ int main(void)
         cmocka_unit_test(test_parallelepiped_roots),
         cmocka_unit_test(test_parallelotope_roots),
         cmocka_unit_test(test_plane_roots),
+        cmocka_unit_test(test_plane1d_interval),
         cmocka_unit_test(test_change_of_variables),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -174,6 +174,66 @@ static void test_hypervolumes_tiles(void **state)
                 SLICE_TILE_BIAS);
 }
 
+/* ---- sliced photon planes (planes, planes_1d; docs/sliced_primitives.md §7) ---- */
+
+/* Per tile against the path tracer on the fog box with its point light, with the bounce keys `bounces` in both
+ * renders (the order-2 layer: min_bounces 2, max_bounces 3, two scattering events, all served by planes at the
+ * light; or every order up to 5 segments, the beams fallback serving the rest) and `bias` the budget of the
+ * beams' and blurred planes' kernels. */
+static void planes_tiles_check(const char *label, const char *type, const char *bounces, long pt_passes,
+                               long passes, double bias)
+{
+    char text[16384], keys[2048];
+    cell_totals ref, m;
+    double t_ref, t_m;
+    snprintf(keys, sizeof keys, "\"type\": \"path_tracer\", %s, " BOX_GATE, bounces);
+    box_scene_text(text, sizeof text, 16, keys);
+    cell_render(text, pt_passes, 11, 0, &ref, &t_ref);
+    snprintf(keys, sizeof keys,
+             "\"type\": \"progressive_transient_photon_map\", %s, \"photon_count\": 200, \"volume_photon_count\": 1e6,"
+             " \"gather_photon_count\": 256, \"gather_radius\": 0.15, \"volume_gather_radius\": 0.05, \"alpha\": 0.7,"
+             " \"volume_alpha\": 0.7, \"volume_photon_type\": \"%s\", " BOX_GATE,
+             bounces, type);
+    box_scene_text(text, sizeof text, 16, keys);
+    cell_render(text, passes, 29, 0, &m, &t_m);
+    double z = tiles_z(label, &ref, &m, bias);
+    print_message("  seconds: path tracer %.1f, %s %.1f\n", t_ref, label, t_m);
+    free(ref.x);
+    free(m.x);
+    assert_true(z < 4.2); /* Bonferroni over 16 tiles */
+}
+
+#define ORDER2 "\"min_bounces\": 2, \"max_bounces\": 3"
+#define ORDERS5 "\"max_bounces\": 5"
+
+/* The order-2 layer: every path is light → x1 (fog) → x0 (the camera ray) → camera, served by the planes at the
+ * light; unbiased, no budget. */
+static void test_planes_order2_tiles(void **state)
+{
+    (void)state;
+    planes_tiles_check("planes, order 2, vs path tracer", "planes", ORDER2, 1500, 200, SLICE_TILE_BIAS);
+}
+
+/* The whole image up to 5 segments: planes where x1 scatters in the fog, beams elsewhere (their 3 % budget). */
+static void test_planes_tiles(void **state)
+{
+    (void)state;
+    planes_tiles_check("planes vs path tracer", "planes", ORDERS5, 1500, 120, SLICE_TILE_BIAS);
+}
+
+/* The 1-D-blurred planes: biased by the blur (r 0.05 shrinking with alpha 0.7), budget 3 %. */
+static void test_planes_1d_order2_tiles(void **state)
+{
+    (void)state;
+    planes_tiles_check("planes_1d, order 2, vs path tracer", "planes_1d", ORDER2, 1500, 60, SLICE_TILE_BIAS);
+}
+
+static void test_planes_1d_tiles(void **state)
+{
+    (void)state;
+    planes_tiles_check("planes_1d vs path tracer", "planes_1d", ORDERS5, 1500, 60, SLICE_TILE_BIAS);
+}
+
 /* ---- MIS weights ---- */
 
 /* The ball's and the parallelepiped's weight of one path sum to 1 (so the MIS of §4.6 is unbiased whatever
@@ -257,7 +317,11 @@ int main(void)
         cmocka_unit_test(test_mis_volumes_balls_tiles),
         cmocka_unit_test(test_volumes_balls_tiles),
         cmocka_unit_test(test_hypervolumes_tiles),
+        cmocka_unit_test(test_planes_order2_tiles),
+        cmocka_unit_test(test_planes_tiles),
+        cmocka_unit_test(test_planes_1d_order2_tiles),
+        cmocka_unit_test(test_planes_1d_tiles),
     };
-    if (getenv("SLICE_ONLY")) cmocka_set_test_filter(getenv("SLICE_ONLY")); /* TEMP */
+    if (getenv("DARTSPP_TEST_FILTER")) cmocka_set_test_filter(getenv("DARTSPP_TEST_FILTER"));
     return RUN_TESTS_AND_STRESS(tests, stress);
 }
