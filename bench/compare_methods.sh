@@ -5,7 +5,8 @@
 # seed (a slow spell of the machine falls on all of them), and prints the paper's table: per method the
 # passes, the MSE against REFERENCE (and MSE − V_ref when REFERENCE.var holds the reference's own noise), the
 # papers' q99-normalised MSE, each relative to DARTS PT, and each method's own variance from the spread of
-# its seeds (no reference needed; SEEDS >= 2). Methods (METHODS="..." picks a subset, in this order):
+# its seeds (no reference needed; SEEDS >= 2), each ratio with a 95 % interval over seeds (bench/seed_stats.py;
+# BASE=method picks the denominator, DARTS PT by default). Methods (METHODS="..." picks a subset, in this order):
 #   uniform_pt  uniform-time path tracer (Jarabo et al. 2014 as the DARTS supplement B.4 corrects it)
 #   pt          plain path tracer
 #   pp          baseline progressive photon points
@@ -15,6 +16,9 @@
 #   darts_pp    DARTS photon points (DA + elliptical control vertices)
 #   pb          baseline progressive transient photon beams (1-D kernel; docs/beams.md), not in the default set
 #   darts_pb    DARTS photon beams (long beams from the DARTS photon pass), not in the default set
+#   balls volumes hypervolumes volumes_balls mis_volumes_balls planes planes_1d
+#               Liu et al. 2022's temporally sliced photon primitives (docs/sliced_primitives.md), baseline
+#               photon pass, not in the default set
 # The scene's own integrator keys (photon
 # counts, radii, bounces, gate) are kept; only the method's keys are set. Images, logs and error-against-time
 # rows (with REFERENCE, one per second) go to bench/results/NAME/; the table to
@@ -32,6 +36,7 @@ table=bench/results/$name-methods-${secs}s.md
 pt="--set type=path_tracer"
 pp="--set type=progressive_transient_photon_map --set volume_photon_type=points"
 pb="--set type=progressive_transient_photon_map --set volume_photon_type=beams"
+sliced="--set type=progressive_transient_photon_map --set volume_photon_type"
 off="--set enable_guiding=false --set enable_elliptical=false --set eda=false"
 on="--set enable_guiding=true --set enable_elliptical=true"
 methods="uniform_pt|$pt $off --set time_sampling=uniform
@@ -41,7 +46,14 @@ darts_pt|$pt $on
 darts_pt_eda|$pt --set enable_guiding=false --set enable_elliptical=true --set eda=true
 darts_pp|$pp $on
 pb|$pb $off
-darts_pb|$pb $on"
+darts_pb|$pb $on
+balls|$sliced=balls $off
+volumes|$sliced=volumes $off
+hypervolumes|$sliced=hypervolumes $off
+volumes_balls|$sliced=volumes_balls $off
+mis_volumes_balls|$sliced=mis_volumes_balls $off
+planes|$sliced=planes $off
+planes_1d|$sliced=planes_1d $off"
 only=${METHODS:-uniform_pt pt pp darts_pt darts_pp}
 s=1
 while [ "$s" -le "$seeds" ]; do
@@ -58,23 +70,10 @@ while [ "$s" -le "$seeds" ]; do
 done
 vref=0
 [ "$ref" != - ] && [ -f "$ref.var" ] && vref=$(cat "$ref.var")
-# per method: passes (mean over seeds), MSE and MSE/q99² against the reference (mean over seeds), seed variance
-for label in $only; do
-    passes=0; mse=0; q=0; s=1
-    while [ "$s" -le "$seeds" ]; do
-        p=$(sed -n 's/^rendered \([0-9]*\) passes.*/\1/p' "$out/$label-s$s.txt")
-        passes=$(awk -v a="$passes" -v b="${p:-0}" -v n="$seeds" 'BEGIN { print a + b / n }')
-        if [ "$ref" != - ]; then
-            row=$("$bin" compare "$out/$label-s$s.exr" "$ref" --csv)
-            mse=$(echo "$row" | awk -F, -v a="$mse" -v n="$seeds" '{ print a + $1 / n }')
-            q=$(echo "$row" | awk -F, -v a="$q" -v n="$seeds" '{ print a + $4 / n }')
-        fi
-        s=$((s + 1))
-    done
-    v=-
-    [ "$seeds" -ge 2 ] && v=$("$bin" compare "$out/$label-s1.exr" "$out/$label-s2.exr" --csv | awk -F, '{ printf "%.6g", $1 / 2 }')
-    echo "$label $passes $mse $q $v"
-done > "$out/summary.txt"
+# the table: bench/seed_stats.py (per method passes, MSE and MSE/q99² against REFERENCE over all seeds, the seed
+# variance from disjoint pairs of seeds, each ratio to BASE with a 95 % bootstrap interval over seeds)
+base=${BASE:-darts_pt}
+case " $only " in *" $base "*) ;; *) base=${only%% *} ;; esac
 paper() {
     case $1 in
     uniform_pt) echo "2–4 (paper §6.1: DARTS PT reduces MSE 2–4× against uniform-time PT)" ;;
@@ -83,6 +82,10 @@ paper() {
     darts_pt) echo "1" ;;
     darts_pt_eda) echo "(not in the paper: its PT results use no EDA)" ;;
     darts_pp) echo "< 1 (paper §6.1: DARTS PP further increased the gap)" ;;
+    pb) echo "> 1 (paper §6.1, Fig. 7: 1-D progressive transient photon beams behind DARTS PT and PP)" ;;
+    darts_pb) echo "below pb, above darts_pp (supplement §C.3, Fig. VI)" ;;
+    mis_volumes_balls) echo "(Liu et al. 2022 §6: 20–40× less variance than pb on SUBSURFACE, 2–4× on CORNELL BOX)" ;;
+    balls|volumes|hypervolumes|volumes_balls|planes|planes_1d) echo "(not in the paper)" ;;
     esac
 }
 {
@@ -90,15 +93,8 @@ paper() {
     echo "($(date -u +%Y-%m-%d), $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ *//'))"
     [ "$vref" != 0 ] && echo "Reference noise V_ref = $vref (variance of the reference mean, from its chunks), subtracted below."
     echo
-    echo "| method | passes | MSE − V_ref | ÷ DARTS PT | MSE/q99² | ÷ DARTS PT | variance (seeds) | ÷ DARTS PT | paper, ÷ DARTS PT |"
-    echo "|---|---|---|---|---|---|---|---|---|"
-    while read -r label passes mse q v; do
-        set -- $(grep '^darts_pt ' "$out/summary.txt" || echo x 0 0 0 -)
-        awk -v l="$label" -v p="$passes" -v m="$mse" -v q="$q" -v v="$v" -v dm="$3" -v dq="$4" -v dv="$5" \
-            -v vref="$vref" -v paper="$(paper "$label")" 'BEGIN {
-            e = m - vref; de = dm - vref
-            r1 = de > 0 ? sprintf("%.2f", e / de) : "-"; r2 = dq > 0 ? sprintf("%.2f", q / dq) : "-"
-            r3 = (v != "-" && dv != "-" && dv > 0) ? sprintf("%.2f", v / dv) : "-"
-            printf("| %s | %.0f | %.4g | %s | %.4g | %s | %s | %s | %s |\n", l, p, e, r1, q, r2, v, r3, paper) }'
-    done < "$out/summary.txt"
+    DARTSPP=$bin /usr/bin/python3 bench/seed_stats.py "$out" "$base" "$only" "$seeds" "$ref" "$vref"
+    echo
+    echo "The paper's ratios to DARTS PT, for comparison:"
+    for label in $only; do echo "- $label: $(paper "$label")"; done
 } | tee "$table"

@@ -34,6 +34,18 @@ void film_free(film *f);
 void film_copy_sums(film *to, const film *from);
 /* A new film `to` (film_init) holding the completed passes of `from`. 0, or -1 with err (out of memory). */
 int film_copy(film *to, const film *from, dp_error *err);
+/* Under a delta gate (window.delta), the box of the pass in progress: [center − w/2, center + w/2) with weight
+ * 1/w, the temporal kernel K_τ of this iteration (plan_gate_width); every reader of f->window (film_time_slot,
+ * the estimators' time pruning) then sees it. Nothing for a box gate. The sums stay comparable across passes
+ * (each contribution is weighted when it is splatted), so a film's reduction, copy and checkpoint do not
+ * depend on it. */
+static inline void film_set_pass_gate(film *f, double w)
+{
+    if (!f->window.delta) return;
+    f->window.width = w;
+    f->window.start = f->window.center - 0.5 * w;
+}
+
 /* Where a contribution arriving at path time t (tagged with frame, as film_splat) lands: decided once, so
  * that an estimator adding many contributions of one time (a photon splatted into many pixels) divides
  * once. */
@@ -158,8 +170,9 @@ static inline void film_pixel_splat(film_pixel *p, double t, vec3 c, int frame, 
     if (!film_splat(p->f, p->px, t, c, frame, order)) p->nonfinite++;
 }
 
-/* One camera sample: dir is the jittered primary ray, rng the pixel's stream after the jitter. */
-typedef void (*film_sample_fn)(void *ctx, film_pixel *pixel, vec3 dir, dp_rng *rng);
+/* One camera sample: o and dir are the jittered primary ray (camera_ray: o is the camera's position for a
+ * pinhole, the film point for an orthographic camera), rng the pixel's stream after the jitter. */
+typedef void (*film_sample_fn)(void *ctx, film_pixel *pixel, vec3 o, vec3 dir, dp_rng *rng);
 
 /* One sample of every pixel into the pass layer; rows not started once stop is set are skipped (the pass is
  * then incomplete). Returns the rays traced; the non-finite contributions are added to f->nonfinite. */

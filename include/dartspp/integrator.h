@@ -23,6 +23,7 @@
     X(double, stored_photons, RENDER_SUM, 1, "volume + surface photons stored, summed over iterations")                \
     X(double, r_vol, RENDER_LAST, 1, "the volume radius of the last iteration")                                        \
     X(double, r_surf, RENDER_LAST, 1, "the surface radius of the last iteration")                                      \
+    X(double, w_gate, RENDER_LAST, 0, "a delta gate's temporal kernel width of the last iteration (0: none)")         \
     X(double, t_photon, RENDER_SUM, 1, "seconds spent in the photon pass")                                             \
     X(double, t_maps, RENDER_SUM, 1, "seconds spent in the map builds")                                                \
     X(double, t_gather, RENDER_SUM, 1, "seconds spent in the sensor pass")                                             \

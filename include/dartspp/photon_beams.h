@@ -14,16 +14,25 @@
 
 typedef struct beam_map beam_map;
 
-/* A BVH over the n beams (copied), each box inflated by the radius r >= 0 of this iteration. NULL + err on
- * failure (out of memory). */
-beam_map *beam_map_build(const photon_beam *b, size_t n, double r, dp_error *err);
+/* What the film can count, for the build to leave out or cut finer: `end`, the latest path time that counts
+ * (the gate's end, the last frame's, a delta gate's box of this iteration; INFINITY: steady), and `width`, the
+ * narrowest window (the gate's or a frame's width; 0: none). */
+typedef struct {
+    double end, width;
+} beam_time_cut;
+
+/* A BVH over the n beams (copied), each box inflated by the radius r >= 0 of this iteration. With tc (NULL:
+ * none), the parts of beams beyond tc->end are left out (their points' path times are past it whatever the
+ * camera adds) and the pieces' own time ranges are at most four window widths, so that the nodes' time ranges
+ * prune a narrow gate. NULL + err on failure (out of memory). */
+beam_map *beam_map_build(const photon_beam *b, size_t n, double r, const beam_time_cut *tc, dp_error *err);
 void beam_map_free(beam_map *m);
 size_t beam_map_size(const beam_map *m);
 /* Bytes beam_map_build allocates at its peak for n beams cut into `pieces` pieces (the memory guard). */
 double beam_map_bytes(double n, double pieces);
 /* How many pieces beam_map_build cuts the n beams into at radius r (long beams are cut so that their boxes
  * stay tight). */
-double beam_map_pieces(const photon_beam *b, size_t n, double r);
+double beam_map_pieces(const photon_beam *b, size_t n, double r, const beam_time_cut *tc);
 
 /* A time window on a query: a point s along beam b seen at t along the camera line has the path time
  * t0 + b->time + η_b·s + eta·t (η_b its medium's), and only times in [lo, hi) count. */
@@ -63,6 +72,7 @@ void photon_beams_gather(const beam_gather *g, const scene *s, film_pixel *pix, 
 /* The memory guard's item of the volume part of a beams iteration: V beams (their budget, capped by the
  * caller's pilot) and their BVH at the first (widest) radius r0, with as many pieces per beam as the pilot's n
  * beams (none: one each). */
-void photon_beams_memory(const photon_beam *pilot, size_t n, double r0, double V, memory_estimate *m);
+void photon_beams_memory(const photon_beam *pilot, size_t n, double r0, const beam_time_cut *tc, double V,
+                         memory_estimate *m);
 
 #endif

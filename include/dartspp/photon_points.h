@@ -9,6 +9,7 @@
 #include "dartspp/darts.h"
 #include "dartspp/film.h"
 #include "dartspp/integrator.h"
+#include "dartspp/photon_beams.h"
 #include "dartspp/plan.h"
 #include "dartspp/scene.h"
 
@@ -17,6 +18,10 @@
  * returns early with the pass incomplete (the caller drops it). */
 int photon_points_pass(const scene *s, const render_plan *p, const eda_set *eda, film *f, uint64_t seed,
                        long iteration, const dp_stop_flag *stop, render_stats *st, dp_error *err);
+
+/* What iteration i's film can count, for the beam map (beam_map_build): the latest time that counts
+ * (plan_window_end) and the window's width (a delta gate's first width). */
+beam_time_cut photon_points_beam_cut(const render_plan *p, long iteration);
 
 /* The radii of the last of `passes` passes into st->r_vol and st->r_surf (the schedules depend on the pass index
  * only: the driver sets them once the ranks' figures are summed). */

@@ -50,6 +50,11 @@ typedef struct render_plan {
     radius_schedule r_vol;           /* volume_gather_radius, volume_alpha, radius_schedule; beams: dims 1 (their
                                       * kernel is 1-D, Marco et al. 2019's r0·γ_i) unless radius_schedule "3d" */
     radius_schedule r_surf;          /* gather_radius, alpha */
+    /* delta_time_gate (window.delta): the temporal kernel's width w_i = w₀·γ_i^{1/d} with the volume's α and d
+     * (plan_gate_width), w₀ = transient_time_width; r_vol then shrinks with the same d, the dimension of the
+     * joint spatio-temporal kernel: 2 for beams (Liu et al. 2022's progressive photon map: r and w by √γ_i),
+     * 3 for points (their 2-D kernel and time). Zero without a delta gate. */
+    radius_schedule w_gate;
     int include_surfaces, low_order_scattering, surface_chains;
     volume_photon_type_choice volume_photon_type; /* points, or short beams (src/photon_beams) */
     camera_leg_choice camera_leg;
@@ -77,10 +82,17 @@ double plan_surface_slack(const render_plan *p, long iteration);
 
 /* The weight of iteration i in the image (film_commit_pass): 1 for the path tracer and with pass_weights
  * "equal"; for photon points by default the kernel area of iteration i relative to iteration 0 — the
- * surface kernel's πR_i² when surfaces are gathered, else the volume kernel's πr_i². An iteration's
+ * surface kernel's πR_i² when surfaces are gathered, else the volume kernel's πr_i² (beams: 2r_i) — times
+ * w_i/w₀ under a delta gate (the temporal kernel is one more dimension of the kernel). An iteration's
  * estimate has variance about ∝ 1/area (fresh photons, a 2-D kernel), so this is the inverse-variance
  * mean; it stays consistent (every weight > 0, and Σ_i w_i diverges for α > 0: w_i ~ i^{α−1}). */
 double plan_pass_weight(const render_plan *p, long iteration);
+/* Under a delta gate (window.delta), the width w_i of iteration i's temporal box kernel, centred on the gate's
+ * instant with weight 1/w_i (the film's gate of that pass: film_set_pass_gate); else the box gate's width. */
+double plan_gate_width(const render_plan *p, long iteration);
+/* The end of iteration i's window (the latest path time that counts): the box of a delta gate's iteration, the
+ * gate's or the last frame's end, INFINITY when steady. */
+double plan_window_end(const render_plan *p, long iteration);
 /* Photon points: the microfacet α floor of light connections after a glossy camera bounce in iteration i,
  * glossy_regularization · R_i/R_0 (0 when the key is 0): it shrinks with the surface radius. */
 double plan_glossy_regularization(const render_plan *p, long iteration);

@@ -77,19 +77,35 @@ static inline int surface_next_medium(const surface *s, int current, vec3 d, vec
     return v3_dot(d, ng) < 0.0 ? s->int_medium : s->ext_medium;
 }
 
+typedef enum { CAMERA_PINHOLE, CAMERA_ORTHOGRAPHIC } camera_type;
+
 typedef struct {
     int width, height;
-    double fov_deg;         /* horizontal */
+    int type;               /* camera_type */
+    double fov_deg;         /* pinhole: horizontal */
     vec3 pos;
     vec3 right, up, forward; /* world axes of the image plane: +right = screen right, +up = screen up */
-    double plane_dist;      /* 1 / tan(fov/2): image plane spans x in [-1,1] */
+    double plane_dist;      /* pinhole: 1 / tan(fov/2): image plane spans x in [-1,1] */
+    double ortho_size;      /* orthographic (Tungsten's orthographic_size): half the film's height in scene units;
+                             * the film is 2·ortho_size·width/height × 2·ortho_size, centred on pos, in the plane
+                             * through pos perpendicular to forward (the camera's plane) */
     int medium;
     sensor_response response; /* its time response, from the integrator's sensor_* keys (sensor.h) */
 } camera;
 
-/* Direction of the camera ray through the image-plane point (px, py) in pixel units: pixel (x, y) covers
- * [x, x+1) × [y, y+1), row 0 at the top; px = x + u with u uniform in [0,1) is the box filter. */
+/* The camera ray through the image-plane point (px, py) in pixel units: pixel (x, y) covers [x, x+1) × [y, y+1),
+ * row 0 at the top; px = x + u with u uniform in [0,1) is the box filter. Pinhole: every ray starts at pos, its
+ * direction through Tungsten's image plane at distance plane_dist. Orthographic (Tungsten's
+ * OrthographicCamera): the rays are parallel to forward and start on the camera's plane, at the film point of
+ * (px, py). Sets *o and returns the unit direction. */
+vec3 camera_ray(const camera *c, double px, double py, vec3 *o);
+/* Its direction alone (the same for every pixel of an orthographic camera). */
 vec3 camera_ray_dir(const camera *c, double px, double py);
+/* The least distance light at p travels to reach the sensor: to pos (pinhole), to the camera's plane
+ * (orthographic: a lower bound, the film being part of that plane). */
+double camera_distance(const camera *c, vec3 p);
+/* The side of one pixel on an orthographic camera's film, in scene units (2·ortho_size / height). */
+static inline double camera_ortho_pixel(const camera *c) { return 2.0 * c->ortho_size / c->height; }
 
 /* ---- time ---- */
 typedef struct {
@@ -101,6 +117,10 @@ typedef struct {
                         * sensor (docs/time.md §2.2); 0: camera-warped (the default) */
     int orders;        /* integrator key bounce_orders K: K + 1 more layers of the gate image or of every frame, the
                         * paths of 0, 1, ..., K − 1 and of K or more scattering events (docs/time.md §7); 0: none */
+    int delta;         /* delta_time_gate: the gate is a Dirac delta at `center` (docs/time.md §3.1); start and width
+                        * hold the box of the first iteration, [center − w₀/2, center + w₀/2), and a film holds the box
+                        * of its pass in progress (film_set_pass_gate); never with frames */
+    double center;     /* the delta gate's instant (transient_time_center); 0 without a delta gate */
 } time_window;
 
 /* The film's float layers: the frames, then per order the frames (the gate image when there are none). */
@@ -112,6 +132,13 @@ static inline int time_window_layers(const time_window *tw)
 static inline double time_window_end(const time_window *tw)
 {
     return tw->start + tw->width * (tw->frame_count > 0 ? tw->frame_count : 1);
+}
+
+/* The bounds an image's header gives: [start, end) of a box gate; a delta gate's instant twice. */
+static inline void time_window_bounds(const time_window *tw, double *start, double *end)
+{
+    *start = tw->delta ? tw->center : tw->start;
+    *end = tw->delta ? tw->center : time_window_end(tw);
 }
 
 /* ---- settings ----

@@ -139,8 +139,7 @@ static int fill_result(const film *f, const render_stats *st, const render_plan 
     res->frame_count = tw->frame_count;
     res->gated = tw->gated;
     res->camera_warped = !tw->camera_unwarp;
-    res->gate_start = tw->start;
-    res->gate_end = time_window_end(tw);
+    time_window_bounds(tw, &res->gate_start, &res->gate_end); /* a delta gate: its instant twice */
     res->image = malloc(px * sizeof(float));
     res->frames = tw->frame_count > 0 ? malloc(px * tw->frame_count * sizeof(float)) : NULL;
     res->frame_times = tw->frame_count > 0 ? malloc(2 * (size_t)tw->frame_count * sizeof(double)) : NULL;

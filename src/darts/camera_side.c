@@ -62,11 +62,12 @@ static int reflects_exactly(const bsdf *b, const surface_shading *sh)
  * the planar reflector it continues through first (-1: none, a curved, transmissive or smooth-shaded
  * surface) and *exact whether the reflector's focus gives its camera leg exactly: a delta reflection
  * whose reflected ray then ends on a gathered surface or leaves the scene. */
-static int classify_ray(const scene *s, const surface_shading *sh, const char *planar, vec3 d, int *mirror, int *exact)
+static int classify_ray(const scene *s, const surface_shading *sh, const char *planar, vec3 o, vec3 d, int *mirror,
+                        int *exact)
 {
     hit_record h;
     *mirror = -1, *exact = 0;
-    if (!first_opaque_hit(s, s->cam.pos, d, &h)) return 0;
+    if (!first_opaque_hit(s, o, d, &h)) return 0;
     const bsdf *b = &s->bsdfs[s->surfaces[h.surface].bsdf];
     if (!surface_photon_split(b, sh).cont) return 0;
     vec3 ns = v3_dot(h.ns, h.ng) < 0.0 ? v3_neg(h.ns) : h.ns;
@@ -76,8 +77,8 @@ static int classify_ray(const scene *s, const surface_shading *sh, const char *p
     vec3 n = v3_dot(d, h.ng) < 0.0 ? h.ng : v3_neg(h.ng); /* towards the camera */
     vec3 r = v3_sub(d, v3_scale(n, 2.0 * v3_dot(d, n)));
     hit_record h2;
-    vec3 o = scene_offset_ray_origin(s, h.p, n);
-    *exact = !first_opaque_hit(s, o, r, &h2) || !surface_photon_split(&s->bsdfs[s->surfaces[h2.surface].bsdf], sh).cont;
+    vec3 o2 = scene_offset_ray_origin(s, h.p, n);
+    *exact = !first_opaque_hit(s, o2, r, &h2) || !surface_photon_split(&s->bsdfs[s->surfaces[h2.surface].bsdf], sh).cont;
     return 1;
 }
 
@@ -114,7 +115,8 @@ void darts_scan_camera_side(const scene *s, const surface_shading *sh, camera_si
         for (int y = 0; y < gh; y++)
             for (int x = 0; x < gw; x++) {
                 int m, exact;
-                if (!classify_ray(s, sh, planar, camera_ray_dir(&s->cam, sx * x, sy * y), &m, &exact)) continue;
+                vec3 o, d = camera_ray(&s->cam, sx * x, sy * y, &o);
+                if (!classify_ray(s, sh, planar, o, d, &m, &exact)) continue;
                 seen++;
                 if (m >= 0) mine[m]++, mine[ns + m] += exact;
                 if (!exact) other++;

@@ -93,6 +93,25 @@ static void resolve_camera_side(const scene *s, integrator_type type, const surf
     d->cv_defensive = def / sum;
 }
 
+/* The DARTS photon pass aims light paths at the camera's position: the ellipsoid of a control vertex has it as
+ * a focus, DA and EDA sample diffusion towards it, and the camera is the virtual importons' emitter. An
+ * orthographic camera has no such point (its rays start anywhere on its film, all along one axis), so the
+ * combination is refused before any work, naming the key that asked for it (docs/darts.md). The DARTS path
+ * tracer aims at the light instead and works with either camera. */
+static int refuse_orthographic(const scene *s, integrator_type type, const darts_plan *d, dp_error *err)
+{
+    if (type != INTEGRATOR_PHOTON_POINTS || !d->active || s->cam.type != CAMERA_ORTHOGRAPHIC) return 0;
+    const integrator_settings *in = &s->integrator;
+    const char *key = in->enable_guiding ? "enable_guiding" : in->enable_elliptical ? "enable_elliptical" : "eda";
+    for (int i = 0; i < s->medium_count && !in->enable_guiding && !in->enable_elliptical && !in->eda; i++)
+        if (s->media[i].eda) key = "phase_function ida (EDA)";
+    return dp_fail(err, "%s: integrator.%s: the DARTS photon pass aims light paths at the camera's position (elliptical "
+                   "control vertices, DA and EDA sampling, the camera as the importons' emitter), and an orthographic "
+                   "camera has none: not supported; set enable_guiding, enable_elliptical and eda to false (baseline "
+                   "photon points), or use the path tracer (its DARTS aims at the light and works with an orthographic "
+                   "camera), or a pinhole camera", s->path, key);
+}
+
 int darts_plan_resolve(const scene *s, integrator_type type, const surface_shading *sh, darts_plan *d, dp_error *err)
 {
     memset(d, 0, sizeof *d);
@@ -101,6 +120,10 @@ int darts_plan_resolve(const scene *s, integrator_type type, const surface_shadi
         return dp_fail_kind(err, DP_ERROR_MEMORY, "%s: out of memory for the render plan", s->path);
     resolve_eda(s, type, d);
     resolve_samplers(s, type, d);
+    if (refuse_orthographic(s, type, d, err)) {
+        darts_plan_free(d);
+        return -1;
+    }
     resolve_camera_side(s, type, sh, d);
     return 0;
 }

@@ -140,7 +140,8 @@ double film_sample_pixels(film *f, const camera *cam, uint64_t seed, long pass, 
             film_pixel pixel = {.f = f, .px = (size_t)y * cam->width + x};
             dp_rng rng = rng_stream(seed, (uint64_t)pass, pixel.px);
             double jx = rng_uniform(&rng), jy = rng_uniform(&rng);
-            sample(ctx, &pixel, camera_ray_dir(cam, x + jx, y + jy), &rng);
+            vec3 o, d = camera_ray(cam, x + jx, y + jy, &o);
+            sample(ctx, &pixel, o, d, &rng);
             rays += pixel.rays;
             bad += pixel.nonfinite;
         }

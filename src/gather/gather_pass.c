@@ -68,12 +68,11 @@ void volume_beam_gather(const gather_input *g, film_pixel *pix, const medium *m,
 
 /* Keeps a medium segment of the primary line for the splat; 0 when the line is full (then the caller
  * queries it). */
-static int record_line_segment(const scene *s, primary_line *L, int med, vec3 o, vec3 d, double len, vec3 thr,
-                               double t_cam)
+static int record_line_segment(primary_line *L, int med, vec3 o, vec3 d, double len, vec3 thr, double t_cam)
 {
     if (L->n >= PRIMARY_SEGMENTS) return 0;
     line_segment *sg = &L->seg[L->n++];
-    sg->t0 = v3_dot(v3_sub(o, s->cam.pos), d);
+    sg->t0 = v3_dot(v3_sub(o, v3(L->o[0], L->o[1], L->o[2])), d);
     sg->t1 = sg->t0 + len;
     sg->t_cam = t_cam;
     sg->thr[0] = thr.x;
@@ -163,14 +162,17 @@ static void hit_emission(pixel_ctx *c, const hit_record *h, vec3 d, vec3 thr, do
 
 /* The camera walk: volume gathers along every medium segment; at a surface, the gather over the lobes the
  * photon map carries and a continuation through the others (surface_photon_split), sampled. */
-static void trace_sensor_path(pixel_ctx *c, vec3 d)
+static void trace_sensor_path(pixel_ctx *c, vec3 o, vec3 d)
 {
     const scene *s = c->s;
-    vec3 o = s->cam.pos, thr = v3s(1.0);
+    vec3 thr = v3s(1.0);
     int med = s->cam.medium, b_cam = 1, after_delta = 1, after_glossy = 0;
     double t_cam = 0.0;
     primary_line *line = c->line; /* set while the walk is still on the primary line */
     if (line) {
+        line->o[0] = o.x;
+        line->o[1] = o.y;
+        line->o[2] = o.z;
         line->d[0] = d.x;
         line->d[1] = d.y;
         line->d[2] = d.z;
@@ -183,7 +185,7 @@ static void trace_sensor_path(pixel_ctx *c, vec3 d)
         double len = hit ? h.t : INFINITY;
         if (med != MEDIUM_VACUUM) {
             const medium *m = &s->media[med];
-            if (c->g->vol && !(line && record_line_segment(s, line, med, o, d, len, thr, t_cam)))
+            if (c->g->vol && !(line && record_line_segment(line, med, o, d, len, thr, t_cam)))
                 volume_beam_gather(c->g, c->pix, m, o, d, len, thr, t_cam, b_cam);
             if (c->g->beams) photon_beams_gather(c->g->beams, s, c->pix, med, o, d, len, thr, t_cam, b_cam);
             if (c->g->slices) sliced_primitives_gather(c->g->slices, s, c->pix, med, o, d, len, thr, t_cam, b_cam, c->rng);
@@ -226,11 +228,11 @@ typedef struct {
     primary_line *lines; /* per pixel, or NULL */
 } pass_ctx;
 
-static void sample_pixel(void *ctx, film_pixel *pix, vec3 dir, dp_rng *rng)
+static void sample_pixel(void *ctx, film_pixel *pix, vec3 o, vec3 dir, dp_rng *rng)
 {
     const pass_ctx *p = ctx;
     pixel_ctx c = {.s = p->s, .g = p->g, .pix = pix, .rng = rng, .line = p->lines ? &p->lines[pix->px] : NULL};
-    trace_sensor_path(&c, dir);
+    trace_sensor_path(&c, o, dir);
 }
 
 /* The fallback when the splat's tile lists would be too big: a beam query per recorded segment. */

@@ -1,5 +1,6 @@
 /* The primary line of each pixel: the medium segments of its camera ray before the first surface that
- * scatters (null and forward surfaces pass through, so the ray stays one straight line from the camera).
+ * scatters (null and forward surfaces pass through, so the ray stays one straight line from the camera; an
+ * orthographic camera's lines are parallel, each from its pixel's film point).
  * The camera walk records them; the volume gather on them is then done photon by photon
  * (volume_splat.c), the rest of the walk by beam queries as before. Private to src/gather. */
 #ifndef DARTSPP_GATHER_PRIMARY_LINE_H
@@ -11,14 +12,15 @@
 #define PRIMARY_SEGMENTS 2 /* medium segments kept per line; further ones are gathered by beam queries */
 
 typedef struct {
-    double t0, t1; /* along the line, from the camera position */
+    double t0, t1; /* along the line, from its origin */
     double t_cam;  /* camera time at t0 */
     double thr[3]; /* camera throughput at t0 */
     int medium;
 } line_segment;
 
 typedef struct {
-    double d[3];   /* unit direction from the camera position */
+    double o[3];   /* its origin: the camera's position (pinhole) or the pixel's film point (orthographic) */
+    double d[3];   /* unit direction from the origin */
     int n;         /* segments recorded */
     line_segment seg[PRIMARY_SEGMENTS];
 } primary_line;

@@ -1,6 +1,6 @@
-/* The volume gather on the primary lines, photon by photon: every primary line starts at the camera, so the
- * pixels whose line can pass within r of a photon are those its ball covers on the image, a small
- * rectangle. Each photon is binned into the image tiles its rectangle meets; a tile then tests its photons
+/* The volume gather on the primary lines, photon by photon: every primary line starts at the camera (or, for
+ * an orthographic camera, runs parallel to its axis from its film point), so the pixels whose line can pass
+ * within r of a photon are those its ball covers on the image, a small rectangle. Each photon is binned into the image tiles its rectangle meets; a tile then tests its photons
  * against its own pixels' lines. The same pairs as one beam query per segment, without a tree walk per
  * ray, and the lines of a tile stay in cache. Written by hand: no library does this. */
 #include <stdint.h>
@@ -55,19 +55,37 @@ static int clamp_pixel(double v, int n)
     return (int)v;
 }
 
-/* The pixels whose jittered ray can pass within r of x (camera_ray_dir inverted; right, up and forward
+/* The pixel range [lo, hi] of an orthographic camera whose lines pass within r of x: its film point
+ * (cx, cy) ± r (camera_ray's film point inverted), or 0 when x lies more than r behind the camera's plane. */
+static int ortho_range(const camera *c, double cx, double cy, double cz, double r, double px[2], double py[2])
+{
+    if (cz < -r) return 0;
+    double a = camera_ortho_pixel(c), h = c->ortho_size * c->width / c->height;
+    px[0] = (cx - r + h) / a - RASTER_PAD, px[1] = (cx + r + h) / a + RASTER_PAD;
+    py[0] = (c->ortho_size - cy - r) / a - RASTER_PAD, py[1] = (c->ortho_size - cy + r) / a + RASTER_PAD;
+    return 1;
+}
+
+/* The pixels whose jittered ray can pass within r of x (camera_ray inverted; right, up and forward
  * orthonormal). */
 static footprint photon_footprint(const camera *c, vec3 x, double r)
 {
     footprint fp = {0, 0, -1, -1};
     vec3 w = v3_sub(x, c->pos);
     double cx = v3_dot(w, c->right), cy = v3_dot(w, c->up), cz = v3_dot(w, c->forward);
-    double xl, xh, yl, yh;
-    if (!tangent_range(cx, cz, r, &xl, &xh) || !tangent_range(cy, cz, r, &yl, &yh)) return fp;
-    /* image plane: X = plane_dist·tan = -1 + px·sx, Y = plane_dist·tan = h/w - py·sx */
-    double sx = 2.0 / c->width, aspect = (double)c->height / c->width;
-    double px_lo = (c->plane_dist * xl + 1.0) / sx - RASTER_PAD, px_hi = (c->plane_dist * xh + 1.0) / sx + RASTER_PAD;
-    double py_lo = (aspect - c->plane_dist * yh) / sx - RASTER_PAD, py_hi = (aspect - c->plane_dist * yl) / sx + RASTER_PAD;
+    double px_lo, px_hi, py_lo, py_hi;
+    if (c->type == CAMERA_ORTHOGRAPHIC) {
+        double px[2], py[2];
+        if (!ortho_range(c, cx, cy, cz, r, px, py)) return fp;
+        px_lo = px[0], px_hi = px[1], py_lo = py[0], py_hi = py[1];
+    } else {
+        double xl, xh, yl, yh;
+        if (!tangent_range(cx, cz, r, &xl, &xh) || !tangent_range(cy, cz, r, &yl, &yh)) return fp;
+        /* image plane: X = plane_dist·tan = -1 + px·sx, Y = plane_dist·tan = h/w - py·sx */
+        double sx = 2.0 / c->width, aspect = (double)c->height / c->width;
+        px_lo = (c->plane_dist * xl + 1.0) / sx - RASTER_PAD, px_hi = (c->plane_dist * xh + 1.0) / sx + RASTER_PAD;
+        py_lo = (aspect - c->plane_dist * yh) / sx - RASTER_PAD, py_hi = (aspect - c->plane_dist * yl) / sx + RASTER_PAD;
+    }
     if (px_hi < 0.0 || py_hi < 0.0 || px_lo >= c->width || py_lo >= c->height) return fp;
     fp.x0 = clamp_pixel(px_lo, c->width);
     fp.x1 = clamp_pixel(px_hi, c->width);
@@ -138,7 +156,8 @@ static int tile_bins_build(tile_bins *b, const camera *c, const photon *ph, size
 
 /* What a photon's estimate on a line segment that starts at the camera does not owe to the pixel: with
  * the Euclidean camera leg, the leg |x − camera| and so the path time and whether the film counts it
- * (volume_photon_splat, computed the same way: the segment origin is the camera itself). */
+ * (volume_photon_splat, computed the same way: the segment origin is the camera itself). Not for an
+ * orthographic camera, whose lines start at their own film points: there every pixel computes its own. */
 typedef struct {
     int valid;        /* the camera sits in a medium and the leg is Euclidean */
     film_slot slot;   /* slot.counts: the bounce count and the path time are counted */
@@ -147,7 +166,7 @@ typedef struct {
 static camera_leg_time photon_camera_time(const scene *s, const gather_input *g, const film *f, const photon *p)
 {
     camera_leg_time c = {0};
-    if (s->cam.medium == MEDIUM_VACUUM || g->camera_leg_projected) return c;
+    if (s->cam.medium == MEDIUM_VACUUM || g->camera_leg_projected || s->cam.type == CAMERA_ORTHOGRAPHIC) return c;
     vec3 x = v3(p->pos[0], p->pos[1], p->pos[2]);
     double leg = v3_len(v3_sub(x, s->cam.pos));
     c.valid = 1;
@@ -159,8 +178,9 @@ static camera_leg_time photon_camera_time(const scene *s, const gather_input *g,
 
 /* Photon p against one pixel's line: the segment holding its projection, if within r (the beam test). */
 static void splat_photon_on_line(const scene *s, const gather_input *g, film_pixel *pix, const primary_line *L,
-                                 const photon *p, vec3 w, const camera_leg_time *ct)
+                                 const photon *p, vec3 x, const camera_leg_time *ct)
 {
+    vec3 lo = v3(L->o[0], L->o[1], L->o[2]), w = v3_sub(x, lo);
     double t = w.x * L->d[0] + w.y * L->d[1] + w.z * L->d[2];
     double vx = w.x - t * L->d[0], vy = w.y - t * L->d[1], vz = w.z - t * L->d[2];
     double d2 = vx * vx + vy * vy + vz * vz;
@@ -175,7 +195,7 @@ static void splat_photon_on_line(const scene *s, const gather_input *g, film_pix
                                          t, d2, &ct->slot);
             return;
         }
-        vec3 o = v3_add(s->cam.pos, v3_scale(d, sg->t0));
+        vec3 o = v3_add(lo, v3_scale(d, sg->t0));
         volume_photon_splat(g, pix, &s->media[sg->medium], o, d, v3(sg->thr[0], sg->thr[1], sg->thr[2]), sg->t_cam, 1,
                             p, t - sg->t0, d2);
         return;
@@ -192,7 +212,7 @@ static void splat_tile(const scene *s, const gather_input *g, film *f, const pri
         uint32_t i = b->entry[e];
         const photon *p = &g->vol_photons[i];
         const footprint *fp = &b->fp[i];
-        vec3 w = v3_sub(v3(p->pos[0], p->pos[1], p->pos[2]), c->pos);
+        vec3 xp = v3(p->pos[0], p->pos[1], p->pos[2]);
         camera_leg_time ct = photon_camera_time(s, g, f, p);
         int x0 = fp->x0 > X0 ? fp->x0 : X0, x1 = fp->x1 < X1 ? fp->x1 : X1;
         int y0 = fp->y0 > Y0 ? fp->y0 : Y0, y1 = fp->y1 < Y1 ? fp->y1 : Y1;
@@ -201,7 +221,7 @@ static void splat_tile(const scene *s, const gather_input *g, film *f, const pri
                 size_t px = (size_t)y * c->width + x;
                 if (lines[px].n == 0) continue;
                 film_pixel pix = {.f = f, .px = px};
-                splat_photon_on_line(s, g, &pix, &lines[px], p, w, &ct);
+                splat_photon_on_line(s, g, &pix, &lines[px], p, xp, &ct);
                 *nonfinite += pix.nonfinite;
             }
     }
@@ -270,10 +290,10 @@ double volume_splat_scratch_bytes(const camera *c, const photon *sample, size_t 
 
 void primary_line_gather_beam(const scene *s, const gather_input *g, film_pixel *pix, const primary_line *line)
 {
-    vec3 d = v3(line->d[0], line->d[1], line->d[2]);
+    vec3 d = v3(line->d[0], line->d[1], line->d[2]), o = v3(line->o[0], line->o[1], line->o[2]);
     for (int k = 0; k < line->n; k++) {
         const line_segment *sg = &line->seg[k];
-        volume_beam_gather(g, pix, &s->media[sg->medium], v3_add(s->cam.pos, v3_scale(d, sg->t0)), d, sg->t1 - sg->t0,
+        volume_beam_gather(g, pix, &s->media[sg->medium], v3_add(o, v3_scale(d, sg->t0)), d, sg->t1 - sg->t0,
                            v3(sg->thr[0], sg->thr[1], sg->thr[2]), sg->t_cam, 1);
     }
 }

@@ -96,7 +96,7 @@ int pt_aim_start(pixel_ctx *c, path_state *ps)
     /* the earliest arrival: a straight line camera → light, or (unwarped, the camera segment free) none;
      * emission through another point of the light (hits, beam crossings) can be up to `extent` nearer */
     double slack = a->g->eta_lb * L->extent;
-    vec3 from = pp->p->window.camera_unwarp ? a->pt.y : s->cam.pos;
+    vec3 from = pp->p->window.camera_unwarp ? a->pt.y : ps->o; /* the camera ray's origin (either camera) */
     if (!darts_sample_bin(a->g, from, ps->time - slack, rng_uniform(c->rng), &a->bin)) return 0;
     a->reach = a->bin;
     a->reach.end += slack;

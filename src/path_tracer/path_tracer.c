@@ -204,10 +204,10 @@ static int medium_distance(pixel_ctx *c, path_state *ps, double tmax, int *event
     return 1;
 }
 
-static void trace_camera_path(pixel_ctx *c, vec3 d)
+static void trace_camera_path(pixel_ctx *c, vec3 o, vec3 d)
 {
     const scene *s = c->pass->s;
-    path_state ps = {.o = s->cam.pos, .d = d, .medium = s->cam.medium, .beta = v3s(1.0), .after_delta = 1};
+    path_state ps = {.o = o, .d = d, .medium = s->cam.medium, .beta = v3s(1.0), .after_delta = 1};
     if (c->pass->aimed && !pt_aim_start(c, &ps)) return;
     for (int guard = 0; guard < 100000; guard++) {
         if (ps.depth >= c->pass->p->bounces.max - 1) return; /* no later path can count */
@@ -228,10 +228,10 @@ static void trace_camera_path(pixel_ctx *c, vec3 d)
     }
 }
 
-static void sample_pixel(void *ctx, film_pixel *pix, vec3 dir, dp_rng *rng)
+static void sample_pixel(void *ctx, film_pixel *pix, vec3 o, vec3 dir, dp_rng *rng)
 {
     pixel_ctx c = {.pass = ctx, .pix = pix, .rng = rng};
-    trace_camera_path(&c, dir);
+    trace_camera_path(&c, o, dir);
 }
 
 int path_tracer_pass(const scene *s, const render_plan *p, const eda_set *eda, film *f, uint64_t seed,

@@ -487,7 +487,7 @@ void photon_pass_input_init(photon_pass_input *in, const scene *s, const render_
     *in = (photon_pass_input){.light_paths = p->photon_count, .volume_budget = p->volume_photon_count,
                               .surface_budget = p->photon_count, .light_selection = p->light_selection,
                               .max_bounces = p->bounces.max,
-                              .t_end = p->window.gated ? time_window_end(&p->window) : INFINITY,
+                              .t_end = plan_window_end(p, iteration),
                               .include_surfaces = p->include_surfaces, .low_order_scattering = p->low_order_scattering,
                               .beams = p->volume_photon_type != VOLUME_PHOTON_POINTS,
                               .vertices = volume_type_sliced(p->volume_photon_type),

@@ -58,9 +58,10 @@ void photon_beams_gather(const beam_gather *g, const scene *s, film_pixel *pix, 
     beam_map_query(g->map, o, d, len, tw->gated && tw->width > 0.0 ? &w : NULL, beam_hit, &c);
 }
 
-void photon_beams_memory(const photon_beam *pilot, size_t n, double r0, double V, memory_estimate *m)
+void photon_beams_memory(const photon_beam *pilot, size_t n, double r0, const beam_time_cut *tc, double V,
+                         memory_estimate *m)
 {
-    double per_beam = n ? beam_map_pieces(pilot, n, r0) / (double)n : 1.0;
+    double per_beam = n ? dp_fmax(beam_map_pieces(pilot, n, r0, tc) / (double)n, 1.0) : 1.0;
     memory_item_add(m, "volume beams and their map", "integrator.volume_photon_count",
                     photon_beam_array_bytes(V) + beam_map_bytes(V, V * per_beam));
 }

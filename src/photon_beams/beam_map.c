@@ -11,6 +11,7 @@
 
 #define BEAM_LEAF 4
 
+
 typedef struct {
     float lo[3], hi[3];
     double t_min;      /* earliest start time of its beams */
@@ -38,7 +39,7 @@ struct beam_map {
 };
 
 typedef struct {
-    float lo[3], hi[3], c[3];
+    float lo[3], hi[3], c[4]; /* c[3]: the time at the piece's middle, τ + η·(s0 + s1)/2 */
     uint32_t piece;
 } beam_box;
 
@@ -52,6 +53,7 @@ static void box_of(const photon_beam *b, const beam_piece *pc, double r, beam_bo
         x->hi[k] = (float)(hi + r) + 1e-6f * (1.0f + fabsf((float)hi));
         x->c[k] = (float)(0.5 * (lo + hi));
     }
+    x->c[3] = (float)(b->time + (double)b->eta * 0.5 * ((double)pc->s0 + pc->s1));
 }
 
 typedef struct {
@@ -85,12 +87,36 @@ static int key_cmp(const void *a, const void *b)
     return x->at < y->at ? -1 : x->at > y->at; /* ties by index: a total order, so the tree is deterministic */
 }
 
-/* Sorts box[0, n) into Morton order of the centres. 0, or -1 out of memory. */
-static int morton_sort(beam_box *box, size_t n)
+/* 16 bits of v spread to every 4th bit (the 4-D Morton code of space and time). */
+static uint64_t spread16x4(uint32_t v)
 {
-    float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    uint64_t x = 0;
+    for (int b = 0; b < 16; b++) x |= (uint64_t)((v >> b) & 1u) << (4 * b);
+    return x;
+}
+
+/* The Morton code of centre c, each coordinate quantized over [lo, hi]: 21 bits of each of x, y, z, or with
+ * time (dims 4) 16 bits of each of x, y, z and t. */
+static uint64_t morton_code(const float *c, const float *lo, const float *hi, int dims)
+{
+    uint64_t code = 0;
+    double top = dims == 4 ? 65535.0 : 2097151.0;
+    for (int k = 0; k < dims; k++) {
+        double ext = (double)hi[k] - lo[k], u = ext > 0.0 ? ((double)c[k] - lo[k]) / ext : 0.0;
+        uint32_t q = (uint32_t)(u * top);
+        code |= dims == 4 ? spread16x4(q) << k : spread21(q) << k;
+    }
+    return code;
+}
+
+/* Sorts box[0, n) into Morton order of the centres: in space, or with `timed` in space and time (the pieces'
+ * middle times: with a narrow window, whole subtrees then fall outside it in time). 0, or -1 out of memory. */
+static int morton_sort(beam_box *box, size_t n, int timed)
+{
+    int dims = timed ? 4 : 3;
+    float lo[4] = {INFINITY, INFINITY, INFINITY, INFINITY}, hi[4] = {-INFINITY, -INFINITY, -INFINITY, -INFINITY};
     for (size_t i = 0; i < n; i++)
-        for (int k = 0; k < 3; k++) {
+        for (int k = 0; k < dims; k++) {
             if (box[i].c[k] < lo[k]) lo[k] = box[i].c[k];
             if (box[i].c[k] > hi[k]) hi[k] = box[i].c[k];
         }
@@ -101,14 +127,7 @@ static int morton_sort(beam_box *box, size_t n)
         free(tmp);
         return -1;
     }
-    for (size_t i = 0; i < n; i++) {
-        uint64_t code = 0;
-        for (int k = 0; k < 3; k++) {
-            double ext = (double)hi[k] - lo[k], u = ext > 0.0 ? ((double)box[i].c[k] - lo[k]) / ext : 0.0;
-            code |= spread21((uint32_t)(u * 2097151.0)) << k;
-        }
-        key[i] = (morton_key){code, (uint32_t)i};
-    }
+    for (size_t i = 0; i < n; i++) key[i] = (morton_key){morton_code(box[i].c, lo, hi, dims), (uint32_t)i};
     qsort(key, n, sizeof *key, key_cmp);
     for (size_t i = 0; i < n; i++) tmp[i] = box[key[i].at];
     memcpy(box, tmp, n * sizeof *box);
@@ -163,7 +182,7 @@ static void build(builder *B, size_t lo, size_t hi)
 }
 
 /* The pieces' length: a 16th of the largest side of the beams' box, and at least 4 r (shorter pieces would
- * only add pieces to a box the radius already dominates); at most BEAM_PIECES_MAX pieces a beam. */
+ * only add pieces to a box the radius already dominates). */
 static double piece_length(const photon_beam *b, size_t n, double r)
 {
     float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
@@ -179,26 +198,52 @@ static double piece_length(const photon_beam *b, size_t n, double r)
 }
 
 #define BEAM_PIECES_MAX 64 /* per beam: a tiny radius (late iterations of a small α) must not explode the count */
+#define BEAM_PIECE_WINDOWS 4.0 /* with a window: a piece's own time range is at most this many window widths */
+#define BEAM_TIMED_PIECES_MAX 256 /* per beam, when the window's width sets the pieces' length */
 
-static size_t pieces_of(const photon_beam *b, double len)
+/* The part of beam b that can count: a point at s has the path time t_cam + τ + η·s + (camera leg) >= τ + η·s
+ * (the camera's times are >= 0; emission and sensor offsets are in τ), so nothing beyond (end − τ)/η reaches a
+ * window ending at `end`. The cut is widened by 1e-5 relative (b's float η against its medium's double). 0: the
+ * whole beam is too late. */
+static double usable_length(const photon_beam *b, const beam_time_cut *tc)
 {
-    double k = ceil((double)b->length / len);
-    if (!(k >= 1.0)) return 1; /* also NaN */
-    return k > BEAM_PIECES_MAX ? BEAM_PIECES_MAX : (size_t)k;
+    double len = b->length, eta = b->eta;
+    if (!tc || !(tc->end < INFINITY) || !(eta > 0.0)) return len;
+    double s_end = (tc->end - b->time) / eta;
+    if (!(s_end > 0.0)) return 0.0;
+    s_end = s_end * (1.0 + 1e-5) + 1e-6;
+    return s_end < len ? s_end : len;
 }
 
-double beam_map_pieces(const photon_beam *b, size_t n, double r)
+/* A beam's pieces: of length `len` (piece_length), shorter with a window so that each piece's own time range
+ * η·Δs is at most BEAM_PIECE_WINDOWS widths (the nodes' time ranges then prune: a narrow gate), at most
+ * BEAM_PIECES_MAX (BEAM_TIMED_PIECES_MAX with a window) a beam; *use the usable length. */
+static size_t pieces_of(const photon_beam *b, double len, const beam_time_cut *tc, double *use)
 {
-    double len = piece_length(b, n, r), sum = 0.0;
-    for (size_t i = 0; i < n; i++) sum += (double)pieces_of(&b[i], len);
+    *use = usable_length(b, tc);
+    if (!(*use > 0.0)) return 0;
+    double cap = BEAM_PIECES_MAX;
+    if (tc && tc->width > 0.0 && b->eta > 0.0) {
+        double lt = BEAM_PIECE_WINDOWS * tc->width / b->eta;
+        if (lt < len) len = lt, cap = BEAM_TIMED_PIECES_MAX;
+    }
+    double k = ceil(*use / len);
+    if (!(k >= 1.0)) return 1; /* also NaN */
+    return k > cap ? (size_t)cap : (size_t)k;
+}
+
+double beam_map_pieces(const photon_beam *b, size_t n, double r, const beam_time_cut *tc)
+{
+    double len = piece_length(b, n, r), sum = 0.0, use;
+    for (size_t i = 0; i < n; i++) sum += (double)pieces_of(&b[i], len, tc, &use);
     return sum;
 }
 
-beam_map *beam_map_build(const photon_beam *b, size_t n, double r, dp_error *err)
+beam_map *beam_map_build(const photon_beam *b, size_t n, double r, const beam_time_cut *tc, dp_error *err)
 {
-    double len = piece_length(b, n, r);
+    double len = piece_length(b, n, r), use;
     size_t np = 0;
-    for (size_t i = 0; i < n; i++) np += pieces_of(&b[i], len);
+    for (size_t i = 0; i < n; i++) np += pieces_of(&b[i], len, tc, &use);
     beam_map *m = calloc(1, sizeof *m);
     beam_box *box = np ? malloc(np * sizeof *box) : NULL;
     beam_piece *pc = np ? malloc(np * sizeof *pc) : NULL;
@@ -219,17 +264,20 @@ beam_map *beam_map_build(const photon_beam *b, size_t n, double r, dp_error *err
     if (n) memcpy(m->beams, b, n * sizeof *b);
     size_t j = 0;
     for (size_t i = 0; i < n; i++) {
-        size_t k = pieces_of(&b[i], len);
-        double step = (double)b[i].length / (double)k;
-        for (size_t q = 0; q < k; q++, j++) {
-            pc[j] = (beam_piece){.beam = (uint32_t)i, .s0 = (float)(q * step), .s1 = q + 1 == k ? b[i].length : (float)((q + 1) * step)};
-        }
+        size_t k = pieces_of(&b[i], len, tc, &use);
+        double step = use / (double)k;
+        /* the last piece ends at the beam's end, or where the beam can no longer count (rounded up: a float
+         * below `use` would drop a point that counts) */
+        float end = use < (double)b[i].length ? nextafterf((float)use, INFINITY) : b[i].length;
+        if (end > b[i].length) end = b[i].length;
+        for (size_t q = 0; q < k; q++, j++)
+            pc[j] = (beam_piece){.beam = (uint32_t)i, .s0 = (float)(q * step), .s1 = q + 1 == k ? end : (float)((q + 1) * step)};
     }
     for (size_t i = 0; i < np; i++) {
         box_of(&b[pc[i].beam], &pc[i], r, &box[i]);
         box[i].piece = (uint32_t)i;
     }
-    if (np && morton_sort(box, np)) {
+    if (np && morton_sort(box, np, tc && tc->width > 0.0)) {
         free(box);
         free(pc);
         beam_map_free(m);

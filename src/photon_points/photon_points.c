@@ -10,6 +10,15 @@ void photon_points_last_radii(const render_plan *p, long passes, render_stats *s
     if (passes <= 0) return;
     st->r_vol = schedule_radius(&p->r_vol, passes - 1);
     st->r_surf = schedule_radius(&p->r_surf, passes - 1);
+    st->w_gate = p->window.delta ? plan_gate_width(p, passes - 1) : 0.0;
+}
+
+beam_time_cut photon_points_beam_cut(const render_plan *p, long iteration)
+{
+    if (!p->window.gated) return (beam_time_cut){INFINITY, 0.0};
+    /* pieces by the first (widest) box of a delta gate: their count then never grows over the iterations, and
+     * the memory guard's estimate from iteration 0 holds */
+    return (beam_time_cut){plan_window_end(p, iteration), p->window.width};
 }
 
 int photon_points_pass(const scene *s, const render_plan *p, const eda_set *eda, film *f, uint64_t seed,
@@ -24,6 +33,7 @@ int photon_points_pass(const scene *s, const render_plan *p, const eda_set *eda,
                       .stop = stop, .r_vol = schedule_radius(&p->r_vol, iteration),
                       .r_surf = schedule_radius(&p->r_surf, iteration),
                       .alpha_reg = plan_glossy_regularization(p, iteration)};
+    film_set_pass_gate(f, plan_gate_width(p, iteration)); /* a delta gate's kernel K_τ of this iteration */
     double t0 = dp_seconds();
     if (photon_pass(s, &pin, &ps, err)) return -1;
     if (ps.interrupted) { /* the iteration is dropped: no maps, no sensor pass */
@@ -44,7 +54,8 @@ int photon_points_pass(const scene *s, const render_plan *p, const eda_set *eda,
                              .r = g.r_vol};
     int rc = 0;
     if (ps.n_vol > 0 && !(vm = volume_map_build(ps.vol, ps.n_vol, g.r_vol, err))) rc = -1;
-    if (!rc && ps.n_beams > 0 && !(bm = beam_map_build(ps.beams, ps.n_beams, g.r_vol, err))) rc = -1;
+    beam_time_cut cut = photon_points_beam_cut(p, iteration);
+    if (!rc && ps.n_beams > 0 && !(bm = beam_map_build(ps.beams, ps.n_beams, g.r_vol, &cut, err))) rc = -1;
     if (!rc && sliced && !(slm = slice_map_build(s, &sbi, ps.verts, ps.n_verts, err))) rc = -1;
     if (!rc && ps.n_surf > 0 && !(sm = surface_map_build(ps.surf, ps.n_surf, err))) rc = -1;
     double t2 = dp_seconds();
@@ -70,6 +81,7 @@ int photon_points_pass(const scene *s, const render_plan *p, const eda_set *eda,
                              .stored_photons = (double)(ps.n_vol + ps.n_surf + ps.n_beams + slice_map_size(slm)),
                              .r_vol = g.r_vol,
                              .r_surf = g.r_surf,
+                             .w_gate = p->window.delta ? f->window.width : 0.0,
                              .t_photon = t1 - t0,
                              .t_maps = t2 - t1};
         pass.t_gather = dp_seconds() - t2;

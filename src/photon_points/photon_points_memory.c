@@ -55,8 +55,11 @@ void photon_points_memory(const scene *s, const render_plan *p, memory_estimate 
     }
     if (volume && sliced) sliced_primitives_memory(p->volume_photon_type, V, m);
     if (volume && beams) /* beams: no volume photons, and the sensor pass queries the beam map per segment */
+    {
+        beam_time_cut cut = photon_points_beam_cut(p, 0); /* the widest: later ends are earlier */
         photon_beams_memory(piloted ? pilot.beams : NULL, piloted ? pilot.n_beams : 0, schedule_radius(&p->r_vol, 0),
-                            V_beams, m);
+                            &cut, V_beams, m);
+    }
     if (volume && !beams)
         memory_item_add(m, "volume photons and their map", "integrator.volume_photon_count", photon_array_bytes(V) + V * per_mapped);
     if (volume && !beams) /* the first pass's radius is the largest: the most footprint entries */

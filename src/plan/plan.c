@@ -3,6 +3,7 @@
 #include "dartspp/plan.h"
 
 #include <cjson/cJSON.h>
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -32,7 +33,12 @@ static void resolve_photon_points(const integrator_settings *in, render_plan *p)
     /* the kernel's dimension: 2 for points, 1 for beams (the 1-D kernel of src/photon_beams); "3d" is the
      * authors' cube root for either */
     int dims = in->radius_schedule == RADIUS_SCHEDULE_3D ? 3 : in->volume_photon_type != VOLUME_PHOTON_POINTS ? 1 : 2; /* sliced types: their beams */
+    /* a delta gate adds the temporal kernel's dimension: radius and width both by γ_i^{1/d}, d = 2 for beams
+     * (Liu's ProgressivePhotonMapIntegrator, the "spatio-temporal variant" of Marco et al. 2019 with β = 1/2),
+     * d = 3 for points (the same rule: the kernel's volume r²·w shrinks by γ_i, Knaus and Zwicker 2011) */
+    if (in->window.delta) dims = in->volume_photon_type != VOLUME_PHOTON_POINTS ? 2 : 3;
     p->r_vol = (radius_schedule){in->volume_gather_radius, in->volume_alpha, dims};
+    if (in->window.delta) p->w_gate = (radius_schedule){in->window.width, in->volume_alpha, dims};
     p->r_surf = (radius_schedule){in->gather_radius, in->alpha, 2};
     p->include_surfaces = in->include_surfaces;
     p->low_order_scattering = in->low_order_scattering;
@@ -60,7 +66,10 @@ int plan_resolve(const scene *s, render_plan *p, dp_error *err)
     p->time_angular_share = in->time_angular_share;
     p->uniform_time = resolve_uniform_time(s, p);
     if (darts_plan_resolve(s, p->type, &p->shading, &p->darts, err)) return -1;
-    if (sliced_primitives_check(s, p, err)) return -1; /* what the sliced primitives do not support */
+    if (sliced_primitives_check(s, p, err)) { /* what the sliced primitives do not support */
+        plan_free(p);
+        return -1;
+    }
     p->spp = s->renderer.spp;
     p->timeout = s->renderer.timeout;
     p->checkpoint_interval = s->renderer.checkpoint_interval;
@@ -93,8 +102,21 @@ double plan_pass_weight(const render_plan *p, long iteration)
     const radius_schedule *r = p->include_surfaces ? &p->r_surf : &p->r_vol;
     double q = schedule_radius(r, iteration) / r->r0;
     /* beams' 1-D kernel: variance about ∝ 1/r, so the weight is the kernel's width */
-    if (!p->include_surfaces && p->volume_photon_type != VOLUME_PHOTON_POINTS) return q;
-    return q * q;
+    double w = p->window.delta ? plan_gate_width(p, iteration) / p->w_gate.r0 : 1.0; /* the temporal kernel's share */
+    if (!p->include_surfaces && p->volume_photon_type != VOLUME_PHOTON_POINTS) return q * w;
+    return q * q * w;
+}
+
+double plan_gate_width(const render_plan *p, long iteration)
+{
+    return p->window.delta ? schedule_radius(&p->w_gate, iteration) : p->window.width;
+}
+
+double plan_window_end(const render_plan *p, long iteration)
+{
+    if (!p->window.gated) return INFINITY;
+    if (p->window.delta) return p->window.center + 0.5 * plan_gate_width(p, iteration);
+    return time_window_end(&p->window);
 }
 
 /* A key's resolved value as JSON, by its type in the key table. */
@@ -159,7 +181,15 @@ int plan_json(const render_plan *p, const scene *s, char *out, size_t n)
     cJSON_AddStringToObject(root, "time", tw->camera_unwarp ? "camera-unwarped optical path length"
                                                             : "camera-warped optical path length");
     if (!tw->gated) cJSON_AddStringToObject(root, "window", "steady");
-    else {
+    else if (tw->delta) {
+        cJSON *d = cJSON_AddObjectToObject(root, "delta_gate");
+        cJSON_AddNumberToObject(d, "center", tw->center);
+        cJSON_AddNumberToObject(d, "width0", p->w_gate.r0);
+        cJSON_AddNumberToObject(d, "alpha", p->w_gate.alpha);
+        cJSON_AddNumberToObject(d, "dims", p->w_gate.dims);
+        cJSON_AddStringToObject(d, "schedule", "w_i = width0*g_i^(1/dims), r_i = r0*g_i^(1/dims), "
+                                               "g_i = prod_{k=1..i} (k+alpha)/(k+1)");
+    } else {
         double w[2] = {tw->start, time_window_end(tw)};
         cJSON_AddItemToObject(root, "window", cJSON_CreateDoubleArray(w, 2));
         cJSON_AddNumberToObject(root, "frames", tw->frame_count);

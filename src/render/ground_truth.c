@@ -12,10 +12,9 @@
 #include "dartspp/surface_site.h"
 
 /* The first scattering surface along the camera ray; its hit, site and the camera leg's optical length. */
-static int first_surface(const scene *s, const surface_shading *sh, vec3 d, hit_record *h, surface_site *ss,
+static int first_surface(const scene *s, const surface_shading *sh, vec3 o, vec3 d, hit_record *h, surface_site *ss,
                          double *depth, double *leg, int *med)
 {
-    vec3 o = s->cam.pos;
     *med = s->cam.medium;
     *depth = *leg = 0.0;
     for (int crossing = 0; crossing < 256; crossing++) {
@@ -66,8 +65,8 @@ int ground_truth_compute(const scene *s, const render_plan *p, ground_truth *gt,
             surface_site ss;
             double depth, leg;
             int med;
-            vec3 d = camera_ray_dir(&s->cam, x + 0.5, y + 0.5);
-            if (!first_surface(s, &p->shading, d, &hit, &ss, &depth, &leg, &med)) continue;
+            vec3 o, d = camera_ray(&s->cam, x + 0.5, y + 0.5, &o);
+            if (!first_surface(s, &p->shading, o, d, &hit, &ss, &depth, &leg, &med)) continue;
             vec3 n = ss.fr.n;
             if (v3_dot(n, d) > 0.0) n = v3_neg(n); /* towards the camera */
             double arrival = first_arrival(s, &ss, med, unwarp ? 0.0 : leg);

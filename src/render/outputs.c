@@ -183,9 +183,9 @@ static int write_all(const film *f, const char *stem, const char *dot, const cha
     char path[STAGED_PATH_MAX];
     snprintf(path, sizeof path, "%s%s", stem, dot);
     const time_window *tw = &f->window;
-    image_meta meta = {.time_unit = RENDER_TIME_UNIT, .gated = tw->gated, .gate_start = tw->start,
-                       .gate_end = time_window_end(tw), .camera_warped = !tw->camera_unwarp, .frame_index = -1,
-                       .integrator = integrator, .plan = plan, .passes = f->passes};
+    image_meta meta = {.time_unit = RENDER_TIME_UNIT, .gated = tw->gated, .camera_warped = !tw->camera_unwarp,
+                       .frame_index = -1, .integrator = integrator, .plan = plan, .passes = f->passes};
+    time_window_bounds(tw, &meta.gate_start, &meta.gate_end); /* a delta gate: its instant twice */
     image_rgb img = {0};
     if (film_image(f, -1, &img, err)) return -1;
     char png[STAGED_PATH_MAX];

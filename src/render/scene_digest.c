@@ -96,6 +96,7 @@ static uint64_t camera_part(const scene *s)
     uint64_t h = FNV_OFFSET;
     h_d(&h, c->fov_deg), h_v3(&h, c->pos), h_v3(&h, c->right), h_v3(&h, c->up), h_v3(&h, c->forward);
     h_d(&h, c->plane_dist), h_i(&h, c->medium);
+    if (c->type == CAMERA_ORTHOGRAPHIC) h_i(&h, c->type), h_d(&h, c->ortho_size); /* pinhole digests as before */
     const sensor_response *r = &c->response;
     h_i(&h, r->on), h_d(&h, r->sigma), h_d(&h, r->tail), h_i(&h, r->n);
     for (int i = 0; i < r->n && r->t && r->p; i++) h_d(&h, r->t[i]), h_d(&h, r->p[i]);

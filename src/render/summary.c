@@ -156,6 +156,11 @@ static void print_scene(const scene *s, const render_plan *p, double load_second
     if (!tw->gated) printf("steady state (no gate)\n");
     else if (tw->frame_count) printf("%d frames of width %g from %g (%s optical path length)\n", tw->frame_count, tw->width,
                                      tw->start, tw->camera_unwarp ? "camera-unwarped" : "camera-warped");
+    else if (tw->delta)
+        printf("delta gate at %g (%s optical path length): the time density there, per unit of optical path length, "
+               "by a temporal box kernel of width w_i = %g·γ_i^(1/%d) and volume radius r_i = %g·γ_i^(1/%d), "
+               "γ_i = Π_{k=1..i} (k + %g)/(k + 1)\n", tw->center, tw->camera_unwarp ? "camera-unwarped" : "camera-warped",
+               p->w_gate.r0, p->w_gate.dims, p->r_vol.r0, p->r_vol.dims, p->w_gate.alpha);
     else printf("gate [%g, %g) (%s optical path length)\n", tw->start, time_window_end(tw),
                 tw->camera_unwarp ? "camera-unwarped" : "camera-warped");
 }
@@ -180,6 +185,7 @@ static void print_photon_stats(const render_stats *st)
                "time in photon pass %.2f s, map builds %.2f s, sensor pass %.2f s; last radii r_vol %.4g, R_surf %.4g\n",
                st->photon_paths, st->t_photon > 0 ? st->photon_paths / st->t_photon * 1e-6 : 0.0, st->stored_photons,
                st->t_photon, st->t_maps, st->t_gather, st->r_vol, st->r_surf);
+    if (st->w_gate > 0) printf("delta gate: the last iteration's temporal kernel width w %.4g\n", st->w_gate);
 }
 
 /* Several ranks: the film reductions and rank 0's time in them. */

@@ -124,10 +124,10 @@ static void warn_camera_medium(FILE *out, const scene *s)
 {
     static const double at[5][2] = {{0.5, 0.5}, {0.25, 0.25}, {0.75, 0.25}, {0.25, 0.75}, {0.75, 0.75}};
     for (int k = 0; k < 5; k++) {
-        vec3 d = camera_ray_dir(&s->cam, at[k][0] * s->cam.width, at[k][1] * s->cam.height);
+        vec3 o, d = camera_ray(&s->cam, at[k][0] * s->cam.width, at[k][1] * s->cam.height, &o);
         int here, med = s->cam.medium;
         const surface *sf;
-        if (!medium_side(s, s->cam.pos, d, &here, &sf) || here == med) continue;
+        if (!medium_side(s, o, d, &here, &sf) || here == med) continue;
         char a[96], b[96];
         fprintf(out, "warning: %s: the camera is declared in %s, but surface '%s' in front of it has %s on the "
                 "camera's side: camera paths take the declared medium up to that surface, light paths the surface's, "

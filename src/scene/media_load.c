@@ -145,3 +145,26 @@ int medium_ref(json_ctx *c, scene *s, const cJSON *v, const char *where, const c
     }
     return jfail(c, where, key, "expected a medium name or object");
 }
+
+int clear_region(json_ctx *c, scene *s, double speed, const char *where, const char *key, int *out)
+{
+    char name[64];
+    snprintf(name, sizeof name, "(clear, speed_of_light %.9g)", speed);
+    int k = find_medium(s, name);
+    if (k >= 0) {
+        *out = k;
+        return 0;
+    }
+    if (!(1.0 / speed < INFINITY)) return jfail(c, where, key, "too small (got %g)", speed);
+    medium *grown = realloc(s->media, ((size_t)s->medium_count + 1) * sizeof(medium));
+    if (!grown) return jfail(c, where, key, "out of memory");
+    s->media = grown;
+    medium *m = &s->media[s->medium_count];
+    memset(m, 0, sizeof *m);
+    snprintf(m->name, sizeof m->name, "%s", name);
+    m->eta = 1.0 / speed;
+    m->max_bounces = 1024;
+    m->phase.type = PHASE_ISOTROPIC;
+    *out = s->medium_count++;
+    return 0;
+}

@@ -86,6 +86,9 @@ void scene_release_embree(scene *s);
 int parse_media(json_ctx *c, const cJSON *root, scene *s);
 /* A medium reference: a name, null or "" (vacuum), or an inline object (appended to s->media). */
 int medium_ref(json_ctx *c, scene *s, const cJSON *v, const char *where, const char *key, int *out);
+/* A clear region (σs = σa = 0) where light travels at `speed`: found among the media or appended (Liu et al.'s
+ * int_speed_of_light / ext_speed_of_light on a side of a surface that has no medium). */
+int clear_region(json_ctx *c, scene *s, double speed, const char *where, const char *key, int *out);
 /* A primitive of an emitter type (emitter_ops_find: point, spot, collimated, directional_point), appended to
  * s->lights. */
 int light_parse(json_ctx *c, scene *s, const cJSON *v, const char *where, const char *type, const xform *T);

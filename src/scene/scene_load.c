@@ -252,6 +252,35 @@ static void warn_mixed_winding(json_ctx *c, const scene *s, const cJSON *v, cons
           medium_name(s, sf->ext_medium), flipped, shared);
 }
 
+/* Liu et al.'s fork of Tungsten (Primitive::selectSpeedOfLight): int_speed_of_light / ext_speed_of_light set the
+ * speed of light on the back / front side of a surface when that side has no medium (a side's medium keeps its
+ * own speed_of_light; a value <= 0 means none, the fork's default -1). dartspp gives such a side a clear region,
+ * a medium with σs = σa = 0 and η = 1/speed (media_load.c): Liu's volumetric-caustic times the glass lens this
+ * way. The fork also changes the speed on a surface that sets no medium, keeping the medium: not representable
+ * here (a region is one medium with one η), refused. */
+static int side_speed(json_ctx *c, scene *s, const cJSON *v, const char *where, const char *key, const surface *sf,
+                      int *side)
+{
+    if (!jget_item(c, v, key)) return 0;
+    double speed;
+    if (jget_number(c, v, where, key, -1.0, &speed)) return -1;
+    if (!(speed > 0)) {
+        jwarn(c, "%s: %s %g is not positive: no speed is set (as in Liu et al.'s fork, whose default is -1)", where,
+              key, speed);
+        return 0;
+    }
+    if (!sf->overrides_media)
+        return jfail(c, where, key, "changes the speed of light without int_medium or ext_medium on the surface: "
+                     "not supported (dartspp's regions are media, each with its speed_of_light; give the surface "
+                     "int_medium and ext_medium, or a medium with speed_of_light %g)", speed);
+    if (*side != MEDIUM_VACUUM) {
+        jwarn(c, "%s: %s %g is ignored: that side has medium '%s', whose speed_of_light %g applies (as in Liu et al.'s "
+              "fork)", where, key, speed, s->media[*side].name, 1.0 / s->media[*side].eta);
+        return 0;
+    }
+    return clear_region(c, s, speed, where, key, side);
+}
+
 static int parse_surface(json_ctx *c, scene *s, const cJSON *names, const cJSON *v, const char *where,
                          const char *type, const xform *T)
 {
@@ -266,6 +295,9 @@ static int parse_surface(json_ctx *c, scene *s, const cJSON *names, const cJSON 
     sf.overrides_media = im || em;
     if (im && medium_ref(c, s, im, where, "int_medium", &sf.int_medium)) return -1;
     if (em && medium_ref(c, s, em, where, "ext_medium", &sf.ext_medium)) return -1;
+    if (side_speed(c, s, v, where, "int_speed_of_light", &sf, &sf.int_medium) ||
+        side_speed(c, s, v, where, "ext_speed_of_light", &sf, &sf.ext_medium))
+        return -1;
     tri_mesh m = {0};
     unsigned flags;
     int rc = load_shape(c, s, v, where, type, &m, &flags);
@@ -324,6 +356,30 @@ static int parse_primitives(json_ctx *c, const cJSON *root, scene *s, const cJSO
 
 /* ---- camera ---- */
 
+/* Tungsten's PinholeCamera: the horizontal field of view in degrees. */
+static int parse_pinhole(json_ctx *c, const cJSON *v, camera *cam)
+{
+    if (jget_number(c, v, "camera", "fov", 60.0, &cam->fov_deg)) return -1;
+    if (!(cam->fov_deg > 0 && cam->fov_deg < 180)) return jfail(c, "camera", "fov", "must be in (0, 180) degrees (got %g)", cam->fov_deg);
+    /* a positive fov so small that the image plane's distance 1/tan(fov/2) overflows gave NaN ray directions */
+    if (cam->fov_deg < 1e-6)
+        return jfail(c, "camera", "fov", "is too small (got %g; the smallest supported is 1e-6 degrees)", cam->fov_deg);
+    return 0;
+}
+
+/* Tungsten's OrthographicCamera: orthographic_size, half the film's height in scene units (default 1, as
+ * Tungsten's); the film's width follows the resolution's aspect. It reads no fov (a fov in the file is unread,
+ * as in Tungsten). */
+static int parse_orthographic(json_ctx *c, const cJSON *v, camera *cam)
+{
+    if (jget_number(c, v, "camera", "orthographic_size", 1.0, &cam->ortho_size)) return -1;
+    if (!(cam->ortho_size > 0 && cam->ortho_size < 1e30))
+        return jfail(c, "camera", "orthographic_size", "must be a positive length, half the film's height in scene "
+                     "units (got %g)", cam->ortho_size);
+    cam->fov_deg = 0.0;
+    return 0;
+}
+
 static int parse_camera(json_ctx *c, const cJSON *root, scene *s)
 {
     const cJSON *v = jget_item(c, root, "camera");
@@ -331,8 +387,10 @@ static int parse_camera(json_ctx *c, const cJSON *root, scene *s)
     size_t mark = jread_mark(c);
     const char *type = "pinhole";
     if (jget_string(c, v, "camera", "type", &type) < 0) return -1;
-    if (strcmp(type, "pinhole")) return jfail(c, "camera", "type", "unsupported camera '%s' (supported: pinhole)", type);
     camera *cam = &s->cam;
+    if (!strcmp(type, "pinhole")) cam->type = CAMERA_PINHOLE;
+    else if (!strcmp(type, "orthographic")) cam->type = CAMERA_ORTHOGRAPHIC;
+    else return jfail(c, "camera", "type", "unsupported camera '%s' (supported: pinhole, orthographic)", type);
     cam->width = 512;
     cam->height = 512;
     const cJSON *res = jget_item(c, v, "resolution");
@@ -352,18 +410,14 @@ static int parse_camera(json_ctx *c, const cJSON *root, scene *s)
         cam->width = (int)w;
         cam->height = (int)h;
     }
-    if (jget_number(c, v, "camera", "fov", 60.0, &cam->fov_deg)) return -1;
-    if (!(cam->fov_deg > 0 && cam->fov_deg < 180)) return jfail(c, "camera", "fov", "must be in (0, 180) degrees (got %g)", cam->fov_deg);
-    /* a positive fov so small that the image plane's distance 1/tan(fov/2) overflows gave NaN ray directions */
-    if (cam->fov_deg < 1e-6)
-        return jfail(c, "camera", "fov", "is too small (got %g; the smallest supported is 1e-6 degrees)", cam->fov_deg);
+    if (cam->type == CAMERA_ORTHOGRAPHIC ? parse_orthographic(c, v, cam) : parse_pinhole(c, v, cam)) return -1;
     xform T;
     if (xform_parse(c, jget_item(c, v, "transform"), "camera", &T)) return -1;
     cam->pos = T.pos;
     cam->right = v3_neg(v3_norm(T.x)); /* Tungsten negates the camera's x axis */
     cam->up = v3_norm(T.y);
     cam->forward = v3_norm(T.z);
-    cam->plane_dist = 1.0 / tan(0.5 * cam->fov_deg * M_PI / 180.0);
+    if (cam->type == CAMERA_PINHOLE) cam->plane_dist = 1.0 / tan(0.5 * cam->fov_deg * M_PI / 180.0);
     cam->medium = MEDIUM_VACUUM;
     const cJSON *m = jget_item(c, v, "medium");
     if (m && medium_ref(c, s, m, "camera", "medium", &cam->medium)) return -1;
@@ -417,7 +471,7 @@ static void warn_dark_scene(json_ctx *c, const scene *s)
         if (L->pulse.shape == PULSE_GAUSSIAN && L->pulse.width > 0.0) return; /* no earliest emission */
         if (s->cam.response.on) return; /* the response can move a detection earlier */
         /* the nearest emitting point is at most `extent` nearer than the light's reference point */
-        double d = tw->camera_unwarp ? 0.0 : dp_fmax(0.0, v3_len(v3_sub(L->pos, s->cam.pos)) - L->extent);
+        double d = tw->camera_unwarp ? 0.0 : dp_fmax(0.0, camera_distance(&s->cam, L->pos) - L->extent);
         double t = L->pulse.start + d * eta;
         if (t < earliest) earliest = t, dist = d, first = L;
     }
@@ -429,9 +483,10 @@ static void warn_dark_scene(json_ctx *c, const scene *s)
               first->name);
     else
         jwarn(c, "integrator: the time %s ends at %g, before any light path can reach the camera: the earliest "
-                 "arrival is %g (light '%s': pulse_start %g + distance to the camera %g x the smallest time per "
-                 "length %g): the image will be black", tw->frame_count > 0 ? "window of the frames" : "gate", end,
-              earliest, first->name, first->pulse.start, dist, eta);
+                 "arrival is %g (light '%s': pulse_start %g + distance to the camera%s %g x the smallest time per "
+                 "length %g): the image will be black; a file written for a renderer that does not time the camera "
+                 "segment (Liu et al.'s) renders with camera_unwarp true", tw->frame_count > 0 ? "window of the frames" : "gate", end,
+              earliest, first->name, first->pulse.start, s->cam.type == CAMERA_ORTHOGRAPHIC ? "'s plane" : "", dist, eta);
 }
 
 /* A light whose paths start in vacuum (no ext_medium) while the camera is in a medium and no surface sets

@@ -290,7 +290,6 @@ static int resolve_window(json_ctx *c, const cJSON *v, integrator_settings *in)
     int timed = cJSON_HasObjectItem(v, "transient_time_center") || cJSON_HasObjectItem(v, "frame_num") ||
                 cJSON_HasObjectItem(v, "transient_time_width");
     double width = timed ? in->transient_time_width : 0.0;
-    if (in->delta_time_gate) return jfail(c, "integrator", "delta_time_gate", "delta gates are not supported (use a box gate width)");
     time_window *tw = &in->window;
     tw->camera_unwarp = in->camera_unwarp;
     tw->frame_count = (int)in->frame_num;
@@ -304,7 +303,54 @@ static int resolve_window(json_ctx *c, const cJSON *v, integrator_settings *in)
         tw->gated = width > 0;
         tw->start = width > 0 ? in->transient_time_center - 0.5 * width : 0.0;
     }
+    if (in->delta_time_gate) { /* checked by delta_gate_refusal: photon points or beams, one gate, width > 0 */
+        tw->delta = 1;
+        tw->center = in->transient_time_center;
+    }
     return window_precision(c, tw);
+}
+
+/* The volume photon types that estimate a delta gate (delta_time_gate): a temporal box kernel K_τ of width w_i
+ * centred on the gate, with the joint schedule of the radius and the width (src/plan, docs/beams.md §5). A type
+ * that can: one line here. */
+static const int delta_gate_estimated[] = {
+    [VOLUME_PHOTON_POINTS] = 1,
+    [VOLUME_PHOTON_BEAMS] = 1,
+    /* the sliced primitives: τ_k at the instant itself (no temporal kernel); their beams fallback as beams */
+    [VOLUME_PHOTON_BALLS] = 1, [VOLUME_PHOTON_VOLUMES] = 1, [VOLUME_PHOTON_HYPERVOLUMES] = 1,
+    [VOLUME_PHOTON_VOLUMES_BALLS] = 1, [VOLUME_PHOTON_MIS_VOLUMES_BALLS] = 1,
+};
+
+/* delta_time_gate: refused where no estimator of the time density at the gate's instant runs, or where the
+ * combination is not supported (docs/time.md §3.1). */
+static int delta_gate_refusal(json_ctx *c, const cJSON *v, const integrator_settings *in)
+{
+    const char *key = "delta_time_gate";
+    if (!in->delta_time_gate) return 0;
+    if (in->type == INTEGRATOR_PATH_TRACER)
+        return jfail(c, "integrator", key, "the path tracer cannot estimate a delta gate: an unbiased path tracer "
+                     "never samples a path of exactly the gate's time (it has probability 0); use a narrow box gate "
+                     "(transient_time_width) or progressive_transient_photon_map, whose temporal kernel shrinks");
+    int t = in->volume_photon_type, n = (int)(sizeof delta_gate_estimated / sizeof delta_gate_estimated[0]);
+    if (t < 0 || t >= n || !delta_gate_estimated[t])
+        return jfail(c, "integrator", key, "volume_photon_type \"%s\" has no delta-gate estimator yet (points, "
+                     "beams, balls, volumes, hypervolumes, volumes_balls and mis_volumes_balls do)", scene_key_find("volume_photon_type")->choices[t]);
+    if (!cJSON_HasObjectItem(v, "transient_time_center") || !(in->transient_time_width > 0))
+        return jfail(c, "integrator", key, "a delta gate needs transient_time_center (its instant) and "
+                     "transient_time_width > 0 (the width of the first iteration's temporal kernel)");
+    if (in->frame_num > 0)
+        return jfail(c, "integrator", key, "frames (frame_num %ld) with a delta gate are not supported: a delta gate "
+                     "is one instant; render one scene per instant", in->frame_num);
+    if (in->enable_guiding || in->enable_elliptical || in->eda || in->strict_time_width)
+        return jfail(c, "integrator", key, "the DARTS samplers (%s) aim at a fixed box window and do not follow the "
+                     "delta gate's shrinking width; set enable_guiding, enable_elliptical, eda and strict_time_width "
+                     "to false", in->enable_guiding ? "enable_guiding" : in->enable_elliptical ? "enable_elliptical"
+                                 : in->eda ? "eda" : "strict_time_width");
+    if (t == VOLUME_PHOTON_BEAMS && in->radius_schedule == RADIUS_SCHEDULE_3D)
+        return jfail(c, "integrator", key, "radius_schedule \"3d\" (the cube root of a box gate) does not apply to "
+                     "beams under a delta gate, whose radius and width both shrink by the square root (Liu et al. "
+                     "2022's progressive photon map); leave radius_schedule at \"2d\"");
+    return 0;
 }
 
 /* Rules between integrator keys, after every key is read. */
@@ -333,6 +379,7 @@ static int resolve_integrator(json_ctx *c, const cJSON *v, integrator_settings *
         cJSON_GetObjectItemCaseSensitive(v, "fixed_volume_radius"))
         jwarn(c, "integrator.fixed_volume_radius: false (k-NN radii) is not supported; every volume photon "
                  "gets the progressive radius from volume_gather_radius");
+    if (delta_gate_refusal(c, v, in)) return -1;
     return resolve_window(c, v, in);
 }
 

@@ -58,7 +58,9 @@ static int build_one(const scene *s, const slice_build_input *in, const path_ver
     const time_window *tw = &in->window;
     double span = tw->width * (tw->frame_count > 0 ? tw->frame_count : 1);
     double u = rng_uniform(rng); /* drawn first, whatever follows: the draws of a vertex do not depend on it */
-    *p = (slice_prim){.vertex = i, .kind = k, .tau = tw->start + u * span, .pdf = 1.0};
+    /* a delta gate: the instant itself (the image is the time density there; weight 1 against the film's per-pass
+     * box, slice_gather.c) */
+    *p = (slice_prim){.vertex = i, .kind = k, .tau = tw->delta ? tw->center : tw->start + u * span, .pdf = 1.0};
     if (k == SLICE_PLANE || k == SLICE_PLANE_1D) p->tau = tw->start + span; /* no τ_k (the gate is analytic): the
                                                                              * window's end bounds it */
     vec3 dirs[4] = {v->w_out};

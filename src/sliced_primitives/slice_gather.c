@@ -17,7 +17,8 @@ typedef struct {
     const medium *m;
     vec3 o, d, thr;
     double len, t_cam, eta_c;
-    double span;   /* 1/p(τ_k): the gate's (or frames') span, against the film's 1/(width·frames) */
+    double span;   /* 1/p(τ_k): the gate's (or frames') span, against the film's 1/(width·frames); a delta gate:
+                    * the film's box of this pass, w_i, against its 1/w_i (weight 1: the image is the density) */
     int b_cam, mis;
     dp_rng *rng;
 } slice_ctx;

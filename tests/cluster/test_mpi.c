@@ -1,5 +1,5 @@
 /* dartspp-mpi against one process (`mpirun --oversubscribe`, Open MPI): the same image for the same seed and
- * pass count (photon points with and without DARTS, the path tracer, gate and frames) within the bound the
+ * pass count (photon points and photon beams with and without DARTS, the path tracer, gate and frames) within the bound the
  * accumulation allows, --time with 2 ranks, Ctrl-C on mpirun, and a rank that cannot read its scene.
  * Both binaries are the release build (the same objects, so the same arithmetic). */
 #include "child_process.h"
@@ -57,6 +57,14 @@ static void test_same_image_as_one_process(void **state)
     one_vs_three("baseline-gate", sets, 0);
     snprintf(sets, sizeof sets, "%s --set frame_num=3 --set start_time=15.95 --set transient_time_width=0.1", small);
     one_vs_three("darts-frames", sets, 3);
+    /* photon beams (docs/beams.md), baseline and DARTS-fed: the beam map is built from the same beams on
+     * every rank */
+    snprintf(sets, sizeof sets, "%s --set volume_photon_type=beams --set enable_guiding=false --set enable_elliptical=false",
+             small);
+    one_vs_three("beams-gate", sets, 0);
+    snprintf(sets, sizeof sets, "%s --set volume_photon_type=beams --set frame_num=2 --set start_time=15.95 "
+             "--set transient_time_width=0.1", small);
+    one_vs_three("darts-beams-frames", sets, 2);
     one_vs_three("path-tracer-frames", "--set type=path_tracer --set frame_num=2 --set start_time=14 --set transient_time_width=2", 2);
 }
 

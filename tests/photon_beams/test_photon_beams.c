@@ -53,22 +53,27 @@ static void test_beam_map_brute_force(void **state)
     }
     const double r = 0.02;
     dp_error err;
-    beam_map *m = beam_map_build(b, NB, r, &err);
+    beam_map *m = beam_map_build(b, NB, r, NULL, &err);
+    /* with the window's end (every window below ends by 3.5) and width: late parts left out, finer pieces in a
+     * space-time order; the windowed queries must find the same pairs */
+    beam_time_cut cut = {3.5, 0.1};
+    beam_map *mc = beam_map_build(b, NB, r, &cut, &err);
     assert_non_null(m);
-    assert_true(beam_map_pieces(b, NB, r) > 1.2 * NB); /* long beams were cut */
+    assert_non_null(mc);
+    assert_true(beam_map_pieces(b, NB, r, NULL) > 1.2 * NB); /* long beams were cut */
     int *count = calloc(NB, sizeof(int));
     double *t = calloc(NB, sizeof(double)), *s = calloc(NB, sizeof(double)), *is = calloc(NB, sizeof(double));
-    long pairs = 0, windowed = 0;
+    long pairs = 0, windowed = 0, windowed_cut = 0;
     for (int q = 0; q < NQ; q++) {
         vec3 o = v3(rng_uniform(&rng), rng_uniform(&rng), rng_uniform(&rng));
         vec3 d = sample_uniform_sphere(rng_uniform(&rng), rng_uniform(&rng));
         double len = 2.0 * rng_uniform(&rng);
         beam_window w = {.t0 = 0.5, .eta = 1.1, .lo = 2.0 + rng_uniform(&rng), .hi = 0};
         w.hi = w.lo + 0.5;
-        for (int pass = 0; pass < 2; pass++) {
+        for (int pass = 0; pass < 3; pass++) {
             memset(count, 0, NB * sizeof(int));
             hit_log h = {count, t, s, is};
-            beam_map_query(m, o, d, len, pass ? &w : NULL, log_hit, &h);
+            beam_map_query(pass == 2 ? mc : m, o, d, len, pass ? &w : NULL, log_hit, &h);
             for (int i = 0; i < NB; i++) {
                 vec3 wb = v3(b[i].dir[0], b[i].dir[1], b[i].dir[2]);
                 vec3 w0 = v3_sub(o, v3(b[i].start[0], b[i].start[1], b[i].start[2]));
@@ -89,15 +94,18 @@ static void test_beam_map_brute_force(void **state)
                 assert_float_equal(t[i], tt, 1e-9);
                 assert_float_equal(s[i], ss, 1e-9 * (1 + ss));
                 assert_float_equal(is[i], 1 / sqrt(sin2), 1e-9 / sqrt(sin2));
-                pass ? windowed++ : pairs++;
+                pass == 2 ? windowed_cut++ : pass ? windowed++ : pairs++;
             }
         }
     }
-    print_message("  %ld pairs within r over %d segments (%ld inside the time windows), %.0f pieces for %d beams\n", pairs,
-                  NQ, windowed, beam_map_pieces(b, NB, r), NB);
+    print_message("  %ld pairs within r over %d segments (%ld inside the time windows, %ld with the map cut at their"
+                  " end), %.0f pieces for %d beams (cut: %.0f)\n", pairs, NQ, windowed, windowed_cut,
+                  beam_map_pieces(b, NB, r, NULL), NB, beam_map_pieces(b, NB, r, &cut));
     assert_true(pairs > 200);
     assert_true(windowed > 10);
+    assert_int_equal(windowed_cut, windowed);
     beam_map_free(m);
+    beam_map_free(mc);
     free(b), free(count), free(t), free(s), free(is);
 }
 
@@ -235,18 +243,6 @@ static void tiles_check(const char *label, const char *extra, int frames, long p
 
 /* The other emitters of tests/emitters/test_emitters_render.c (stress): a ceiling panel (box pulse) and a spot
  * in a clear pocket (Gaussian pulse); a collimated beam of radius 0.08 across the box. */
-#define PANEL_AND_SPOT                                                                                               \
-    "{ \"type\": \"quad\", \"name\": \"panel\", \"bsdf\": \"white\", \"emission\": [3, 2.5, 2], \"int_medium\": \"fog\","   \
-    "  \"ext_medium\": \"fog\", \"pulse_width\": 0.3,"                                                                 \
-    "  \"transform\": { \"position\": [0.3, 1.96, 0.1], \"scale\": [0.7, 1, 0.7], \"rotation\": [180, 0, 0] } },"     \
-    "{ \"type\": \"cube\", \"bsdf\": { \"type\": \"forward\" }, \"ext_medium\": \"fog\","                              \
-    "  \"transform\": { \"position\": [-0.5, 1.2, -2.2], \"scale\": [0.3, 0.3, 0.3] } },"                              \
-    "{ \"type\": \"spot\", \"name\": \"flash\", \"emission\": [5, 6, 7], \"coneangle\": 30, \"conedeltaangle\": 10,"   \
-    "  \"pulse_start\": 0.1, \"pulse_width\": 0.4, \"pulse_shape\": \"gaussian\","                                      \
-    "  \"transform\": { \"position\": [-0.5, 1.2, -2.2], \"look_at\": [0.2, 0.7, 0.8], \"up\": [0, 1, 0] } }"
-#define COLLIMATED                                                                                                   \
-    "{ \"type\": \"collimated\", \"name\": \"laser\", \"radius\": 0.08, \"emission\": [60, 50, 40], \"ext_medium\": \"fog\"," \
-    "  \"transform\": { \"position\": [-0.9, 1.4, -0.8], \"look_at\": [0.9, 0.6, 0.9], \"up\": [0, 1, 0] } }"
 
 /* Measured (2026-11-28): panel and spot +1.24 % (max |z| 1.16), collimated −1.26 % (1.27). Broken variant: the
  * first segment's beams starting at time 0 instead of the light's emission time: panel and spot −5.48 %, max
@@ -254,8 +250,8 @@ static void tiles_check(const char *label, const char *extra, int frames, long p
 static void test_beams_other_emitters(void **state)
 {
     (void)state;
-    tiles_check_lights("beams: panel and spot", PANEL_AND_SPOT, "", 0, 3000, 150);
-    tiles_check_lights("beams: collimated beam", COLLIMATED, "", 0, 3000, 150);
+    tiles_check_lights("beams: panel and spot", FOG_BOX_PANEL_AND_SPOT, "", 0, 3000, 150);
+    tiles_check_lights("beams: collimated beam", FOG_BOX_COLLIMATED, "", 0, 3000, 150);
 }
 
 static void test_beams_tiles(void **state)
@@ -324,6 +320,76 @@ static void test_darts_beams_tiles(void **state)
     tiles_check("DARTS beams vs path tracer", ", \"enable_guiding\": true, \"enable_elliptical\": true", 0, 1500, 60);
 }
 
+/* ---- a delta gate (delta_time_gate) against the quadrature ---- */
+
+/* The single-scattering scene under a delta gate at τ = 3.5 with first width w₀ = 1 (so that the first box is
+ * the quadrature's [3, 4) of ss_reference, whose kernel-bias terms apply). What the image estimates: the time
+ * density f(τ) of the image total, per unit of optical path length: E_δ = lim_{w→0} E_box(w), by Richardson
+ * from boxes of 0.1 and 0.05 (the box average is f + f''w²/24 + O(w⁴)). Iteration i averages over its box
+ * w_i, so its expectation is E_δ + (E_box(w₀) − E_δ)·(w_i/w₀)² + O(w⁴): the temporal bias of the pass mean is
+ * that term's mean over the iterations; its O(w⁴) remainder is bounded by how far E_box(w₀/2) is from the same
+ * model. Spatial bias: the allowance of beams_total_check (points: test_photon_single_scatter.c's, 3/8 of it)
+ * with the mean r_i² of the joint schedule. A third of the passes' totals is the temporal kernel's share, so
+ * the test fails when the kernel stays at w₀ (the temporal bias then is the whole E_box(w₀) − E_δ). */
+static void delta_total_check(const char *label, const char *type, int dims, double kernel_factor, int seeds)
+{
+    char text[4096], sets[3][64];
+    tmp_scene t;
+    ss_scene_text(text, sizeof text, "");
+    tmp_scene_write(&t, text);
+    snprintf(sets[0], sizeof sets[0], "volume_photon_type=%s", type);
+    snprintf(sets[1], sizeof sets[1], "delta_time_gate=true");
+    snprintf(sets[2], sizeof sets[2], "volume_alpha=0.3");
+    const char *set[3] = {sets[0], sets[1], sets[2]};
+    scene s;
+    load_scene(t.path, set, 3, &s);
+    assert_true(s.integrator.window.delta);
+    const ss_expectation *e = ss_reference(&s); /* the first box [3, 4): its kernel-bias terms */
+    pass_totals pt;
+    render_totals(&s, 900, seeds, SS_ITERS, &pt);
+    double r2 = 0, w2 = 0;
+    for (long i = 0; i < SS_ITERS; i++) {
+        double gamma = radius_closed_form(1.0, 0.3, i, 1);
+        r2 += SS_R0 * SS_R0 * pow(gamma, 2.0 / dims) / SS_ITERS;
+        w2 += pow(gamma, 2.0 / dims) / SS_ITERS; /* mean (w_i/w₀)² */
+    }
+    print_message("  %s, %d seeds × %d iterations, mean (w_i/w0)^2 %.3f:\n", label, seeds, SS_ITERS, w2);
+    for (int ch = 0; ch < 3; ch++) {
+        double mean, se;
+        pass_totals_mean_se(&pt, 0, ch, &mean, &se);
+        double e1 = v3_comp(e->total, ch), eh = ss_box_total(&s, 3.5, 0.5, ch);
+        double d1 = ss_box_total(&s, 3.5, 0.1, ch), d2 = ss_box_total(&s, 3.5, 0.05, ch);
+        double delta = (4 * d2 - d1) / 3, richardson = fabs(d2 - d1) / 3; /* E_δ, and its own error bound */
+        double temporal = (e1 - delta) * w2, remainder = fabs(eh - (delta + 0.25 * (e1 - delta))) * 4 * w2;
+        double edge = r2 * v3_comp(e->edge, ch), interior = r2 * v3_comp(e->interior, ch);
+        /* the terms are the box [3, 4)'s moments: scaled to the density's size */
+        double spatial = kernel_factor * (2 * fabs(edge) + interior) * fmax(1.0, delta / e1);
+        double want = delta + temporal, allowance = spatial + remainder + richardson;
+        print_message("  channel %d: E_delta %.6g (box [3,4) %.6g), expected with the schedule %.6g, %s %.6g (se %.2f %%),"
+                      " diff %+.3f %% = %+.2f se; allowance %.3f %% (spatial %.3f %%, O(w^4) %.3f %%)\n",
+                      ch, delta, e1, want, type, mean, 100 * se / want, 100 * (mean - want) / want, (mean - want) / se,
+                      100 * allowance / want, 100 * spatial / want, 100 * remainder / want);
+        assert_true(se > 0);
+        assert_true(allowance < 0.02 * want);
+        assert_true(fabs(mean - want) < 4 * se + allowance);
+    }
+    pass_totals_free(&pt);
+    scene_free(&s);
+    tmp_scene_remove(&t);
+}
+
+static void test_beams_delta_gate_single_scatter(void **state)
+{
+    (void)state;
+    delta_total_check("beams, delta gate", "beams", 2, 8.0 / 3.0, 2);
+}
+
+static void test_points_delta_gate_single_scatter(void **state)
+{
+    (void)state;
+    delta_total_check("points, delta gate", "points", 3, 1.0, 2);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -331,6 +397,8 @@ int main(void)
         cmocka_unit_test(test_beams_thread_independent),
         cmocka_unit_test(test_beams_single_scatter_total),
         cmocka_unit_test(test_beams_tiles),
+        cmocka_unit_test(test_beams_delta_gate_single_scatter),
+        cmocka_unit_test(test_points_delta_gate_single_scatter),
     };
     const struct CMUnitTest stress[] = {
         cmocka_unit_test(test_beams_unwarped_single_scatter_total),

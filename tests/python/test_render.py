@@ -33,7 +33,9 @@ def cli_render(cli, scene, tmp_path, spp, seed, sets=()):
     ["enable_guiding=false", "enable_elliptical=false"],  # baseline photon points
     ["type=path_tracer"],                                 # DARTS path tracer (the scene's DARTS keys)
     ["type=path_tracer", "enable_guiding=false", "enable_elliptical=false"],  # the path tracer
-], ids=["darts-pp", "baseline-pp", "darts-pt", "pt"])
+    ["volume_photon_type=beams", "enable_guiding=false", "enable_elliptical=false"],  # photon beams
+    ["volume_photon_type=beams"],                         # DARTS photon beams
+], ids=["darts-pp", "baseline-pp", "darts-pt", "pt", "beams", "darts-beams"])
 @pytest.mark.filterwarnings("ignore:.*does not read this key")
 def test_same_image_as_cli(cli, tmp_path, method):
     """The gate image and every frame equal the CLI's at the same seed and passes, bit for bit."""

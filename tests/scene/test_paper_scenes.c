@@ -1,11 +1,13 @@
 /* tier: quick */
 /* The paper's own scene files load with the values written in them: the Cornell box of cbox-trans (its four
- * files, volume beams resolved as beams) and the three dragon files (textures, conductors, smooth mesh).
+ * files, volume beams resolved as beams) and the three dragon files (textures, conductors, smooth mesh); Liu,
+ * Jiao and Jarosz 2022's three example scenes (liu2022/) with only the other branches' two keys overridden.
  * Skipped when the paper's scenes are not beside the checkout (see test_need_paper_files). Expected values are
  * worked out by hand from the scene files and docs/scene-format.md. */
 #include "fixtures.h"
 
 #include "dartspp/render.h"
+#include "render_fixtures.h"
 
 #include <glob.h>
 
@@ -286,6 +288,96 @@ static void test_dragon_scenes_load(void **state)
 
 #define T(f) cmocka_unit_test_teardown(f, teardown_fx)
 
+/* ---- Liu, Jiao and Jarosz 2022's example scenes (liu2022/, their README) ---- */
+
+/* Every "warning:" line of text must contain one of the expected phrases; returns how many lines matched
+ * each (counts[i]) and fails on any other warning. */
+static void expect_warnings(const char *label, const char *text, const char *const *expected, int n, int *counts)
+{
+    for (int i = 0; i < n; i++) counts[i] = 0;
+    for (const char *line = text; line && *line;) {
+        const char *end = strchr(line, '\n');
+        size_t len = end ? (size_t)(end - line) : strlen(line);
+        if (!strncmp(line, "warning:", 8)) {
+            int hit = -1;
+            for (int i = 0; i < n && hit < 0; i++) {
+                const char *at = strstr(line, expected[i]);
+                if (at && at < line + len) hit = i;
+            }
+            if (hit < 0) fail_msg("%s: unexpected warning: %.*s", label, (int)len, line);
+            counts[hit]++;
+        }
+        line = end ? end + 1 : NULL;
+    }
+}
+
+/* His three scenes in ../shared load unchanged but for the two keys other branches add (volume_photon_type
+ * mis_volumes_balls -> points, delta_time_gate true -> false) and render one pass at 32² with no error and no
+ * warning but: the unknown key "gather_photon_count_" (his files' disabled key, trailing underscore), and,
+ * camera-warped (our default), the gate that ends before any light can reach the camera. His renderer does
+ * not time the camera segment: warped, every pixel is exactly 0 (as the warning says); with camera_unwarp
+ * true the warning goes and the image is lit. The volumetric caustic's lens (int_speed_of_light 0.66666667,
+ * no int_medium) gets a clear region of η = 1.5 inside. */
+static void test_liu2022_scenes(void **state)
+{
+    (void)state;
+    static const char *const names[3] = {"cornell-box", "subsurface-scattering", "volumetric-caustic"};
+    const char *dir = test_need_paper_files("liu2022/cornell-box/scene.json", "liu2022/subsurface-scattering/scene.json",
+                                            "liu2022/volumetric-caustic/scene.json", NULL);
+    static const char *const expected[2] = {"unknown key \"gather_photon_count_\"",
+                                            "before any light path can reach the camera"};
+    for (int i = 0; i < 3; i++)
+        for (int unwarp = 0; unwarp < 2; unwarp++) {
+            char path[4200], label[256];
+            snprintf(path, sizeof path, "%s/liu2022/%s/scene.json", dir, names[i]);
+            snprintf(label, sizeof label, "%s (%s)", names[i], unwarp ? "camera_unwarp=true" : "unchanged time");
+            const char *sets[4] = {"volume_photon_type=points", "delta_time_gate=false", "resolution=32",
+                                   "camera_unwarp=true"};
+            scene *s = fx_slot();
+            dp_error err;
+            memset(&err, 0, sizeof err);
+            scene_load_options o = {.sets = sets, .set_count = unwarp ? 4 : 3};
+            if (scene_load(path, &o, s, &err)) fail_msg("%s: %s", label, err.msg);
+            fx_mark(s, 1);
+            render_plan p;
+            if (plan_resolve(s, &p, &err)) fail_msg("%s: %s", label, err.msg);
+            char *warned = NULL;
+            size_t wlen = 0;
+            FILE *w = open_memstream(&warned, &wlen);
+            assert_non_null(w);
+            render_warn(w, s, &p);
+            fclose(w);
+            plan_free(&p);
+            int load_counts[2], run_counts[2];
+            expect_warnings(label, s->notes, expected, 2, load_counts);
+            expect_warnings(label, warned, expected, 2, run_counts);
+            free(warned);
+            assert_int_equal(load_counts[0], 1);
+            assert_int_equal(load_counts[1] + run_counts[1], unwarp ? 0 : 1);
+            if (i == 2) { /* the lens: dielectric sphere, gas outside, a clear region of speed 2/3 inside */
+                int lens = -1;
+                for (int k = 0; k < s->surface_count; k++)
+                    if (!strcmp(s->surfaces[k].name, "Lens")) lens = k;
+                assert_true(lens >= 0);
+                const surface *sf = &s->surfaces[lens];
+                assert_true(sf->overrides_media && sf->int_medium >= 0 && sf->int_medium != sf->ext_medium);
+                const medium *m = &s->media[sf->int_medium];
+                assert_float_equal(m->eta, 1.0 / 0.66666667, 1e-12);
+                assert_true(v3_is_zero(m->sigma_t));
+            }
+            film f;
+            render_stats st;
+            render_passes(s, 2, 7, 1, &f, &st);
+            double sum = 0.0;
+            for (size_t k = 0; k < (size_t)f.width * f.height * 3; k++) sum += f.sum[k];
+            print_message("  %-45s 1 pass at 32²: image total %.4g; warnings as expected\n", label, sum / f.weight_sum);
+            if (unwarp) assert_true(sum > 0.0);
+            else assert_true(sum == 0.0);
+            film_free(&f);
+            fx_drop(s);
+        }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -295,6 +387,7 @@ int main(void)
         T(test_scene_json_values),
         T(test_scene_json_without_time_keys_is_steady),
         T(test_dragon_scenes_load),
+        T(test_liu2022_scenes),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

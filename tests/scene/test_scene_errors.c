@@ -177,6 +177,11 @@ static void test_bad_values_in_process(void **state)
         {"\"look_at\": [0, 0, 0]", "\"look_at\": [0, 1, -4]", "transform"}, /* look_at == position */
         {"\"transform\": {\"scale\": [4, 1, 4]}", "\"transform\": [1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0]", "transform"},
         {"\"camera\"", "\"kamera\"", "camera"}, /* no camera at all */
+        {"\"type\": \"pinhole\"", "\"type\": \"thinlens\"", "camera.type"},
+        {"\"type\": \"pinhole\"", "\"type\": \"orthographic\", \"orthographic_size\": 0", "camera.orthographic_size"},
+        /* Liu et al.'s speed of light on a side: a surface that sets no medium cannot change it (a region is one
+         * medium with one η) */
+        {"\"bsdf\": \"white\"}", "\"bsdf\": \"white\", \"int_speed_of_light\": 0.5}", "int_speed_of_light"},
         /* pulses (issue 21): finite and >= 0; camera_unwarp a boolean */
         {"\"power\": 100", "\"power\": 100, \"pulse_start\": -0.5", "pulse_start"},
         {"\"power\": 100", "\"power\": 100, \"pulse_start\": 1e999", "pulse_start"},
@@ -379,6 +384,13 @@ static void test_dark_scene_warnings(void **state)
         {"light without ext_medium in fog", "\"power\": 100,\n     \"ext_medium\": \"fog\"}", "\"power\": 100}",
          {"light 'light' has no ext_medium", "camera is in medium 'fog'", "\"ext_medium\": \"fog\""}, 0},
         {"albedo [0.5, 1.2, 0.5]", "\"albedo\": 0.5", "\"albedo\": [0.5, 1.2, 0.5]", {"bsdf 'white'", "above 1", NULL}, 0},
+        /* Liu et al.'s speed of light on a side that has a medium: the medium's speed applies, as in his fork */
+        {"ext_speed_of_light beside a medium", "\"bsdf\": \"white\"}",
+         "\"bsdf\": \"white\", \"ext_medium\": \"fog\", \"ext_speed_of_light\": 0.5}",
+         {"ext_speed_of_light 0.5 is ignored", "medium 'fog'", NULL}, 0},
+        /* and on a side without one: a clear region, no warning */
+        {"int_speed_of_light on a vacuum side", "\"bsdf\": \"white\"}",
+         "\"bsdf\": \"white\", \"ext_medium\": \"fog\", \"int_speed_of_light\": 0.5}", {NULL, NULL, NULL}, 0},
         {"base scene", NULL, NULL, {NULL, NULL, NULL}, 0},
         {"gate just reachable", "\"transient_time_center\": 6", "\"transient_time_center\": 4", {NULL, NULL, NULL}, 0},
         {"albedo 1", "\"albedo\": 0.5", "\"albedo\": 1", {NULL, NULL, NULL}, 0},

@@ -14,6 +14,7 @@
 #include "../photon_points/test_photon_single_scatter.c"
 #include "fixtures.h"
 
+#include "dartspp/plan.h"
 #include "dartspp/sliced_primitives.h"
 
 /* ---- single scattering against the quadrature ---- */
@@ -76,7 +77,8 @@ static void test_balls_unwarped_single_scatter(void **state)
     " \"photon_count\": 200, \"volume_photon_count\": 1e6, \"gather_photon_count\": 256, \"gather_radius\": 0.15,"   \
     " \"volume_gather_radius\": 0.05, \"alpha\": 0.7, \"volume_alpha\": 0.7, " BOX_GATE
 
-static double tiles_z(const char *label, const cell_totals *ref, const cell_totals *m, double bias)
+/* The largest |z| over the tiles (and frames) after the bias budget; *z_total that of the image total. */
+static double tiles_z(const char *label, const cell_totals *ref, const cell_totals *m, double bias, double *z_total)
 {
     double zmax = 0.0, tot_r = 0, tot_m = 0, var_r = 0, var_m = 0;
     int worst = 0;
@@ -94,8 +96,10 @@ static double tiles_z(const char *label, const cell_totals *ref, const cell_tota
     cell_mean_se(m, worst, &mm, &sm);
     print_message("  worst cell %d: %.5g (se %.2g) vs path tracer %.5g (se %.2g), %+.2f %%\n", worst, mm, sm, mr, sr,
                   100.0 * (mm - mr) / mr);
-    print_message("  %-34s total %.5g (se %.2g) vs path tracer %.5g (se %.2g), %+.2f %%; max |z| %.2f over %d cells\n",
-                  label, tot_m, sqrt(var_m), tot_r, sqrt(var_r), 100.0 * (tot_m - tot_r) / tot_r, zmax, NT + m->frames);
+    *z_total = fmax(0.0, fabs(tot_m - tot_r) - bias * tot_r) / sqrt(var_r + var_m);
+    print_message("  %-34s total %.5g (se %.2g) vs path tracer %.5g (se %.2g), %+.2f %% (|z| %.2f after the budget); "
+                  "max |z| %.2f over %d cells\n", label, tot_m, sqrt(var_m), tot_r, sqrt(var_r),
+                  100.0 * (tot_m - tot_r) / tot_r, *z_total, zmax, NT + m->frames);
     return zmax;
 }
 
@@ -117,11 +121,12 @@ static void tiles_check(const char *label, const char *lights, const char *type,
     if (lights) lamp_box_text(text, sizeof text, keys, lights);
     else box_scene_text(text, sizeof text, 16, keys);
     cell_render(text, passes, 29, frames, &m, &t_m);
-    double z = tiles_z(label, &ref, &m, bias);
+    double zt, z = tiles_z(label, &ref, &m, bias, &zt);
     print_message("  seconds: path tracer %.1f, %s %.1f\n", t_ref, type, t_m);
     free(ref.x);
     free(m.x);
     assert_true(z < 4.2); /* Bonferroni over 16 tiles */
+    assert_true(zt < 4.0); /* the total: the sharper test of a small bias spread over the image */
 }
 
 static void test_balls_tiles(void **state)
@@ -160,6 +165,13 @@ static void test_mis_volumes_balls_tiles(void **state)
                 100, 0.0);
 }
 
+/* Where both serve most (paths of at least 4 segments): a weight that does not sum to 1 shows most here. */
+static void test_mis_volumes_balls_high_orders(void **state)
+{
+    (void)state;
+    tiles_check("mis_volumes_balls, orders >= 4", NULL, "mis_volumes_balls", ", \"min_bounces\": 4", 0, 1500, 200, 0.0);
+}
+
 static void test_volumes_balls_tiles(void **state)
 {
     (void)state;
@@ -196,7 +208,7 @@ static void planes_tiles_check(const char *label, const char *type, const char *
              bounces, type);
     box_scene_text(text, sizeof text, 16, keys);
     cell_render(text, passes, 29, 0, &m, &t_m);
-    double z = tiles_z(label, &ref, &m, bias);
+    double zt, z = tiles_z(label, &ref, &m, bias, &zt);
     print_message("  seconds: path tracer %.1f, %s %.1f\n", t_ref, label, t_m);
     free(ref.x);
     free(m.x);
@@ -232,6 +244,97 @@ static void test_planes_1d_tiles(void **state)
 {
     (void)state;
     planes_tiles_check("planes_1d vs path tracer", "planes_1d", ORDERS5, 1500, 60, SLICE_TILE_BIAS);
+}
+
+/* Frames (stress): 2 frames of width 2 from 3.2; τ_k uniform over both, weight 2·2 against the film's 1/2 a
+ * frame and 1/4 for the gate image: the tiles of the union and each frame's total against the path tracer's. */
+static void test_balls_frames(void **state)
+{
+    (void)state;
+    tiles_check("balls, 2 frames vs path tracer", NULL, "balls", "", 2, 1500, 100, 0.0);
+}
+
+/* The other emitters (stress): a ceiling panel (area light, box pulse) and a spot in a clear pocket (Gaussian
+ * pulse), balls at their points through emitter_connect_point; a collimated beam of radius 0.08, a delta at
+ * x1 = the emitter, whose first segments go to the beams fallback (3 % budget there). */
+static void test_balls_other_emitters(void **state)
+{
+    (void)state;
+    tiles_check("balls: panel and spot", FOG_BOX_PANEL_AND_SPOT, "balls", "", 0, 3000, 100, 0.0);
+    tiles_check("balls: collimated beam", FOG_BOX_COLLIMATED, "balls", "", 0, 3000, 100, SLICE_TILE_BIAS);
+    tiles_check("mis_volumes_balls: collimated beam", FOG_BOX_COLLIMATED, "mis_volumes_balls", "", 0, 3000, 100,
+                SLICE_TILE_BIAS);
+}
+
+/* ---- what the sliced types refuse ---- */
+
+static void expect_plan_refusal(const char *integrator_keys, const char *needle)
+{
+    char text[16384], keys[2048];
+    snprintf(keys, sizeof keys, "\"type\": \"progressive_transient_photon_map\", \"volume_gather_radius\": 0.05, %s",
+             integrator_keys);
+    box_scene_text(text, sizeof text, 8, keys);
+    tmp_scene t;
+    tmp_scene_write(&t, text);
+    scene s;
+    load_scene(t.path, NULL, 0, &s);
+    render_plan p;
+    dp_error err;
+    int rc = plan_resolve(&s, &p, &err);
+    if (!rc) plan_free(&p);
+    assert_int_not_equal(rc, 0);
+    print_message("  refused: %s\n", err.msg);
+    assert_non_null(strstr(err.msg, t.path));
+    assert_non_null(strstr(err.msg, needle));
+    scene_free(&s);
+    tmp_scene_remove(&t);
+}
+
+/* Each refusal names the file, the key and the reason; the same scenes with a box gate and the baseline pass
+ * load and plan (the tile tests). */
+static void test_sliced_refusals(void **state)
+{
+    (void)state;
+    expect_plan_refusal("\"volume_photon_type\": \"balls\"", "transient_time_width > 0");
+    expect_plan_refusal("\"volume_photon_type\": \"volumes\", " BOX_GATE ", " DARTS_KEYS_TEXT, "enable_guiding");
+    expect_plan_refusal("\"volume_photon_type\": \"mis_volumes_balls\", \"low_order_scattering\": false, " BOX_GATE,
+                        "low_order_scattering");
+}
+
+/* ---- a delta gate ---- */
+
+/* The single-scattering scene under a delta gate at τ = 3.5 (first box width 1): every order-1 path is served by a
+ * ball at the light with τ_k = 3.5 exactly, so the image is the time density f(3.5) of the image total with no
+ * temporal kernel and no allowance but the Richardson extrapolation's own error: E_δ = lim_{w→0} E_box(w) from
+ * boxes of 0.1 and 0.05 of the quadrature (ss_box_total). */
+static void test_balls_delta_gate_single_scatter(void **state)
+{
+    (void)state;
+    char text[4096];
+    tmp_scene t;
+    ss_scene_text(text, sizeof text, "");
+    tmp_scene_write(&t, text);
+    const char *sets[3] = {"volume_photon_type=balls", "delta_time_gate=true", SLICE_SS_PATHS};
+    scene s;
+    load_scene(t.path, sets, 3, &s);
+    assert_true(s.integrator.window.delta);
+    pass_totals pt;
+    render_totals(&s, 900, 2, SS_ITERS, &pt);
+    print_message("  balls, delta gate at 3.5, 2 seeds × %d iterations:\n", SS_ITERS);
+    for (int ch = 0; ch < 3; ch++) {
+        double mean, se;
+        pass_totals_mean_se(&pt, 0, ch, &mean, &se);
+        double d1 = ss_box_total(&s, 3.5, 0.1, ch), d2 = ss_box_total(&s, 3.5, 0.05, ch);
+        double delta = (4 * d2 - d1) / 3, richardson = fabs(d2 - d1) / 3;
+        print_message("  channel %d: E_delta %.6g (Richardson error %.2g), balls %.6g (se %.2f %%), diff %+.3f %% = "
+                      "%+.2f se\n", ch, delta, richardson, mean, 100 * se / delta, 100 * (mean - delta) / delta,
+                      (mean - delta) / se);
+        assert_true(se > 0 && se < 0.01 * delta);
+        assert_true(fabs(mean - delta) < 4 * se + richardson);
+    }
+    pass_totals_free(&pt);
+    scene_free(&s);
+    tmp_scene_remove(&t);
 }
 
 /* ---- MIS weights ---- */
@@ -307,11 +410,16 @@ int main(void)
         cmocka_unit_test(test_mis_weights_sum_to_one),
         cmocka_unit_test(test_sliced_thread_independent),
         cmocka_unit_test(test_balls_single_scatter),
+        cmocka_unit_test(test_sliced_refusals),
     };
     const struct CMUnitTest stress[] = {
         cmocka_unit_test(test_balls_unwarped_single_scatter),
         cmocka_unit_test(test_balls_tiles),
         cmocka_unit_test(test_balls_tiles_unwarped),
+        cmocka_unit_test(test_balls_delta_gate_single_scatter),
+        cmocka_unit_test(test_balls_frames),
+        cmocka_unit_test(test_balls_other_emitters),
+        cmocka_unit_test(test_mis_volumes_balls_high_orders),
         cmocka_unit_test(test_volumes_tiles),
         cmocka_unit_test(test_volumes_high_orders),
         cmocka_unit_test(test_mis_volumes_balls_tiles),
