@@ -492,6 +492,7 @@ int main(void)
         cmocka_unit_test(test_planes_1d_order2_tiles),
         cmocka_unit_test(test_planes_1d_tiles),
     };
-    if (getenv("DARTSPP_TEST_FILTER")) cmocka_set_test_filter(getenv("DARTSPP_TEST_FILTER"));
+    const char *filter = getenv("DARTSPP_TEST_FILTER");
+    if (filter && filter[0]) cmocka_set_test_filter(filter);
     return RUN_TESTS_AND_STRESS(tests, stress);
 }
