@@ -8,7 +8,9 @@
  *     pocket, orders up to 5 segments): each type, no bias budget for the paths the primitives serve (the
  *     beams fallback's paths carry the beams' 3 % budget where a type leaves any);
  *   - the MIS weights of balls and parallelepipeds sum to 1 on random paths;
- *   - 1 and 2 threads bit-identical.
+ *   - 1 and 2 threads bit-identical;
+ *   - planes and planes_1d (stress): the order-2 layer and the whole image per tile against the path tracer on
+ *     the fog box, the order-2 layer in an infinite fog (planes alone, no budget); their refusals.
  * Broken variants each check was shown failing on: at each test (figures in tests/README.md). */
 #define SINGLE_SCATTER_NO_MAIN 1
 #include "../photon_points/test_photon_single_scatter.c"
