@@ -115,7 +115,7 @@ typedef enum {
     SLICE_BALL,
     SLICE_PARALLELEPIPED,
     SLICE_PARALLELOTOPE,
-    SLICE_PLANE,    /* §4.2: the box gate analytic, no τ_k drawn (tau: the window's end) */
+    SLICE_PLANE,    /* Liu et al. 2022 §4.2: the box gate analytic, no τ_k drawn (tau: the window's end) */
     SLICE_PLANE_1D, /* the 1-D-blurred plane (docs/sliced_primitives.md §7.2) */
     SLICE_KIND_COUNT
 } slice_kind;

@@ -199,7 +199,7 @@ static void eval_parallelotope(slice_ctx *c, const slice_prim *p)
     splat(c, v, 4, p->tau, v3_scale(val, c->len / (rt.jacobian * p->pdf)));
 }
 
-/* ---- photon planes (§4.2) and 1-D-blurred planes (docs/sliced_primitives.md §7) ---- */
+/* ---- photon planes (Liu et al. 2022 §4.2) and 1-D-blurred planes (docs/sliced_primitives.md §7) ---- */
 
 /* The plane at x2 = v: ω2 the photon's own sampled direction, ω1 fresh (density p->pdf); long in t2 and t1 (the
  * chain's transmittance and visibility evaluated), the box gate analytic: the root's path time picks the film's

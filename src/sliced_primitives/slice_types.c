@@ -98,10 +98,11 @@ int sliced_primitives_check(const scene *s, const render_plan *p, dp_error *err)
     if (p->type != INTEGRATOR_PHOTON_POINTS || !volume_type_sliced(p->volume_photon_type)) return 0;
     const scene_key *k = scene_key_find("volume_photon_type");
     const char *name = k ? k->choices[p->volume_photon_type] : "this type";
+    /* a delta gate is refused for planes at load (src/scene/settings.c, delta_gate_refusal) */
     if (slice_type_plane(p->volume_photon_type) && (!p->window.gated || !(p->window.width > 0.0)))
         return dp_fail(err, "%s: integrator.transient_time_width: volume_photon_type %s integrates a box gate "
                        "analytically (Liu et al. 2022 §4.2: the gate is its 4th analytic dimension), so it needs a "
-                       "gate of width > 0; a delta gate or steady state is not supported", s->path, name);
+                       "gate of width > 0; steady state is not supported", s->path, name);
     if (!p->window.gated || !(p->window.width > 0.0))
         return dp_fail(err, "%s: integrator.volume_photon_type: %s slices the path space at a time in a gate: it "
                        "needs transient_time_width > 0 (steady state has no time to slice)", s->path, name);
