@@ -32,7 +32,7 @@ static int pilot_pass(const scene *s, const render_plan *p, photon_set *ps, int 
 void photon_points_memory(const scene *s, const render_plan *p, memory_estimate *m)
 {
     memory_item_add(m, "EDA tables", "integrator.eda_shape", (double)eda_set_bytes(s, &p->darts));
-    double V = p->volume_photon_count, S = p->photon_count, batch_photons = 1.0, batch_beams = 0.0;
+    double V = p->volume_photon_count, S = p->photon_count, batch_photons = 1.0, batch_beams = 0.0, batch_verts = 0.0;
     photon_set pilot;
     int chains, piloted = pilot_pass(s, p, &pilot, &chains);
     /* the budgets cap what the light paths store; surface chains start once the volume budget is full, which
@@ -42,6 +42,7 @@ void photon_points_memory(const scene *s, const render_plan *p, memory_estimate 
         if (!chains) S = dp_fmin(S, (double)pilot.n_surf / pilot.paths * p->photon_count);
         batch_photons = dp_fmax((double)(pilot.n_vol + pilot.n_surf) / pilot.paths * PHOTON_PASS_BATCH, 1.0);
         batch_beams = (double)pilot.n_beams / pilot.paths * PHOTON_PASS_BATCH;
+        batch_verts = (double)pilot.n_verts / pilot.paths * PHOTON_PASS_BATCH; /* sliced types' vertices */
     }
     /* each set's array at its capacity, and its map: volume_map_bytes is about (16 + 56) B a photon plus the
      * nodes (the surface map is the same tree); in double for huge budgets */
@@ -68,6 +69,7 @@ void photon_points_memory(const scene *s, const render_plan *p, memory_estimate 
                               schedule_radius(&p->r_vol, 0), V));
     if (p->include_surfaces || !volume)
         memory_item_add(m, "surface photons and their map", "integrator.photon_count", photon_array_bytes(S) + S * per_mapped);
-    memory_item_add(m, "photon batch buffers", NULL, photon_array_bytes(batch_photons) + photon_beam_array_bytes(batch_beams));
+    memory_item_add(m, "photon batch buffers", NULL, photon_array_bytes(batch_photons) + photon_beam_array_bytes(batch_beams) +
+                    path_vertex_array_bytes(batch_verts));
     if (piloted) photon_set_free(&pilot);
 }
