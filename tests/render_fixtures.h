@@ -116,6 +116,22 @@ void cell_render(const char *text, long passes, uint64_t seed, int frames, cell_
     "      \"rotation\": [0, 0, 90] } },"
 
 
+/* The fog box's other lights (JSON primitives for lamp_box_text): a ceiling panel facing down (box pulse) and a
+ * spot beside the camera in a clear pocket (Gaussian pulse), aimed into the box (the gated camera's flash); a
+ * collimated beam of radius 0.08 across the box, from the left wall's side toward the back right. */
+#define FOG_BOX_PANEL_AND_SPOT                                                                                               \
+    "{ \"type\": \"quad\", \"name\": \"panel\", \"bsdf\": \"white\", \"emission\": [3, 2.5, 2], \"int_medium\": \"fog\","   \
+    "  \"ext_medium\": \"fog\", \"pulse_width\": 0.3,"                                                                 \
+    "  \"transform\": { \"position\": [0.3, 1.96, 0.1], \"scale\": [0.7, 1, 0.7], \"rotation\": [180, 0, 0] } },"     \
+    "{ \"type\": \"cube\", \"bsdf\": { \"type\": \"forward\" }, \"ext_medium\": \"fog\","                              \
+    "  \"transform\": { \"position\": [-0.5, 1.2, -2.2], \"scale\": [0.3, 0.3, 0.3] } },"                              \
+    "{ \"type\": \"spot\", \"name\": \"flash\", \"emission\": [5, 6, 7], \"coneangle\": 30, \"conedeltaangle\": 10,"   \
+    "  \"pulse_start\": 0.1, \"pulse_width\": 0.4, \"pulse_shape\": \"gaussian\","                                      \
+    "  \"transform\": { \"position\": [-0.5, 1.2, -2.2], \"look_at\": [0.2, 0.7, 0.8], \"up\": [0, 1, 0] } }"
+#define FOG_BOX_COLLIMATED                                                                                                   \
+    "{ \"type\": \"collimated\", \"name\": \"laser\", \"radius\": 0.08, \"emission\": [60, 50, 40], \"ext_medium\": \"fog\"," \
+    "  \"transform\": { \"position\": [-0.9, 1.4, -0.8], \"look_at\": [0.9, 0.6, 0.9], \"up\": [0, 1, 0] } }"
+
 /* The fog box (render_fixtures.c tells its design): res × res pixels, the integrator's keys, HG g, the
  * camera in the fog or in vacuum outside an index-matched fog cube. */
 void box_scene_text_cam(char *text, size_t len, int res, const char *integrator, double g, int camera_in_fog);

@@ -11,11 +11,14 @@
 #include "dartspp/photon.h"
 #include "dartspp/photon_beams.h"
 #include "dartspp/plan.h"
+#include "dartspp/sliced_primitives.h"
 
 typedef struct {
     const volume_photon_map *vol;   /* may be NULL */
     const beam_gather *beams;       /* volume_photon_type "beams": the 1-D beam kernel along every medium
                                      * segment instead of volume photons (vol NULL), or NULL */
+    const slice_gather *slices;     /* a sliced volume_photon_type: the primitives along every medium segment (with
+                                     * `beams` for the paths they do not serve), or NULL */
     const surface_photon_map *surf; /* may be NULL */
     const photon *surf_photons;     /* the array the surface map was built over */
     const photon *vol_photons;      /* the array the volume map was built over (the splat reads it) */

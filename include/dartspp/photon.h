@@ -7,7 +7,9 @@
 
 #include "dartspp/core.h"
 #include "dartspp/darts.h"
+#include "dartspp/emitter.h"
 #include "dartspp/plan.h"
+#include "dartspp/scene.h"
 
 typedef struct {
     float pos[3];
@@ -34,8 +36,45 @@ typedef struct {
     int frame;        /* DARTS frame mode: the only frame it may be gathered in; -1: any */
     int long_beam;    /* 1: flux power·T(s) (DARTS pass); 0: power·T(s)/P(s) (short beam) */
     int bounce;       /* path segments from the light to a scattering point on the beam (this segment's index) */
+    unsigned from;    /* PATH_VERTEX_* of the light-path vertex the segment leaves (a null surface is no vertex):
+                       * which sliced primitive serves the paths it would complete (src/sliced_primitives) */
     double time;      /* light-to-start path time */
 } photon_beam;
+
+/* What a light-path vertex is, for the sliced primitives' coverage (docs/sliced_primitives.md §4). */
+#define PATH_VERTEX_MEDIUM 1u      /* a medium scattering vertex */
+#define PATH_VERTEX_DELTA 2u       /* its outgoing direction was drawn from a delta: a specular lobe, a collimated
+                                    * (or per-connection aimed) emitter; a ball cannot evaluate it */
+#define PATH_VERTEX_PREV_MEDIUM 4u /* the vertex before it is a medium vertex */
+#define PATH_VERTEX_PREV2_MEDIUM 8u /* the two vertices before it are medium vertices */
+
+typedef enum { PATH_VERTEX_EMITTER, PATH_VERTEX_SURFACE, PATH_VERTEX_VOLUME } path_vertex_kind;
+
+/* A light-path vertex as the sliced primitives need it (photon_pass_input.vertices; Liu et al. 2022 build their
+ * primitives from these, src/sliced_primitives): every emitter point, surface vertex (not null or forward) and
+ * medium vertex of the paths under the volume budget. Powers divided by the number of light paths. */
+typedef struct {
+    vec3 pos;           /* the vertex (an area light: on its surface, not offset) */
+    vec3 w_in;          /* the propagation direction arriving (0 at an emitter) */
+    vec3 w_out;         /* the sampled outgoing direction (0 when sampling failed: the path ended here) */
+    vec3 beta_in;       /* the throughput arriving: at a medium vertex with σs/σt-like event weight included
+                         * (what a volume photon carries); at a surface, before the BSDF; at an emitter 1/p_select */
+    vec3 beta_out;      /* after the vertex's sampled scattering weight f·|cos|/p (an emitter: its ray's flux) */
+    vec3 prev_pos;      /* the vertex before (MIS of balls against parallelepipeds) */
+    vec3 prev_w_in;     /* the direction arriving at the vertex before */
+    double prev_seg;    /* the length of the segment arriving at the vertex before (0: none) */
+    double time;        /* light-to-vertex path time */
+    hit_record hit;     /* surface vertices: the hit */
+    emitter_point ep;   /* emitter vertices: the point (pdf_a: its area density) */
+    int light;          /* emitter vertices: the light's index */
+    int kind;           /* path_vertex_kind */
+    unsigned flags;     /* PATH_VERTEX_* */
+    int medium_in;      /* the region the path arrived in (a surface: the side it came from) */
+    int medium_out;     /* the region w_out leaves into */
+    int prev_region;    /* the region of the vertex before (its medium when a medium vertex) */
+    int bounce;         /* path segments from the light to the vertex */
+    int medium_events;  /* medium events since the last surface or light, this one included */
+} path_vertex;
 
 /* ---- volume photon map ---- */
 typedef struct volume_photon_map volume_photon_map;
@@ -118,6 +157,9 @@ typedef struct {
     photon_chain_stats chain; /* surface chains (all 0 without them) */
     photon_beam *beams;    /* photon_pass_input.beams: the medium segments, instead of volume photons */
     size_t n_beams;
+    path_vertex *verts;    /* photon_pass_input.vertices: the light paths' vertices (under the volume budget, with
+                            * the beams of the same paths) */
+    size_t n_verts;
     int interrupted;       /* the stop flag ended the pass early: the sets are incomplete */
 } photon_set;
 
@@ -131,6 +173,8 @@ typedef struct {
     int include_surfaces, low_order_scattering;
     int beams;                      /* volume_photon_type "beams": the volume budget holds beams (the medium
                                      * segments; long ones with DARTS), no volume photons */
+    int vertices;                   /* sliced primitives: record every light-path vertex (path_vertex); the volume
+                                     * budget counts vertices, and the same paths' beams are kept with them */
     int surface_chains;             /* DARTS: once the volume budget is full, the surface photons come from
                                      * Markov chains over light paths (surface_chain.c) */
     darts_guide guide;              /* DARTS bins, bounds and switches; guide.active 0: baseline */
@@ -154,6 +198,9 @@ void photon_set_free(photon_set *ps);
 
 /* Bytes a beam array of n beams holds at its capacity (it grows by doubling). */
 double photon_beam_array_bytes(double n);
+
+/* Bytes a vertex array of n vertices holds at its capacity. */
+double path_vertex_array_bytes(double n);
 
 /* Bytes a photon set's array of n photons holds at its capacity (it grows by doubling: less than 2n). */
 double photon_array_bytes(double n);

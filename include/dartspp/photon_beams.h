@@ -55,6 +55,10 @@ typedef struct {
     double r;                 /* kernel half-width of this iteration (the map's r) */
     bounce_limits bounces;    /* which light + camera paths count */
     int camera_unwarp;        /* the camera segment adjacent to the sensor takes no time (docs/time.md §2.2) */
+    /* the sliced primitives' fallback (src/sliced_primitives): only the beams keep(keep_type, b->from) accepts;
+     * NULL: every beam */
+    int (*keep)(int keep_type, unsigned start);
+    int keep_type;
 } beam_gather;
 
 /* The 1-D beam × camera-ray estimate (Jarosz et al. 2011, "beam × beam 1D"; docs/beams.md §1) of

@@ -150,7 +150,21 @@ typedef enum { INTEGRATOR_PATH_TRACER, INTEGRATOR_PHOTON_POINTS, INTEGRATOR_COUN
 /* The other choice keys, in the order of their choices in the key table. */
 typedef enum { LIGHT_SELECTION_POWER, LIGHT_SELECTION_UNIFORM } light_selection_choice;
 typedef enum { TIME_SAMPLING_NONE, TIME_SAMPLING_UNIFORM } time_sampling_choice;
-typedef enum { VOLUME_PHOTON_POINTS, VOLUME_PHOTON_BEAMS } volume_photon_type_choice;
+/* points, beams (src/photon_beams), then Liu et al. 2022's sliced primitives (src/sliced_primitives; the key
+ * table's choices in this order) */
+typedef enum {
+    VOLUME_PHOTON_POINTS,
+    VOLUME_PHOTON_BEAMS,
+    VOLUME_PHOTON_BALLS,
+    VOLUME_PHOTON_VOLUMES,
+    VOLUME_PHOTON_HYPERVOLUMES,
+    VOLUME_PHOTON_VOLUMES_BALLS,
+    VOLUME_PHOTON_MIS_VOLUMES_BALLS,
+    VOLUME_PHOTON_PLANES,
+    VOLUME_PHOTON_PLANES_1D,
+} volume_photon_type_choice;
+/* Whether a volume photon type is one of the sliced primitives (which also keep beams for their fallback). */
+static inline int volume_type_sliced(int t) { return t >= VOLUME_PHOTON_BALLS; }
 typedef enum { CAMERA_LEG_EUCLIDEAN, CAMERA_LEG_PROJECTED } camera_leg_choice;
 typedef enum { VOLUME_GATHER_SPLAT, VOLUME_GATHER_BEAM } volume_gather_choice;
 typedef enum { RADIUS_SCHEDULE_2D, RADIUS_SCHEDULE_3D } radius_schedule_choice;
@@ -334,6 +348,9 @@ vec3 scene_albedo(const scene *s, const bsdf *b, const hit_record *h);
 /* Transmittance and time from p (in medium `med`) to the point q, crossing only null/forward surfaces;
  * returns 0 (and tr = 0) when an opaque surface is in the way. time accumulates eta * length. */
 int scene_transmittance(const scene *s, vec3 p, int med, vec3 q, vec3 *tr, double *time);
+/* scene_transmittance, with *end the region at q (the sliced primitives' displaced vertices: σs and the phase
+ * function there). */
+int scene_transmittance_region(const scene *s, vec3 p, int med, vec3 q, vec3 *tr, double *time, int *end);
 
 /* Whether a region (medium index or MEDIUM_VACUUM) occurs in the scene: the camera's, a light's, or a side
  * of a surface that sets media (a surface that sets none keeps the medium it is crossed from). */

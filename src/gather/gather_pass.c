@@ -188,6 +188,7 @@ static void trace_sensor_path(pixel_ctx *c, vec3 o, vec3 d)
             if (c->g->vol && !(line && record_line_segment(line, med, o, d, len, thr, t_cam)))
                 volume_beam_gather(c->g, c->pix, m, o, d, len, thr, t_cam, b_cam);
             if (c->g->beams) photon_beams_gather(c->g->beams, s, c->pix, med, o, d, len, thr, t_cam, b_cam);
+            if (c->g->slices) sliced_primitives_gather(c->g->slices, s, c->pix, med, o, d, len, thr, t_cam, b_cam, c->rng);
             thr = v3_mul(thr, v3_exp_neg(v3_scale(m->sigma_t, len)));
         }
         if (!hit || v3_is_zero(thr)) return;

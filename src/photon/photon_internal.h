@@ -47,11 +47,30 @@ static inline int beam_buf_push(beam_buf *b, const photon_beam *bm)
     return 0;
 }
 
+typedef struct {
+    path_vertex *p;
+    size_t n, cap;
+} vertex_buf;
+
+static inline int vertex_buf_push(vertex_buf *b, const path_vertex *v)
+{
+    if (b->n == b->cap) {
+        size_t cap = b->cap ? 2 * b->cap : PHOTON_BUF_FIRST;
+        path_vertex *q = realloc(b->p, cap * sizeof(path_vertex));
+        if (!q) return -1;
+        b->p = q;
+        b->cap = cap;
+    }
+    b->p[b->n++] = *v;
+    return 0;
+}
+
 /* Written by one thread per photon stored: on cache lines of its own (core.h, dp_calloc_cache_aligned). */
 typedef struct {
     _Alignas(DP_CACHE_LINE) photon_buf vol;
     photon_buf surf;
     beam_buf beams;
+    vertex_buf verts;
     long nonfinite;
     int oom;
 } thread_bufs;
@@ -60,6 +79,8 @@ typedef struct {
     uint32_t n_vol, n_surf;    /* photons this path stored */
     uint32_t n_beams;          /* beams this path stored (photon_pass_input.beams) */
     size_t off_beams;
+    uint32_t n_verts;          /* vertices this path recorded (photon_pass_input.vertices) */
+    size_t off_verts;
     int early_exit;            /* ended by the DARTS early exit */
     int thread;                /* whose buffers hold them */
     size_t off_vol, off_surf;  /* where they start there */

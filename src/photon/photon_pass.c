@@ -38,6 +38,12 @@ typedef struct {
     vec3 o, d, beta;
     int med, bounce, medium_events;
     double time;
+    /* the last light-path vertex (null surfaces are none): what the next vertex and beam record of it */
+    int vkind;             /* path_vertex_kind, -1 before the first */
+    unsigned vflags;       /* its PATH_VERTEX_* */
+    vec3 vpos, vw_in;
+    double vseg;           /* the length of the segment that arrived at it */
+    int vregion;
 } light_path;
 
 static void store(light_path *lp, photon_buf *b, uint32_t *count, vec3 x, vec3 d, vec3 power, int bounce, double t)
@@ -62,9 +68,47 @@ static int aims_at_volume(const light_path *lp) { return lp->g->active && lp->vo
 typedef struct {
     vec3 o, d, beta;
     double time;
+    unsigned vflags; /* the PATH_VERTEX_* of the vertex it leaves */
     int med, bounce, medium_events, on;
     int long_beam; /* DARTS: to the next surface, whatever distance DA sampling drew */
 } beam_start;
+
+/* ---- the light-path vertices of the sliced primitives (photon_pass_input.vertices) ---- */
+
+/* A vertex as the path reaches it: where, what arrives, and what it knows of the vertex before. */
+static path_vertex vertex_begin(const light_path *lp, int kind, vec3 pos, vec3 beta_in, int medium_in)
+{
+    path_vertex v = {.pos = pos, .w_in = kind == PATH_VERTEX_EMITTER ? v3s(0.0) : lp->d,
+                     .beta_in = v3_scale(beta_in, 1.0 / lp->bin.pdf), .prev_pos = lp->vpos, .prev_w_in = lp->vw_in,
+                     .prev_seg = lp->vseg, .time = lp->time, .light = -1, .kind = kind,
+                     .flags = (kind == PATH_VERTEX_VOLUME ? PATH_VERTEX_MEDIUM : 0u) |
+                              (lp->vkind == PATH_VERTEX_VOLUME ? PATH_VERTEX_PREV_MEDIUM : 0u) |
+                              (lp->vkind == PATH_VERTEX_VOLUME && (lp->vflags & PATH_VERTEX_PREV_MEDIUM)
+                                   ? PATH_VERTEX_PREV2_MEDIUM : 0u),
+                     .medium_in = medium_in, .medium_out = medium_in, .prev_region = lp->vregion,
+                     .bounce = lp->bounce, .medium_events = lp->medium_events};
+    return v;
+}
+
+/* The vertex once its outgoing direction is drawn (lp->d and lp->beta after the sample; sampled 0: none, the
+ * path ends here): recorded while the volume budget has room, and remembered as the path's last vertex. */
+static void vertex_end(light_path *lp, path_vertex *v, int sampled, int delta)
+{
+    v->w_out = sampled ? lp->d : v3s(0.0);
+    v->beta_out = sampled ? v3_scale(lp->beta, 1.0 / lp->bin.pdf) : v3s(0.0);
+    v->medium_out = sampled ? lp->med : v->medium_in;
+    v->flags |= delta ? PATH_VERTEX_DELTA : 0u;
+    if (lp->in->vertices && lp->volume_open && v3_is_finite(v->beta_in) && v3_is_finite(v->beta_out)) {
+        if (vertex_buf_push(&lp->tb->verts, v)) lp->tb->oom = 1;
+        else lp->pc->n_verts++;
+    }
+    lp->vkind = v->kind;
+    lp->vflags = v->flags;
+    lp->vseg = v->kind == PATH_VERTEX_EMITTER ? 0.0 : v3_len(v3_sub(v->pos, lp->vpos));
+    lp->vpos = v->pos;
+    lp->vw_in = v->w_in;
+    lp->vregion = v->kind == PATH_VERTEX_VOLUME ? v->medium_in : v->medium_out;
+}
 
 static beam_start beam_begin(const light_path *lp)
 {
@@ -78,7 +122,8 @@ static beam_start beam_begin(const light_path *lp)
         return b;
     /* the bin's probability divides the power as it divides photons' (store) */
     return (beam_start){.o = lp->o, .d = lp->d, .beta = v3_scale(lp->beta, 1.0 / lp->bin.pdf), .time = lp->time,
-                        .med = lp->med, .bounce = lp->bounce + 1, .medium_events = lp->medium_events, .on = 1,
+                        .vflags = lp->vflags, .med = lp->med, .bounce = lp->bounce + 1,
+                        .medium_events = lp->medium_events, .on = 1,
                         .long_beam = aims_at_volume(lp)};
 }
 
@@ -95,7 +140,7 @@ static void beam_end(light_path *lp, const beam_start *b, double length)
                       .dir = {(float)b->d.x, (float)b->d.y, (float)b->d.z},
                       .power = {(float)b->beta.x, (float)b->beta.y, (float)b->beta.z},
                       .length = (float)length, .eta = (float)eta, .medium = b->med, .frame = lp->bin.frame,
-                      .long_beam = b->long_beam, .bounce = b->bounce, .time = b->time};
+                      .long_beam = b->long_beam, .bounce = b->bounce, .from = b->vflags, .time = b->time};
     if (!isfinite(bm.power[0]) || !isfinite(bm.power[1]) || !isfinite(bm.power[2]) || !isfinite(bm.length)) {
         lp->tb->nonfinite++;
         return;
@@ -242,6 +287,7 @@ static int medium_event(light_path *lp, const medium *m, double t, int darts)
     if (lp->volume_open && !in->beams && !(darts && g->enable_elliptical) && (in->low_order_scattering || lp->medium_events > 1))
         store(lp, &lp->tb->vol, &lp->pc->n_vol, lp->o, lp->d, lp->beta, lp->bounce, lp->time);
     new_vertex(lp);
+    path_vertex v = vertex_begin(lp, PATH_VERTEX_VOLUME, lp->o, lp->beta, lp->med);
     const eda_table *et = darts && in->eda ? in->eda->table[lp->med] : NULL;
     if (et) { /* EDA with MIS against the phase function (docs/darts.md §8.2) */
         double u[4], w;
@@ -252,6 +298,7 @@ static int medium_event(light_path *lp, const medium *m, double t, int darts)
         double u1 = rng_uniform(lp->rng), u2 = rng_uniform(lp->rng);
         lp->d = phase_sample(&m->phase, lp->d, u1, u2);
     }
+    vertex_end(lp, &v, 1, 0);
     return 1;
 }
 
@@ -276,13 +323,19 @@ static int surface_event(light_path *lp, const hit_record *h)
     if (surface_photon_split(b, &lp->in->shading).gather && lp->in->include_surfaces && surface_time_ok(lp, h->p))
         store(lp, &lp->tb->surf, &lp->pc->n_surf, h->p, lp->d, surface_photon_power(&ss, lp->beta), lp->bounce,
               lp->time);
+    path_vertex v = vertex_begin(lp, PATH_VERTEX_SURFACE, h->p, lp->beta, lp->med);
+    v.hit = *h;
     double u[3] = {rng_uniform(lp->rng), rng_uniform(lp->rng), rng_uniform(lp->rng)};
     surface_sample smp;
-    if (!surface_sample_bsdf(&ss, u, BSDF_LOBES_ALL, 1, &smp)) return 0;
+    if (!surface_sample_bsdf(&ss, u, BSDF_LOBES_ALL, 1, &smp)) {
+        vertex_end(lp, &v, 0, 0); /* a ball here still evaluates the BSDF */
+        return 0;
+    }
     lp->beta = v3_mul(lp->beta, smp.weight);
     lp->d = smp.w;
     lp->med = surface_next_medium(sf, lp->med, lp->d, h->ng);
     lp->o = surface_spawn(s, &ss, lp->d);
+    vertex_end(lp, &v, 1, smp.lobe == BSDF_LOBE_SPECULAR);
     new_vertex(lp);
     return 1;
 }
@@ -311,7 +364,7 @@ void trace_light_path(const scene *s, const photon_pass_input *in, int volume_op
     }
     vec3 start = fixed ? L->pos : er.p;
     light_path lp = {.s = s, .in = in, .g = g, .tb = tb, .pc = pc, .rng = rng, .o = start, .med = L->medium,
-                     .volume_open = volume_open, .time = tau0,
+                     .volume_open = volume_open, .time = tau0, .vkind = -1, .vregion = MEDIUM_VACUUM,
                      .bin = {.start = -INFINITY, .end = INFINITY, .pdf = 1.0, .frame = -1}};
     if (g->active && !darts_sample_bin(g, start, tau0, rng_uniform(rng), &lp.bin)) return;
     lp.reach = lp.bin; /* the early exit keeps every path whose surface photons could still count */
@@ -323,6 +376,13 @@ void trace_light_path(const scene *s, const photon_pass_input *in, int volume_op
     lp.d = er.d;
     if (!v3_is_zero(er.n)) lp.o = scene_offset_ray_origin(s, er.p, er.n); /* off an area light's surface */
     lp.beta = v3_scale(er.flux, 1.0 / sel_pdf);
+    if (in->vertices) { /* the emitter's point: a ball there evaluates its emission (emitter_connect_point) */
+        path_vertex v = vertex_begin(&lp, PATH_VERTEX_EMITTER, er.p, v3s(1.0 / sel_pdf), L->medium);
+        v.light = li;
+        v.ep = (emitter_point){.y = er.p, .n = er.n, .pdf_a = L->area > 0.0 ? 1.0 / L->area : 1.0};
+        int ball = emitter_connectable(L) && !emitter_is_parallel_beam(L) && !(L->flags & EMITTER_AIM_PER_CONNECTION);
+        vertex_end(&lp, &v, 1, !ball);
+    }
     new_vertex(&lp);
     while (lp.bounce + 1 < in->max_bounces && lp.time < in->t_end && !v3_is_zero(lp.beta)) {
         if (g->active && g->early_exit && !darts_can_reach(g, &lp.reach, lp.o, lp.time)) {
@@ -362,6 +422,7 @@ typedef struct {
     budget_state bv, bsf;
     photon_buf vol, surf;
     beam_buf beams;    /* photon_pass_input.beams: under the volume budget (bv) */
+    vertex_buf verts;  /* photon_pass_input.vertices: under the volume budget, with the same paths' beams */
     long next;         /* independent light paths traced */
     long early, aimed;
     int interrupted;
@@ -396,6 +457,23 @@ static int merge_beams(beam_buf *dst, budget_state *bs, const beam_buf *src, siz
     return 0;
 }
 
+/* merge_path for vertices: the path's vertices under the volume budget, and its beams with them */
+static int merge_vertices(pass_totals *pt, const thread_bufs *src, const path_count *c)
+{
+    budget_state *bs = &pt->bv;
+    if (bs->full) return 0;
+    if (pt->verts.n + c->n_verts > bs->budget) {
+        bs->full = 1;
+        return 0;
+    }
+    for (uint32_t i = 0; i < c->n_verts; i++)
+        if (vertex_buf_push(&pt->verts, &src->verts.p[c->off_verts + i])) return -1;
+    for (uint32_t i = 0; i < c->n_beams; i++)
+        if (beam_buf_push(&pt->beams, &src->beams.p[c->off_beams + i])) return -1;
+    bs->paths++;
+    return 0;
+}
+
 static void scale_powers(photon *p, size_t n, long paths)
 {
     float inv = paths > 0 ? (float)(1.0 / paths) : 0.0f;
@@ -411,7 +489,8 @@ void photon_pass_input_init(photon_pass_input *in, const scene *s, const render_
                               .max_bounces = p->bounces.max,
                               .t_end = plan_window_end(p, iteration),
                               .include_surfaces = p->include_surfaces, .low_order_scattering = p->low_order_scattering,
-                              .beams = p->volume_photon_type == VOLUME_PHOTON_BEAMS,
+                              .beams = p->volume_photon_type != VOLUME_PHOTON_POINTS,
+                              .vertices = volume_type_sliced(p->volume_photon_type),
                               .surface_chains = p->surface_chains,
                               .surface_slack = plan_surface_slack(p, iteration), .shading = p->shading,
                               .eda = eda, .seed = seed,
@@ -435,13 +514,13 @@ static int independent_paths(const scene *s, const photon_pass_input *in, int nt
 #pragma omp parallel num_threads(nt)
         {
             thread_bufs *mine = &tb[omp_get_thread_num()];
-            mine->vol.n = mine->surf.n = mine->beams.n = 0;
+            mine->vol.n = mine->surf.n = mine->beams.n = mine->verts.n = 0;
 #pragma omp for schedule(dynamic, 64) /* paths differ in length; any thread may trace any path */
             for (long i = 0; i < nb; i++) {
                 dp_rng rng = rng_stream(in->seed ^ 0x70686f746f6eULL, (uint64_t)in->iteration, (uint64_t)(next + i));
                 /* counted in a local and stored once: neighbouring entries belong to other threads */
                 path_count c = {.thread = omp_get_thread_num(), .off_vol = mine->vol.n, .off_surf = mine->surf.n,
-                                .off_beams = mine->beams.n};
+                                .off_beams = mine->beams.n, .off_verts = mine->verts.n};
                 trace_light_path(s, in, open, &rng, mine, &c);
                 pc[i] = c;
             }
@@ -449,7 +528,8 @@ static int independent_paths(const scene *s, const photon_pass_input *in, int nt
         for (long i = 0; i < nb && !rc; i++) { /* merge in path order */
             const thread_bufs *src = &tb[pc[i].thread];
             pt->early += pc[i].early_exit;
-            if (in->beams) rc |= merge_beams(&pt->beams, &pt->bv, &src->beams, pc[i].off_beams, pc[i].n_beams);
+            if (in->vertices) rc |= merge_vertices(pt, src, &pc[i]);
+            else if (in->beams) rc |= merge_beams(&pt->beams, &pt->bv, &src->beams, pc[i].off_beams, pc[i].n_beams);
             else rc |= merge_path(&pt->vol, &pt->bv, &src->vol, pc[i].off_vol, pc[i].n_vol);
             rc |= merge_path(&pt->surf, &pt->bsf, &src->surf, pc[i].off_surf, pc[i].n_surf);
         }
@@ -531,6 +611,7 @@ int photon_pass(const scene *s, const photon_pass_input *in, photon_set *out, dp
         free(tb[t].vol.p);
         free(tb[t].surf.p);
         free(tb[t].beams.p);
+        free(tb[t].verts.p);
     }
     free(tb);
     free(pc);
@@ -538,6 +619,7 @@ int photon_pass(const scene *s, const photon_pass_input *in, photon_set *out, dp
         free(pt.vol.p);
         free(pt.surf.p);
         free(pt.beams.p);
+        free(pt.verts.p);
         return dp_fail_kind(err, DP_ERROR_MEMORY, "%s: out of memory in the photon pass", s->path);
     }
     out->paths = pt.next + pt.chains.traced;
@@ -551,6 +633,11 @@ int photon_pass(const scene *s, const photon_pass_input *in, photon_set *out, dp
     float inv_paths = out->vol_paths > 0 ? (float)(1.0 / out->vol_paths) : 0.0f;
     for (size_t i = 0; i < pt.beams.n; i++)
         for (int c = 0; c < 3; c++) pt.beams.p[i].power[c] *= inv_paths;
+    double inv_vpaths = out->vol_paths > 0 ? 1.0 / (double)out->vol_paths : 0.0;
+    for (size_t i = 0; i < pt.verts.n; i++) {
+        pt.verts.p[i].beta_in = v3_scale(pt.verts.p[i].beta_in, inv_vpaths);
+        pt.verts.p[i].beta_out = v3_scale(pt.verts.p[i].beta_out, inv_vpaths);
+    }
     scale_powers(pt.surf.p, n_independent, out->surf_paths);
     if (pt.chains.states > 0) { /* P̂(V)·traced/states: the chain states stand for the paths they replace */
         double p_visible = (double)pt.chains.visible / (double)pt.chains.large;
@@ -564,6 +651,8 @@ int photon_pass(const scene *s, const photon_pass_input *in, photon_set *out, dp
     out->n_surf = pt.surf.n;
     out->beams = pt.beams.p;
     out->n_beams = pt.beams.n;
+    out->verts = pt.verts.p;
+    out->n_verts = pt.verts.n;
     return 0;
 }
 
@@ -585,8 +674,18 @@ double photon_beam_array_bytes(double n)
     return cap * sizeof(photon_beam);
 }
 
+double path_vertex_array_bytes(double n)
+{
+    if (!(n > 0)) return 0;
+    if (!isfinite(n)) return HUGE_VAL;
+    double cap = PHOTON_BUF_FIRST;
+    while (cap < n) cap *= 2;
+    return cap * sizeof(path_vertex);
+}
+
 void photon_set_free(photon_set *ps)
 {
+    free(ps->verts);
     free(ps->beams);
     free(ps->vol);
     free(ps->surf);

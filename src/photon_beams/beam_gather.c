@@ -15,6 +15,7 @@ static void beam_hit(void *ctx, const photon_beam *b, double t, double s, double
 {
     const beam_ctx *c = ctx;
     if (b->medium != c->med || !bounces_count(&c->g->bounces, b->bounce + c->b_cam)) return;
+    if (c->g->keep && !c->g->keep(c->g->keep_type, b->from)) return; /* a sliced primitive serves its paths */
     const medium *m = c->m;
     double leg = c->g->camera_unwarp && c->b_cam == 1 ? 0.0 : m->eta * t; /* the sensor's own segment: none */
     film_slot slot = film_time_slot(c->pix->f, c->t_cam + b->time + m->eta * s + leg, b->frame, b->bounce + c->b_cam - 1);

@@ -3,6 +3,7 @@
 #include "dartspp/gather.h"
 #include "dartspp/photon_beams.h"
 #include "dartspp/photon_points.h"
+#include "dartspp/sliced_primitives.h"
 
 void photon_points_last_radii(const render_plan *p, long passes, render_stats *st)
 {
@@ -44,10 +45,18 @@ int photon_points_pass(const scene *s, const render_plan *p, const eda_set *eda,
     surface_photon_map *sm = NULL;
     beam_map *bm = NULL; /* volume_photon_type "beams": the pass kept beams instead of volume photons */
     beam_gather bg = {.r = g.r_vol, .bounces = p->bounces, .camera_unwarp = p->window.camera_unwarp};
+    int sliced = volume_type_sliced(p->volume_photon_type);
+    if (sliced) bg.keep = slice_type_gathers_beam, bg.keep_type = p->volume_photon_type; /* beams where no primitive serves */
+    slice_map *slm = NULL; /* a sliced volume_photon_type: the primitives built from the pass's vertices */
+    slice_gather sg = {.type = p->volume_photon_type, .bounces = p->bounces, .shading = p->shading,
+                       .camera_unwarp = p->window.camera_unwarp, .r = g.r_vol};
+    slice_build_input sbi = {.type = p->volume_photon_type, .window = p->window, .seed = seed, .iteration = iteration,
+                             .r = g.r_vol};
     int rc = 0;
     if (ps.n_vol > 0 && !(vm = volume_map_build(ps.vol, ps.n_vol, g.r_vol, err))) rc = -1;
     beam_time_cut cut = photon_points_beam_cut(p, iteration);
     if (!rc && ps.n_beams > 0 && !(bm = beam_map_build(ps.beams, ps.n_beams, g.r_vol, &cut, err))) rc = -1;
+    if (!rc && sliced && !(slm = slice_map_build(s, &sbi, ps.verts, ps.n_verts, err))) rc = -1;
     if (!rc && ps.n_surf > 0 && !(sm = surface_map_build(ps.surf, ps.n_surf, err))) rc = -1;
     double t2 = dp_seconds();
     if (!rc) {
@@ -58,6 +67,8 @@ int photon_points_pass(const scene *s, const render_plan *p, const eda_set *eda,
         g.n_vol = ps.n_vol;
         bg.map = bm;
         g.beams = bm ? &bg : NULL;
+        sg.map = slm;
+        g.slices = slm ? &sg : NULL;
         render_stats pass = {.rays = gather_pass(s, &g, f, seed, iteration),
                              .photon_paths = (double)ps.paths,
                              .early_exits = (double)ps.early_exits,
@@ -67,7 +78,7 @@ int photon_points_pass(const scene *s, const render_plan *p, const eda_set *eda,
                              .chain_visible = (double)ps.chain.visible,
                              .chain_small = (double)ps.chain.small,
                              .chain_accepted = (double)ps.chain.accepted,
-                             .stored_photons = (double)(ps.n_vol + ps.n_surf + ps.n_beams),
+                             .stored_photons = (double)(ps.n_vol + ps.n_surf + ps.n_beams + slice_map_size(slm)),
                              .r_vol = g.r_vol,
                              .r_surf = g.r_surf,
                              .w_gate = p->window.delta ? f->window.width : 0.0,
@@ -79,6 +90,7 @@ int photon_points_pass(const scene *s, const render_plan *p, const eda_set *eda,
     }
     volume_map_free(vm);
     beam_map_free(bm);
+    slice_map_free(slm);
     surface_map_free(sm);
     photon_set_free(&ps);
     return rc;

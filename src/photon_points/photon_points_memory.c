@@ -7,6 +7,7 @@
 #include "dartspp/photon.h"
 #include "dartspp/photon_beams.h"
 #include "dartspp/photon_points.h"
+#include "dartspp/sliced_primitives.h"
 
 /* One photon pass of a single batch of light paths (a few milliseconds), without EDA tables and without
  * budget cuts: how many volume and surface photons a light path stores, and a sample of the volume photons
@@ -31,7 +32,7 @@ static int pilot_pass(const scene *s, const render_plan *p, photon_set *ps, int 
 void photon_points_memory(const scene *s, const render_plan *p, memory_estimate *m)
 {
     memory_item_add(m, "EDA tables", "integrator.eda_shape", (double)eda_set_bytes(s, &p->darts));
-    double V = p->volume_photon_count, S = p->photon_count, batch_photons = 1.0, batch_beams = 0.0;
+    double V = p->volume_photon_count, S = p->photon_count, batch_photons = 1.0, batch_beams = 0.0, batch_verts = 0.0;
     photon_set pilot;
     int chains, piloted = pilot_pass(s, p, &pilot, &chains);
     /* the budgets cap what the light paths store; surface chains start once the volume budget is full, which
@@ -41,16 +42,24 @@ void photon_points_memory(const scene *s, const render_plan *p, memory_estimate 
         if (!chains) S = dp_fmin(S, (double)pilot.n_surf / pilot.paths * p->photon_count);
         batch_photons = dp_fmax((double)(pilot.n_vol + pilot.n_surf) / pilot.paths * PHOTON_PASS_BATCH, 1.0);
         batch_beams = (double)pilot.n_beams / pilot.paths * PHOTON_PASS_BATCH;
+        batch_verts = (double)pilot.n_verts / pilot.paths * PHOTON_PASS_BATCH; /* sliced types' vertices */
     }
     /* each set's array at its capacity, and its map: volume_map_bytes is about (16 + 56) B a photon plus the
      * nodes (the surface map is the same tree); in double for huge budgets */
     double per_mapped = (double)volume_map_bytes(1 << 20) / (1 << 20);
-    int volume = s->medium_count > 0, beams = p->volume_photon_type == VOLUME_PHOTON_BEAMS;
+    int volume = s->medium_count > 0, beams = p->volume_photon_type != VOLUME_PHOTON_POINTS;
+    int sliced = volume_type_sliced(p->volume_photon_type);
+    double V_beams = V; /* sliced types: V counts vertices, and their paths' beams come with them */
+    if (sliced && piloted) {
+        V = dp_fmin(p->volume_photon_count, (double)pilot.n_verts / pilot.paths * p->photon_count);
+        V_beams = pilot.n_verts ? V * (double)pilot.n_beams / (double)pilot.n_verts : 0.0;
+    }
+    if (volume && sliced) sliced_primitives_memory(p->volume_photon_type, V, m);
     if (volume && beams) /* beams: no volume photons, and the sensor pass queries the beam map per segment */
     {
         beam_time_cut cut = photon_points_beam_cut(p, 0); /* the widest: later ends are earlier */
         photon_beams_memory(piloted ? pilot.beams : NULL, piloted ? pilot.n_beams : 0, schedule_radius(&p->r_vol, 0),
-                            &cut, V, m);
+                            &cut, V_beams, m);
     }
     if (volume && !beams)
         memory_item_add(m, "volume photons and their map", "integrator.volume_photon_count", photon_array_bytes(V) + V * per_mapped);
@@ -60,6 +69,7 @@ void photon_points_memory(const scene *s, const render_plan *p, memory_estimate 
                               schedule_radius(&p->r_vol, 0), V));
     if (p->include_surfaces || !volume)
         memory_item_add(m, "surface photons and their map", "integrator.photon_count", photon_array_bytes(S) + S * per_mapped);
-    memory_item_add(m, "photon batch buffers", NULL, photon_array_bytes(batch_photons) + photon_beam_array_bytes(batch_beams));
+    memory_item_add(m, "photon batch buffers", NULL, photon_array_bytes(batch_photons) + photon_beam_array_bytes(batch_beams) +
+                    path_vertex_array_bytes(batch_verts));
     if (piloted) photon_set_free(&pilot);
 }

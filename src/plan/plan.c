@@ -1,4 +1,5 @@
 /* The render plan: every decision derived from the integrator and renderer keys, taken once. */
+#include "dartspp/sliced_primitives.h"
 #include "dartspp/plan.h"
 
 #include <cjson/cJSON.h>
@@ -31,11 +32,11 @@ static void resolve_photon_points(const integrator_settings *in, render_plan *p)
     p->volume_photon_type = in->volume_photon_type;
     /* the kernel's dimension: 2 for points, 1 for beams (the 1-D kernel of src/photon_beams); "3d" is the
      * authors' cube root for either */
-    int dims = in->radius_schedule == RADIUS_SCHEDULE_3D ? 3 : in->volume_photon_type == VOLUME_PHOTON_BEAMS ? 1 : 2;
+    int dims = in->radius_schedule == RADIUS_SCHEDULE_3D ? 3 : in->volume_photon_type != VOLUME_PHOTON_POINTS ? 1 : 2; /* sliced types: their beams */
     /* a delta gate adds the temporal kernel's dimension: radius and width both by γ_i^{1/d}, d = 2 for beams
      * (Liu's ProgressivePhotonMapIntegrator, the "spatio-temporal variant" of Marco et al. 2019 with β = 1/2),
      * d = 3 for points (the same rule: the kernel's volume r²·w shrinks by γ_i, Knaus and Zwicker 2011) */
-    if (in->window.delta) dims = in->volume_photon_type == VOLUME_PHOTON_BEAMS ? 2 : 3;
+    if (in->window.delta) dims = in->volume_photon_type != VOLUME_PHOTON_POINTS ? 2 : 3;
     p->r_vol = (radius_schedule){in->volume_gather_radius, in->volume_alpha, dims};
     if (in->window.delta) p->w_gate = (radius_schedule){in->window.width, in->volume_alpha, dims};
     p->r_surf = (radius_schedule){in->gather_radius, in->alpha, 2};
@@ -65,6 +66,10 @@ int plan_resolve(const scene *s, render_plan *p, dp_error *err)
     p->time_angular_share = in->time_angular_share;
     p->uniform_time = resolve_uniform_time(s, p);
     if (darts_plan_resolve(s, p->type, &p->shading, &p->darts, err)) return -1;
+    if (sliced_primitives_check(s, p, err)) { /* what the sliced primitives do not support */
+        plan_free(p);
+        return -1;
+    }
     p->spp = s->renderer.spp;
     p->timeout = s->renderer.timeout;
     p->checkpoint_interval = s->renderer.checkpoint_interval;
@@ -98,7 +103,7 @@ double plan_pass_weight(const render_plan *p, long iteration)
     double q = schedule_radius(r, iteration) / r->r0;
     /* beams' 1-D kernel: variance about ∝ 1/r, so the weight is the kernel's width */
     double w = p->window.delta ? plan_gate_width(p, iteration) / p->w_gate.r0 : 1.0; /* the temporal kernel's share */
-    if (!p->include_surfaces && p->volume_photon_type == VOLUME_PHOTON_BEAMS) return q * w;
+    if (!p->include_surfaces && p->volume_photon_type != VOLUME_PHOTON_POINTS) return q * w;
     return q * q * w;
 }
 

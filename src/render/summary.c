@@ -3,6 +3,7 @@
 #include <stdio.h>
 #include <sys/resource.h>
 
+#include "dartspp/sliced_primitives.h"
 #include "dartspp/darts.h"
 #include "integrators.h"
 #include "run_internal.h"
@@ -53,6 +54,10 @@ static void print_media(const scene *s, const render_plan *p)
 void summary_print_photon_pass(const scene *s, const render_plan *p)
 {
     const darts_plan *d = &p->darts;
+    if (volume_type_sliced(p->volume_photon_type)) /* docs/sliced_primitives.md */
+        printf("volume: %s (delta-sliced %s; long primitives: unbiased); beams' radius r0*gamma_i\n",
+               slice_type_summary(p->volume_photon_type),
+               p->window.delta ? "at the gate's instant" : "at a time drawn per primitive in the gate");
     if (p->volume_photon_type == VOLUME_PHOTON_BEAMS) /* docs/beams.md */
         printf("volume: photon beams, 1-D kernel, %s; radius r0*gamma_i\n",
                d->active ? "long beams (to the next surface: DA distances)" : "short beams (to the next vertex)");

@@ -180,6 +180,13 @@ vec3 scene_offset_ray_origin(const scene *s, vec3 p, vec3 n)
 
 int scene_transmittance(const scene *s, vec3 p, int med, vec3 q, vec3 *tr, double *time)
 {
+    int end;
+    return scene_transmittance_region(s, p, med, q, tr, time, &end);
+}
+
+int scene_transmittance_region(const scene *s, vec3 p, int med, vec3 q, vec3 *tr, double *time, int *end)
+{
+    *end = med;
     *tr = v3s(1.0);
     for (int crossing = 0; crossing < 256; crossing++) {
         vec3 dq = v3_sub(q, p);
@@ -195,6 +202,7 @@ int scene_transmittance(const scene *s, vec3 p, int med, vec3 q, vec3 *tr, doubl
         const surface *sf = &s->surfaces[h.surface];
         if (!bsdf_is_passthrough(&s->bsdfs[sf->bsdf])) break;
         med = surface_next_medium(sf, med, d, h.ng);
+        *end = med;
         p = scene_offset_ray_origin(s, h.p, v3_dot(d, h.ng) > 0 ? h.ng : v3_neg(h.ng));
     }
     *tr = v3s(0.0);

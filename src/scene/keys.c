@@ -45,7 +45,7 @@ static const scene_key table[] = {
     {.name = "bounce_orders", IN(bounce_orders), .type = KEY_INT, .read_by = ALL, .changes_image = 1, .def = 0,
      IN_RANGE(0, 32), .meaning = "K > 0: also the gate image or frames split by scattering events: 0, 1, ..., K − 1 and K or more (<stem>_orders.npy)"},
     {.name = "delta_time_gate", IN(delta_time_gate), .type = KEY_BOOL, .read_by = ALL, .changes_image = 1, .def = 0,
-     .meaning = "The gate is a delta at transient_time_center: the time density there, by a temporal kernel of first width transient_time_width that shrinks (photon points and beams; docs/time.md §3.1)"},
+     .meaning = "The gate is a delta at transient_time_center: the time density there, by a temporal kernel of first width transient_time_width that shrinks (photon points, beams and the sliced primitives but planes; docs/time.md §3.1)"},
     {.name = "camera_unwarp", IN(camera_unwarp), .type = KEY_BOOL, .read_by = ALL, .changes_image = 1, .def = 0,
      .meaning = "Time leaves out the camera segment next to the sensor (camera-unwarped, docs/time.md)"},
     {.name = "sensor_jitter_fwhm", IN(sensor_jitter_fwhm), .type = KEY_NUMBER, .read_by = ALL, .changes_image = 1,
@@ -95,8 +95,12 @@ static const scene_key table[] = {
      .def = 1, .meaning = "Store and gather surface photons"},
     {.name = "low_order_scattering", IN(low_order_scattering), .type = KEY_BOOL, .read_by = PP,
      .changes_image = 1, .def = 1, .meaning = "Volume photons at the first medium vertex of a light path"},
-    {.name = "volume_photon_type", IN(volume_photon_type), CHOICES("points", "beams"), .read_by = PP, .changes_image = 1,
-     .def = 0, .meaning = "Volume photon kind: points (2-D kernel) or photon beams (1-D kernel; docs/beams.md)"},
+    {.name = "volume_photon_type", IN(volume_photon_type), CHOICES("points", "beams", "balls", "volumes", "hypervolumes", "volumes_balls", "mis_volumes_balls",
+                                                         "planes", "planes_1d"),
+     .read_by = PP, .changes_image = 1, .def = 0,
+     .meaning = "Volume photon kind: points (2-D kernel), photon beams (1-D kernel; docs/beams.md), or Liu et al. "
+                "2022's temporally sliced primitives with photon beams where they do not serve a path "
+                "(docs/sliced_primitives.md)"},
     {.name = "camera_leg", IN(camera_leg), CHOICES("euclidean", "projected"), .read_by = PP,
      .changes_image = 1, .def = 0, .meaning = "Camera leg length of a volume photon's time: along the ray or projected"},
     {.name = "volume_gather", IN(volume_gather), CHOICES("splat", "beam"), .read_by = PP, .changes_image = 1,

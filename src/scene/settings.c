@@ -316,6 +316,9 @@ static int resolve_window(json_ctx *c, const cJSON *v, integrator_settings *in)
 static const int delta_gate_estimated[] = {
     [VOLUME_PHOTON_POINTS] = 1,
     [VOLUME_PHOTON_BEAMS] = 1,
+    /* the sliced primitives: τ_k at the instant itself (no temporal kernel); their beams fallback as beams */
+    [VOLUME_PHOTON_BALLS] = 1, [VOLUME_PHOTON_VOLUMES] = 1, [VOLUME_PHOTON_HYPERVOLUMES] = 1,
+    [VOLUME_PHOTON_VOLUMES_BALLS] = 1, [VOLUME_PHOTON_MIS_VOLUMES_BALLS] = 1,
 };
 
 /* delta_time_gate: refused where no estimator of the time density at the gate's instant runs, or where the
@@ -329,9 +332,15 @@ static int delta_gate_refusal(json_ctx *c, const cJSON *v, const integrator_sett
                      "never samples a path of exactly the gate's time (it has probability 0); use a narrow box gate "
                      "(transient_time_width) or progressive_transient_photon_map, whose temporal kernel shrinks");
     int t = in->volume_photon_type, n = (int)(sizeof delta_gate_estimated / sizeof delta_gate_estimated[0]);
+    if (t == VOLUME_PHOTON_PLANES || t == VOLUME_PHOTON_PLANES_1D)
+        return jfail(c, "integrator", key, "volume_photon_type \"%s\" integrates a box gate analytically "
+                     "(Liu et al. 2022 §4.2: the gate is the plane's 4th analytic dimension), and a delta gate "
+                     "leaves it nothing to integrate; use a box gate (transient_time_width), or balls, volumes or "
+                     "hypervolumes",
+                     scene_key_find("volume_photon_type")->choices[t]);
     if (t < 0 || t >= n || !delta_gate_estimated[t])
-        return jfail(c, "integrator", key, "volume_photon_type \"%s\" has no delta-gate estimator yet (points and "
-                     "beams do)", scene_key_find("volume_photon_type")->choices[t]);
+        return jfail(c, "integrator", key, "volume_photon_type \"%s\" has no delta-gate estimator yet (points, "
+                     "beams, balls, volumes, hypervolumes, volumes_balls and mis_volumes_balls do)", scene_key_find("volume_photon_type")->choices[t]);
     if (!cJSON_HasObjectItem(v, "transient_time_center") || !(in->transient_time_width > 0))
         return jfail(c, "integrator", key, "a delta gate needs transient_time_center (its instant) and "
                      "transient_time_width > 0 (the width of the first iteration's temporal kernel)");

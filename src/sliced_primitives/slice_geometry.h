@@ -1,71 +1,9 @@
-/* Private to src/sliced_primitives: the geometry of Liu, Jiao and Jarosz 2022's temporally sliced photon
- * primitives (../shared/papers/liu-2022-sliced-photon-primitives.txt §4). Each estimator pre-integrates four
- * dimensions against a 4-D spatio-temporal delta δ⁴(g′) (eq. 20–24): these functions find the roots of
- * g′(ξ_a) = 0 for one primitive and one camera segment and give |J|, the absolute 4×4 Jacobian determinant of
- * g′ with respect to the analytic dimensions (eq. 25), camera-warped or unwarped. Pure functions: no scene, no
- * medium, no transmittance — the caller evaluates the path contribution at each root.
- *
- * Conventions (all times are optical path lengths, as everywhere in dartspp):
- * - The camera segment is y1 + s·ψ, ψ unit, 0 <= s <= s_max; eta_c is the time per unit length along it
- *   (the medium's η when camera-warped, 0 when the segment is the sensor's own and unwarped).
- * - The photon chain starts at the base vertex x (x_1 for a ball, x_2 for a plane, x_3 for a parallelepiped,
- *   x_4 for a parallelotope) and goes on along w[0] = ω_k, ..., w[k-1] = ω_1 (unit, Liu's eq. 11 order);
- *   eta_p is the time per unit length along those segments (one medium).
- * - tau is the time budget of a delta-sliced primitive: the gate time minus the light path's time at x minus
- *   the camera path's time at y1 (for the parallelotope: at y0, the sampled camera point). A root satisfies
- *   eta_p·Σt + eta_c·s = tau exactly.
- * - Roots with any t < 0, s < 0 or s > s_max are not returned. */
+/* The geometry of Liu et al. 2022's temporally sliced photon primitives: its types, functions and conventions
+ * moved to the module's public header (include/dartspp/sliced_primitives.h) so that the tests can reach them;
+ * this file keeps every name of the first version working for the code that includes it. */
 #ifndef DARTSPP_SLICE_GEOMETRY_H
 #define DARTSPP_SLICE_GEOMETRY_H
 
-#include "dartspp/core.h"
-
-typedef struct {
-    vec3 y1, psi;    /* camera segment origin and unit direction */
-    double s_max;    /* its length */
-    double eta_c;    /* time per unit length along it (0: unwarped) */
-} slice_ray;
-
-typedef struct {
-    double t[4];     /* t_k, ..., t_1 (k entries used) */
-    double s;        /* distance along the camera segment */
-    vec3 w1;         /* ball only: ω_1*, the direction from x to the root */
-    double jacobian; /* |J| at the root, > 0 (roots with |J| below 1e-12 relative are dropped) */
-    double time;     /* planes only (box gates): eta_p·Σt + eta_c·s, the time the root adds to x's */
-} slice_root;
-
-/* Sliced ball / VPL, §4.5, ξ_a = {cos θ1, φ1, t1, s1}: the points y1 + s·ψ at distance t1 from x with
- * eta_p·t1 + eta_c·s = tau (a sphere when unwarped, the ellipsoid of Pediredla et al. when warped). Up to 2
- * roots; |J| = t1²·|eta_p·(ω1*·ψ) + eta_c| (our derivation; Liu's eq. below 46 is the eta_c = 0 and eta_c =
- * eta_p cases). */
-int slice_ball_roots(vec3 x, double eta_p, double tau, const slice_ray *r, slice_root out[2]);
-
-/* Sliced photon plane, §4.2, ξ_a = {t2, t1, s1, τ_k} (box gates: no time constraint): x + t2·ω2 + t1·ω1 =
- * y1 + s·ψ, t2 in [0, len[0]], t1 in [0, len[1]] (short planes: the segments as sampled; pass INFINITY for
- * long). At most 1 root; |J| = |(ω2 × ω1)·ψ| (eq. 30). root.time is set. */
-int slice_plane_root(vec3 x, const vec3 w[2], const double len[2], double eta_p, const slice_ray *r, slice_root *out);
-
-/* The 1-D-blurred photon plane (planes_1d; Bitterli and Jarosz 2017's "photon planes 1D" as Liu's code slices
- * it): see slice_geometry.c for its dimensions and kernel. */
-
-/* Delta-sliced parallelepiped, §4.3, ξ_a = {t3, t2, t1, s1}: x + t3·ω3 + t2·ω2 + t1·ω1 = y1 + s·ψ with the
- * time constraint (eq. 35–37). At most 1 root; |J| = |det J| of eq. 37 with eta_c in the s column's time
- * entry (eq. 38 is its unwarped value). */
-int slice_parallelepiped_root(vec3 x, const vec3 w[3], double eta_p, double tau, const slice_ray *r,
-                              slice_root *out);
-
-/* Delta-sliced parallelotope, §4.4, ξ_a = {t4, t3, t2, t1}: x + Σ t_i·ω_i = y0 (a camera point sampled by
- * the caller) with eta_p·Σt = tau. At most 1 root (s unused); |J| = |det| of eq. 43. */
-int slice_parallelotope_root(vec3 x, const vec3 w[4], double eta_p, double tau, vec3 y0, slice_root *out);
-
-/* |J| of each estimator at a given full path, for score-based MIS (§4.6), where the path was found by
- * another estimator: the ball's with t1, ω1 (x1 → x0); the parallelepiped's with its three directions. */
-double slice_ball_jacobian(double t1, vec3 w1, vec3 psi, double eta_p, double eta_c);
-double slice_parallelepiped_jacobian(const vec3 w[3], vec3 psi, double eta_p, double eta_c);
-
-/* Small dense linear algebra, written here (four lines each; no library needed for 4×4). */
-double slice_det4(const double a[4][4]);
-/* Solves a·x = b by Gaussian elimination with partial pivoting; 0 on success, -1 when singular. */
-int slice_solve4(const double a[4][4], const double b[4], double x[4]);
+#include "dartspp/sliced_primitives.h"
 
 #endif

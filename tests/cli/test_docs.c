@@ -30,6 +30,7 @@ static const char *const WORKS[] = {
     "Numerical Recipes",
     "Jarabo et al. 2014", /* "A framework for transient rendering", TOG 33(6) */
     "TAOCP vol. 2",     /* Knuth, The Art of Computer Programming, vol. 2, Seminumerical Algorithms */
+    "Liu et al. 2022",  /* temporally sliced photon primitives, CGF 41(4) (EGSR) 2022 */
 };
 
 static const char *const ROOTS[] = {"src", "include", "tests", "bench", "README.md"};

@@ -195,23 +195,7 @@ static void test_beam_single_scatter(void **state)
 
 /* ---- the fog box lit by the new emitters, per tile ---- */
 
-
-/* A ceiling panel facing down (box pulse) and a spot beside the camera in a clear pocket (Gaussian pulse),
- * aimed into the box: the gated camera's flash. */
-#define PANEL_AND_SPOT                                                                                               \
-    "{ \"type\": \"quad\", \"name\": \"panel\", \"bsdf\": \"white\", \"emission\": [3, 2.5, 2], \"int_medium\": \"fog\","   \
-    "  \"ext_medium\": \"fog\", \"pulse_width\": 0.3,"                                                                 \
-    "  \"transform\": { \"position\": [0.3, 1.96, 0.1], \"scale\": [0.7, 1, 0.7], \"rotation\": [180, 0, 0] } },"     \
-    "{ \"type\": \"cube\", \"bsdf\": { \"type\": \"forward\" }, \"ext_medium\": \"fog\","                              \
-    "  \"transform\": { \"position\": [-0.5, 1.2, -2.2], \"scale\": [0.3, 0.3, 0.3] } },"                              \
-    "{ \"type\": \"spot\", \"name\": \"flash\", \"emission\": [5, 6, 7], \"coneangle\": 30, \"conedeltaangle\": 10,"   \
-    "  \"pulse_start\": 0.1, \"pulse_width\": 0.4, \"pulse_shape\": \"gaussian\","                                      \
-    "  \"transform\": { \"position\": [-0.5, 1.2, -2.2], \"look_at\": [0.2, 0.7, 0.8], \"up\": [0, 1, 0] } }"
-
-/* A collimated beam of radius 0.08 across the box, from the left wall's side toward the back right. */
-#define BEAM                                                                                                         \
-    "{ \"type\": \"collimated\", \"name\": \"laser\", \"radius\": 0.08, \"emission\": [60, 50, 40], \"ext_medium\": \"fog\"," \
-    "  \"transform\": { \"position\": [-0.9, 1.4, -0.8], \"look_at\": [0.9, 0.6, 0.9], \"up\": [0, 1, 0] } }"
+/* The lights: FOG_BOX_PANEL_AND_SPOT and FOG_BOX_COLLIMATED (tests/render_fixtures.h). */
 
 #define PT_KEYS "\"type\": \"path_tracer\", \"max_bounces\": 6"
 #define PP_KEYS                                                                                                       \
@@ -310,7 +294,7 @@ static void test_area_and_spot(void **state)
         {"baseline photon points vs path tracer", "\"enable_guiding\": false", 300, 0, PP_BIAS},
         {"DARTS photon points", "\"enable_guiding\": true, \"enable_elliptical\": true", 300, 1, 0},
     };
-    check_tiles(PANEL_AND_SPOT, GATE, tc, (int)(sizeof tc / sizeof tc[0]), 6000, 300);
+    check_tiles(FOG_BOX_PANEL_AND_SPOT, GATE, tc, (int)(sizeof tc / sizeof tc[0]), 6000, 300);
 }
 
 /* The same lights with uniform light selection instead of selection by power (make stress). */
@@ -322,7 +306,7 @@ static void test_area_and_spot_uniform_selection(void **state)
          "\"enable_guiding\": true, \"enable_elliptical\": true, \"light_selection\": \"uniform\"", 1500, 0, 0},
         {"photon points, uniform selection", "\"light_selection\": \"uniform\"", 300, 1, 0},
     };
-    check_tiles(PANEL_AND_SPOT, GATE, tc, (int)(sizeof tc / sizeof tc[0]), 6000, 300);
+    check_tiles(FOG_BOX_PANEL_AND_SPOT, GATE, tc, (int)(sizeof tc / sizeof tc[0]), 6000, 300);
 }
 
 /* A narrow gate on the camera's direct view of the panel (3.0 to 3.6 away, box pulse 0.3 wide): an aimed
@@ -336,7 +320,7 @@ static void test_gate_on_the_panel(void **state)
     const tile_case tc[] = {
         {"panel's direct view: DARTS path tracer", "\"enable_guiding\": true, \"enable_elliptical\": true", 3000, 0, 0},
     };
-    check_tiles(PANEL_AND_SPOT, ", \"transient_time_center\": 3.35, \"transient_time_width\": 0.3", tc, 1, 30000, 300);
+    check_tiles(FOG_BOX_PANEL_AND_SPOT, ", \"transient_time_center\": 3.35, \"transient_time_width\": 0.3", tc, 1, 30000, 300);
 }
 
 /* The same, camera-unwarped (the camera segment takes no time). */
@@ -348,7 +332,7 @@ static void test_area_and_spot_unwarped(void **state)
         {"unwarped baseline photon points vs PT", "\"enable_guiding\": false", 300, 0, PP_BIAS},
         {"unwarped DARTS photon points", "\"enable_guiding\": true, \"enable_elliptical\": true", 300, 1, 0},
     };
-    check_tiles(PANEL_AND_SPOT, ", \"transient_time_center\": 2.6, \"transient_time_width\": 1.0, \"camera_unwarp\": true",
+    check_tiles(FOG_BOX_PANEL_AND_SPOT, ", \"transient_time_center\": 2.6, \"transient_time_width\": 1.0, \"camera_unwarp\": true",
                 tc, (int)(sizeof tc / sizeof tc[0]), 6000, 300);
 }
 
@@ -362,7 +346,7 @@ static void test_beam_in_box(void **state)
         {"beam: baseline photon points vs PT", "\"enable_guiding\": false", 300, 0, PP_BIAS},
         {"beam: DARTS photon points", "\"enable_guiding\": true, \"enable_elliptical\": true", 300, 1, 0},
     };
-    check_tiles(BEAM, GATE, tc, (int)(sizeof tc / sizeof tc[0]), 6000, 300);
+    check_tiles(FOG_BOX_COLLIMATED, GATE, tc, (int)(sizeof tc / sizeof tc[0]), 6000, 300);
 }
 
 /* A sphere lamp (box pulse), a disk facing down under the ceiling, and a diverging collimated beam (radius 0.03,

@@ -245,18 +245,6 @@ static void tiles_check(const char *label, const char *extra, int frames, long p
 
 /* The other emitters of tests/emitters/test_emitters_render.c (stress): a ceiling panel (box pulse) and a spot
  * in a clear pocket (Gaussian pulse); a collimated beam of radius 0.08 across the box. */
-#define PANEL_AND_SPOT                                                                                               \
-    "{ \"type\": \"quad\", \"name\": \"panel\", \"bsdf\": \"white\", \"emission\": [3, 2.5, 2], \"int_medium\": \"fog\","   \
-    "  \"ext_medium\": \"fog\", \"pulse_width\": 0.3,"                                                                 \
-    "  \"transform\": { \"position\": [0.3, 1.96, 0.1], \"scale\": [0.7, 1, 0.7], \"rotation\": [180, 0, 0] } },"     \
-    "{ \"type\": \"cube\", \"bsdf\": { \"type\": \"forward\" }, \"ext_medium\": \"fog\","                              \
-    "  \"transform\": { \"position\": [-0.5, 1.2, -2.2], \"scale\": [0.3, 0.3, 0.3] } },"                              \
-    "{ \"type\": \"spot\", \"name\": \"flash\", \"emission\": [5, 6, 7], \"coneangle\": 30, \"conedeltaangle\": 10,"   \
-    "  \"pulse_start\": 0.1, \"pulse_width\": 0.4, \"pulse_shape\": \"gaussian\","                                      \
-    "  \"transform\": { \"position\": [-0.5, 1.2, -2.2], \"look_at\": [0.2, 0.7, 0.8], \"up\": [0, 1, 0] } }"
-#define COLLIMATED                                                                                                   \
-    "{ \"type\": \"collimated\", \"name\": \"laser\", \"radius\": 0.08, \"emission\": [60, 50, 40], \"ext_medium\": \"fog\"," \
-    "  \"transform\": { \"position\": [-0.9, 1.4, -0.8], \"look_at\": [0.9, 0.6, 0.9], \"up\": [0, 1, 0] } }"
 
 /* Measured (2026-11-28): panel and spot +1.24 % (max |z| 1.16), collimated −1.26 % (1.27). Broken variant: the
  * first segment's beams starting at time 0 instead of the light's emission time: panel and spot −5.48 %, max
@@ -264,8 +252,8 @@ static void tiles_check(const char *label, const char *extra, int frames, long p
 static void test_beams_other_emitters(void **state)
 {
     (void)state;
-    tiles_check_lights("beams: panel and spot", PANEL_AND_SPOT, "", 0, 3000, 150);
-    tiles_check_lights("beams: collimated beam", COLLIMATED, "", 0, 3000, 150);
+    tiles_check_lights("beams: panel and spot", FOG_BOX_PANEL_AND_SPOT, "", 0, 3000, 150);
+    tiles_check_lights("beams: collimated beam", FOG_BOX_COLLIMATED, "", 0, 3000, 150);
 }
 
 static void test_beams_tiles(void **state)
@@ -335,17 +323,6 @@ static void test_darts_beams_tiles(void **state)
 }
 
 /* ---- a delta gate (delta_time_gate) against the quadrature ---- */
-
-/* The box-gated expectation of the single-scattering scene s with the gate [c − w/2, c + w/2) (the quadrature
- * of test_photon_single_scatter.c; its image total). */
-static double ss_box_total(const scene *s, double c, double w, int ch)
-{
-    ss_case a = {.cam = &s->cam, .light = s->lights[0].pos, .I = s->lights[0].value, .ss = s->media[0].sigma_s,
-                 .st = s->media[0].sigma_t, .g = 0.3, .eta = 1.0 / 0.8, .g0 = c - 0.5 * w, .g1 = c + 0.5 * w,
-                 .nodes = 8, .panels = 8};
-    gauss_legendre(a.nodes, a.x, a.w);
-    return v3_comp(ss_expected(&a, 4).total, ch);
-}
 
 /* The single-scattering scene under a delta gate at τ = 3.5 with first width w₀ = 1 (so that the first box is
  * the quadrature's [3, 4) of ss_reference, whose kernel-bias terms apply). What the image estimates: the time

@@ -338,6 +338,19 @@ static void test_darts_single_scatter_total(void **state)
  * DARTS photon points; test_photon_single_scatter_modes (tests/photon_points/test_photon_single_scatter_modes.c,
  * `make test`) includes this file with SINGLE_SCATTER_MODES for camera-unwarped time. A third,
  * tests/photon_beams/test_photon_beams.c, includes it with SINGLE_SCATTER_NO_MAIN for its quadrature. */
+#ifdef SINGLE_SCATTER_NO_MAIN /* for the programs that include this file (the beams' and sliced primitives' delta gates) */
+/* The box-gated expectation of the single-scattering scene s with the gate [c − w/2, c + w/2) (the quadrature
+ * of test_photon_single_scatter.c; its image total). */
+static double ss_box_total(const scene *s, double c, double w, int ch)
+{
+    ss_case a = {.cam = &s->cam, .light = s->lights[0].pos, .I = s->lights[0].value, .ss = s->media[0].sigma_s,
+                 .st = s->media[0].sigma_t, .g = 0.3, .eta = 1.0 / 0.8, .g0 = c - 0.5 * w, .g1 = c + 0.5 * w,
+                 .nodes = 8, .panels = 8};
+    gauss_legendre(a.nodes, a.x, a.w);
+    return v3_comp(ss_expected(&a, 4).total, ch);
+}
+#endif
+
 #ifndef SINGLE_SCATTER_NO_MAIN /* tests/photon_beams/test_photon_beams.c shares the quadrature, with a main of its own */
 int main(void)
 {
