@@ -3,7 +3,7 @@
 # unchanged): the score-based MIS of sliced balls and parallelepipeds (mis_volumes_balls, the files' own
 # volume photon type) against progressive transient photon beams (pb: 1-D beams with the spatio-temporal
 # schedule under the files' delta gate), each with the baseline photon pass, camera-unwarped as Liu rendered
-# them (--set camera_unwarp=true). His protocol (§6): 8 cores of a Xeon E5-2640V3, 1.5 minutes (SUBSURFACE
+# them (--set camera_unwarp=true). His protocol (Liu et al. 2022 §6): 8 cores of a Xeon E5-2640V3, 1.5 minutes (SUBSURFACE
 # SCATTERING) and 10 minutes (CORNELL BOX, VOLUMETRIC CAUSTIC) at 1000×563 and 563²; he reports variance
 # 20–40× lower on SUBSURFACE and 2–4× on CORNELL BOX. Ours: 2 cores, SECONDS per run, SEEDS seeds, a quarter
 # of his resolution; the figure compared is the seed variance (no reference can be made for a delta gate by an
