@@ -58,9 +58,10 @@ double dp_seconds(void);
 void *dp_calloc_cache_aligned(size_t n, size_t size);
 
 /* ---- Morton order (morton.c): the order of the linear BVHs ----
- * order[0, n) = the indices of the n points c[i·stride + 0..2] sorted by their Morton code over the points'
- * bounds (21 bits per axis), ties by index. 0, or -1 out of memory. */
-int dp_morton_order(const float *c, size_t stride, size_t n, uint32_t *order);
+ * order[0, n) = the indices of the n points c[i·stride + 0..dims−1] (dims 3: space, 21 bits per axis; 4: space
+ * and time, 16 bits each) sorted by their Morton code over the points' bounds, ties by index. 0, or -1 out of
+ * memory. */
+int dp_morton_order(const float *c, size_t stride, size_t n, int dims, uint32_t *order);
 
 /* ---- interruption ----
  * A stop flag is set asynchronously (SIGINT/SIGTERM handler) and read by the long loops once per batch of

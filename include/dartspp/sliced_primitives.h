@@ -107,7 +107,7 @@ int slice_solve4(const double a[4][4], const double b[4], double x[4]);
  * bounds their time budgets allow, and the sensor pass (src/gather) evaluates them along every medium segment of
  * the camera walk: the roots of the 4-D delta, each as a *long* primitive (the displaced path's transmittance,
  * visibility, σs and phase functions evaluated by the scene), divided by the numerical dimensions' density
- * and |J|. Paths a type's primitives do not serve are left to photon beams (src/photon_beams), Liu's §5
+ * and |J|. Paths a type's primitives do not serve are left to photon beams (src/photon_beams), Liu et al. 2022 §5
  * fallback: PATH_VERTEX_* on each beam say which. */
 
 /* The primitive kinds, one row each in the table of slice_gather.c (the estimate) and slice_build.c (the fresh directions). */
@@ -161,7 +161,7 @@ void slice_map_query(const slice_map *m, vec3 o, vec3 d, double tmax, double t_c
 int slice_type_builds(int type, int kind, unsigned f);
 /* Whether a beam leaving a vertex with flags f is gathered (no primitive of the type serves its paths). */
 int slice_type_gathers_beam(int type, unsigned f);
-/* Whether the type weighs balls against parallelepipeds by score-based MIS (§4.6). */
+/* Whether the type weighs balls against parallelepipeds by score-based MIS (Liu et al. 2022 §4.6). */
 int slice_type_mis(int type);
 /* 1: the type's primitives are sliced photon planes, 2: 1-D-blurred planes, 0: neither (their gate is analytic). */
 int slice_type_plane(int type);

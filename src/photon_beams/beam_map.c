@@ -63,77 +63,19 @@ typedef struct {
     size_t next;
 } builder;
 
-/* Morton order: the box centres quantized to 21 bits per axis over their bounds, bits interleaved. */
-static uint64_t spread21(uint32_t v)
-{
-    uint64_t x = v & 0x1fffff;
-    x = (x | x << 32) & 0x1f00000000ffffULL;
-    x = (x | x << 16) & 0x1f0000ff0000ffULL;
-    x = (x | x << 8) & 0x100f00f00f00f00fULL;
-    x = (x | x << 4) & 0x10c30c30c30c30c3ULL;
-    x = (x | x << 2) & 0x1249249249249249ULL;
-    return x;
-}
-
-typedef struct {
-    uint64_t key;
-    uint32_t at;
-} morton_key;
-
-static int key_cmp(const void *a, const void *b)
-{
-    const morton_key *x = a, *y = b;
-    if (x->key != y->key) return x->key < y->key ? -1 : 1;
-    return x->at < y->at ? -1 : x->at > y->at; /* ties by index: a total order, so the tree is deterministic */
-}
-
-/* 16 bits of v spread to every 4th bit (the 4-D Morton code of space and time). */
-static uint64_t spread16x4(uint32_t v)
-{
-    uint64_t x = 0;
-    for (int b = 0; b < 16; b++) x |= (uint64_t)((v >> b) & 1u) << (4 * b);
-    return x;
-}
-
-/* The Morton code of centre c, each coordinate quantized over [lo, hi]: 21 bits of each of x, y, z, or with
- * time (dims 4) 16 bits of each of x, y, z and t. */
-static uint64_t morton_code(const float *c, const float *lo, const float *hi, int dims)
-{
-    uint64_t code = 0;
-    double top = dims == 4 ? 65535.0 : 2097151.0;
-    for (int k = 0; k < dims; k++) {
-        double ext = (double)hi[k] - lo[k], u = ext > 0.0 ? ((double)c[k] - lo[k]) / ext : 0.0;
-        uint32_t q = (uint32_t)(u * top);
-        code |= dims == 4 ? spread16x4(q) << k : spread21(q) << k;
-    }
-    return code;
-}
-
-/* Sorts box[0, n) into Morton order of the centres: in space, or with `timed` in space and time (the pieces'
- * middle times: with a narrow window, whole subtrees then fall outside it in time). 0, or -1 out of memory. */
+/* Sorts box[0, n) into Morton order of the centres (dp_morton_order): in space, or with `timed` in space and time
+ * (the pieces' middle times: with a narrow window, whole subtrees then fall outside it in time). 0, or -1 out of
+ * memory. */
 static int morton_sort(beam_box *box, size_t n, int timed)
 {
-    int dims = timed ? 4 : 3;
-    float lo[4] = {INFINITY, INFINITY, INFINITY, INFINITY}, hi[4] = {-INFINITY, -INFINITY, -INFINITY, -INFINITY};
-    for (size_t i = 0; i < n; i++)
-        for (int k = 0; k < dims; k++) {
-            if (box[i].c[k] < lo[k]) lo[k] = box[i].c[k];
-            if (box[i].c[k] > hi[k]) hi[k] = box[i].c[k];
-        }
-    morton_key *key = malloc(n * sizeof *key);
-    beam_box *tmp = malloc(n * sizeof *tmp);
-    if (!key || !tmp) {
-        free(key);
-        free(tmp);
-        return -1;
-    }
-    for (size_t i = 0; i < n; i++) key[i] = (morton_key){morton_code(box[i].c, lo, hi, dims), (uint32_t)i};
-    qsort(key, n, sizeof *key, key_cmp);
-    for (size_t i = 0; i < n; i++) tmp[i] = box[key[i].at];
-    memcpy(box, tmp, n * sizeof *box);
-    free(key);
+    uint32_t *order = malloc((n ? n : 1) * sizeof *order);
+    beam_box *tmp = malloc((n ? n : 1) * sizeof *tmp);
+    int rc = order && tmp ? dp_morton_order(box[0].c, sizeof *box / sizeof(float), n, timed ? 4 : 3, order) : -1;
+    for (size_t i = 0; !rc && i < n; i++) tmp[i] = box[order[i]];
+    if (!rc) memcpy(box, tmp, n * sizeof *box);
+    free(order);
     free(tmp);
-    return 0;
+    return rc;
 }
 
 static inline float min_f(float a, float b) { return a < b ? a : b; }

@@ -71,7 +71,7 @@ static vec3 leave_point(const scene *s, const path_vertex *v, vec3 w)
     return scene_offset_ray_origin(s, v->pos, v3_dot(w, n) > 0.0 ? n : v3_neg(n));
 }
 
-/* ---- balls (§4.5) ---- */
+/* ---- balls (Liu et al. 2022 §4.5) ---- */
 
 /* What vertex v sends toward w1 per unit solid angle (the photon's throughput times its scattering
  * distribution), with where its segment to x0 starts and in which region; 0 when nothing. */
@@ -128,7 +128,7 @@ static void eval_ball(slice_ctx *c, const slice_prim *p)
     }
 }
 
-/* ---- parallelepipeds (§4.3) and parallelotopes (§4.4): a chain of k displaced segments ---- */
+/* ---- parallelepipeds and parallelotopes (Liu et al. 2022 §4.3, §4.4): a chain of k displaced segments ---- */
 
 /* The light carried from v along w[0..k−1] through the displaced vertices x[0..k−2] to x0, times σs and the
  * phase function at each displaced vertex (the fresh directions' density divides later); the regions of the

@@ -78,7 +78,7 @@ slice_map *slice_map_build(const scene *s, const slice_build_input *in, const pa
         sorted = malloc((np ? np : 1) * sizeof *sorted);
         rc = m->verts && m->prims && m->nodes && order && sorted ? 0 : -1;
     }
-    if (!rc && np) rc = dp_morton_order(box[0].c, sizeof *box / sizeof(float), np, order);
+    if (!rc && np) rc = dp_morton_order(box[0].c, sizeof *box / sizeof(float), np, 3, order);
     if (!rc) {
         if (n) memcpy(m->verts, v, n * sizeof *v);
         m->n_verts = n;

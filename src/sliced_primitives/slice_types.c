@@ -24,7 +24,7 @@ typedef struct {
     int pp;         /* parallelepipeds at every vertex with a sampled direction */
     int pt;         /* parallelotopes likewise */
     int ball_yields_pp; /* the ball leaves the parallelepipeds' paths to them */
-    int mis;        /* balls and parallelepipeds both, weighted (§4.6) */
+    int mis;        /* balls and parallelepipeds both, weighted (Liu et al. 2022 §4.6) */
     const char *summary;
     int plane;      /* 1: sliced photon planes, 2: 1-D-blurred planes, at every vertex with a sampled direction */
 } slice_type_row;

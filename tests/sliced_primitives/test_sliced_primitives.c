@@ -402,7 +402,7 @@ static void test_balls_delta_gate_single_scatter(void **state)
 
 /* ---- MIS weights ---- */
 
-/* The ball's and the parallelepiped's weight of one path sum to 1 (so the MIS of §4.6 is unbiased whatever
+/* The ball's and the parallelepiped's weight of one path sum to 1 (so the MIS of Liu et al. 2022 §4.6 is unbiased whatever
  * the densities), on random paths in the coloured fog, warped, unwarped and in between, and each is in [0, 1]. */
 static void test_mis_weights_sum_to_one(void **state)
 {
