@@ -357,6 +357,10 @@ int scene_transmittance_region(const scene *s, vec3 p, int med, vec3 q, vec3 *tr
 int scene_region_present(const scene *s, int region);
 /* Whether every region present in the scene has the same refractive index (control vertices need it). */
 int scene_eta_uniform(const scene *s);
+/* Whether every straight unoccluded segment (scene_transmittance's: crossing only null and forward surfaces)
+ * stays at one refractive index: no pass-through surface separates regions of different speed_of_light.
+ * Weaker than scene_eta_uniform: a glass sphere of another speed in fog passes (its surface stops segments). */
+int scene_eta_uniform_along_segments(const scene *s);
 
 /* Whether the medium scatters in any channel (the DARTS samplers and EDA only run where it does). */
 static inline int medium_scatters(const medium *m)

@@ -26,3 +26,15 @@ int scene_eta_uniform(const scene *s)
     }
     return 1;
 }
+
+/* A straight segment keeps one refractive index unless it can cross a pass-through surface (null or forward:
+ * scene_transmittance goes through those and stops at every other) between regions of different η. */
+int scene_eta_uniform_along_segments(const scene *s)
+{
+    for (int i = 0; i < s->surface_count; i++) {
+        const surface *sf = &s->surfaces[i];
+        if (sf->tri_count == 0 || !sf->overrides_media || !bsdf_is_passthrough(&s->bsdfs[sf->bsdf])) continue;
+        if (medium_eta(s, sf->int_medium) != medium_eta(s, sf->ext_medium)) return 0;
+    }
+    return 1;
+}

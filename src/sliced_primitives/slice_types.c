@@ -113,8 +113,11 @@ int sliced_primitives_check(const scene *s, const render_plan *p, dp_error *err)
     if (!p->low_order_scattering)
         return dp_fail(err, "%s: integrator.low_order_scattering: false is not supported with volume_photon_type %s "
                        "(its primitives serve the first medium vertex's paths too)", s->path, name);
-    if (!scene_eta_uniform(s))
+    /* the displaced segments are straight and evaluated by scene_transmittance, which stops at every surface
+     * but null and forward ones: only those can carry a segment into a region of another speed */
+    if (!scene_eta_uniform_along_segments(s))
         return dp_fail(err, "%s: integrator.volume_photon_type: %s solves the time constraint with one refractive "
-                       "index along the displaced segments; this scene's regions differ in speed_of_light", s->path, name);
+                       "index along the displaced segments; a null or forward surface of this scene separates "
+                       "regions of different speed_of_light", s->path, name);
     return 0;
 }

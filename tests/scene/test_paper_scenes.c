@@ -1,7 +1,7 @@
 /* tier: quick */
 /* The paper's own scene files load with the values written in them: the Cornell box of cbox-trans (its four
  * files, volume beams resolved as beams) and the three dragon files (textures, conductors, smooth mesh); Liu,
- * Jiao and Jarosz 2022's three example scenes (liu2022/) with only the other branches' two keys overridden.
+ * Jiao and Jarosz 2022's three example scenes (liu2022/) as they are, their sliced primitives and delta gates.
  * Skipped when the paper's scenes are not beside the checkout (see test_need_paper_files). Expected values are
  * worked out by hand from the scene files and docs/scene-format.md. */
 #include "fixtures.h"
@@ -311,9 +311,8 @@ static void expect_warnings(const char *label, const char *text, const char *con
     }
 }
 
-/* His three scenes in ../shared load unchanged but for the two keys other branches add (volume_photon_type
- * mis_volumes_balls -> points, delta_time_gate true -> false) and render one pass at 32² with no error and no
- * warning but: the unknown key "gather_photon_count_" (his files' disabled key, trailing underscore), and,
+/* His three scenes in ../shared load unchanged (their own volume_photon_type mis_volumes_balls and delta gate;
+ * only the resolution set) and render two passes at 32² with no error and no warning but: the unknown key "gather_photon_count_" (his files' disabled key, trailing underscore), and,
  * camera-warped (our default), the gate that ends before any light can reach the camera. His renderer does
  * not time the camera segment: warped, every pixel is exactly 0 (as the warning says); with camera_unwarp
  * true the warning goes and the image is lit. The volumetric caustic's lens (int_speed_of_light 0.66666667,
@@ -331,12 +330,11 @@ static void test_liu2022_scenes(void **state)
             char path[4200], label[256];
             snprintf(path, sizeof path, "%s/liu2022/%s/scene.json", dir, names[i]);
             snprintf(label, sizeof label, "%s (%s)", names[i], unwarp ? "camera_unwarp=true" : "unchanged time");
-            const char *sets[4] = {"volume_photon_type=points", "delta_time_gate=false", "resolution=32",
-                                   "camera_unwarp=true"};
+            const char *sets[2] = {"resolution=32", "camera_unwarp=true"};
             scene *s = fx_slot();
             dp_error err;
             memset(&err, 0, sizeof err);
-            scene_load_options o = {.sets = sets, .set_count = unwarp ? 4 : 3};
+            scene_load_options o = {.sets = sets, .set_count = unwarp ? 2 : 1};
             if (scene_load(path, &o, s, &err)) fail_msg("%s: %s", label, err.msg);
             fx_mark(s, 1);
             render_plan p;
