@@ -308,6 +308,41 @@ static void test_balls_other_emitters(void **state)
                 SLICE_TILE_BIAS);
 }
 
+/* The other emitters for every type not checked there above: the fog box's area panel and spot together, then
+ * its collimated beam (a delta at x1: the beams fallback, 3 % budget), each per tile and on the total against one
+ * path-tracer reference per lighting (3000 passes), 100 passes of each type. */
+static void types_vs_path_tracer(const char *lights_label, const char *lights, const char *const *types, int n)
+{
+    char text[16384], keys[2048], label[256];
+    cell_totals ref, m;
+    double t_ref, t_m;
+    lamp_box_text(text, sizeof text, BOX_PT, lights);
+    cell_render(text, 3000, 11, 0, &ref, &t_ref);
+    print_message("  %s: path tracer %.1f s\n", lights_label, t_ref);
+    for (int i = 0; i < n; i++) {
+        snprintf(keys, sizeof keys, BOX_SLICED ", \"volume_photon_type\": \"%s\"", types[i]);
+        lamp_box_text(text, sizeof text, keys, lights);
+        cell_render(text, 100, 29, 0, &m, &t_m);
+        snprintf(label, sizeof label, "%s: %s", types[i], lights_label);
+        double zt, z = tiles_z(label, &ref, &m, SLICE_TILE_BIAS, &zt);
+        print_message("  seconds: %s %.1f\n", types[i], t_m);
+        free(m.x);
+        assert_true(z < 4.2); /* Bonferroni over 16 tiles */
+        assert_true(zt < 4.0);
+    }
+    free(ref.x);
+}
+
+static void test_types_other_emitters(void **state)
+{
+    (void)state;
+    static const char *const panel_types[] = {"volumes", "hypervolumes", "volumes_balls", "mis_volumes_balls",
+                                              "planes", "planes_1d"};
+    static const char *const beam_types[] = {"volumes", "hypervolumes", "volumes_balls", "planes", "planes_1d"};
+    types_vs_path_tracer("panel and spot", FOG_BOX_PANEL_AND_SPOT, panel_types, 6);
+    types_vs_path_tracer("collimated beam", FOG_BOX_COLLIMATED, beam_types, 5);
+}
+
 /* ---- what the sliced types refuse ---- */
 
 static void expect_plan_refusal(const char *integrator_keys, const char *needle)
@@ -493,6 +528,7 @@ int main(void)
         cmocka_unit_test(test_planes_tiles),
         cmocka_unit_test(test_planes_1d_order2_tiles),
         cmocka_unit_test(test_planes_1d_tiles),
+        cmocka_unit_test(test_types_other_emitters),
     };
     const char *filter = getenv("DARTSPP_TEST_FILTER");
     if (filter && filter[0]) cmocka_set_test_filter(filter);
