@@ -45,13 +45,7 @@ static void splat_at(const slice_ctx *c, const path_vertex *v, int segs, double 
 /* Adds val (already over p·|J|) for a path of `segs` light segments beyond vertex v at time τ_k. */
 static void splat(const slice_ctx *c, const path_vertex *v, int segs, double tau, vec3 val)
 {
-    int light = v->bounce + segs;
-    film_slot slot = film_time_slot(c->pix->f, tau, -1, light + c->b_cam - 1);
-    if (!slot.counts) return;
-    val = v3_scale(val, c->span);
-    if (v3_is_zero(val)) return;
-    if (!film_slot_fits(&slot, val)) c->pix->nonfinite++;
-    else film_slot_add(c->pix->f, c->pix->px, &slot, val);
+    splat_at(c, v, segs, tau, v3_scale(val, c->span));
 }
 
 /* Whether the path may have `segs` more light segments after v (bounce limits; the medium's own limit on
