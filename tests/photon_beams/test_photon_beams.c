@@ -538,7 +538,6 @@ int main(void)
         cmocka_unit_test(test_beams_thread_independent),
         cmocka_unit_test(test_beams_single_scatter_total),
         cmocka_unit_test(test_beams_tiles),
-        cmocka_unit_test(test_beams_delta_gate_single_scatter),
         cmocka_unit_test(test_delta_gate_tiles_short),
     };
     const struct CMUnitTest stress[] = {
@@ -548,6 +547,7 @@ int main(void)
         cmocka_unit_test(test_beams_other_emitters),
         cmocka_unit_test(test_darts_beams_tiles),
         cmocka_unit_test(test_darts_beams_single_scatter_total),
+        cmocka_unit_test(test_beams_delta_gate_single_scatter),
         cmocka_unit_test(test_points_delta_gate_single_scatter),
         cmocka_unit_test(test_delta_gate_tiles),
     };
