@@ -326,6 +326,34 @@ void cell_mean_se(const cell_totals *t, int v, double *mean, double *se)
     *se = sqrt(fmax(0.0, (s2 - t->n * *mean * *mean) / (t->n - 1)) / t->n);
 }
 
+double cells_z(const char *label, const cell_totals *ref, const cell_totals *m, double bias, double *z_total)
+{
+    double zmax = 0.0, tot_r = 0, tot_m = 0, var_r = 0, var_m = 0;
+    int worst = 0, dark = 0, cells = NT + m->frames;
+    for (int v = 0; v < cells; v++) {
+        double mr, sr, mm, sm;
+        cell_mean_se(ref, v, &mr, &sr);
+        cell_mean_se(m, v, &mm, &sm);
+        dark += !(mr > 0.0 && mm > 0.0);
+        tot_r += mr, tot_m += mm, var_r += sr * sr, var_m += sm * sm;
+        double z = fmax(0.0, fabs(mm - mr) - bias * mr) / sqrt(sr * sr + sm * sm);
+        if (z > zmax) zmax = z, worst = v;
+    }
+    if (dark) print_message("  %s: %d cells dark in one of the two\n", label, dark);
+    assert_int_equal(dark, 0);
+    double mr, sr, mm, sm;
+    cell_mean_se(ref, worst, &mr, &sr);
+    cell_mean_se(m, worst, &mm, &sm);
+    print_message("  worst cell %d: %.5g (se %.2g) vs path tracer %.5g (se %.2g), %+.2f %%\n", worst, mm, sm, mr, sr,
+                  100.0 * (mm - mr) / mr);
+    double zt = fmax(0.0, fabs(tot_m - tot_r) - bias * tot_r) / sqrt(var_r + var_m);
+    if (z_total) *z_total = zt;
+    print_message("  %-34s total %.5g (se %.2g) vs path tracer %.5g (se %.2g), %+.2f %% (|z| %.2f after the budget); "
+                  "max |z| %.2f over %d cells\n", label, tot_m, sqrt(var_m), tot_r, sqrt(var_r),
+                  100.0 * (tot_m - tot_r) / tot_r, zt, zmax, cells);
+    return zmax;
+}
+
 
 void cell_render(const char *text, long passes, uint64_t seed, int frames, cell_totals *t, double *seconds)
 {

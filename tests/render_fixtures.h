@@ -95,6 +95,11 @@ typedef struct {
 int cell_probe(void *ctx, const film *f, const render_stats *st, dp_error *err);
 /* Mean over the passes of cell v and its standard error. */
 void cell_mean_se(const cell_totals *t, int v, double *mean, double *se);
+/* Per cell (the tiles, then each frame's total) of m against the reference ref: the largest |z| after a bias
+ * budget of `bias` × the reference's cell, printed with the worst cell and the image totals; *z_total (may be
+ * NULL) the totals' |z| after the same budget. Fails the test when a cell is dark in either (the scenes fill
+ * the film). */
+double cells_z(const char *label, const cell_totals *ref, const cell_totals *m, double bias, double *z_total);
 /* Renders the scene `text` (written to a temp folder) for `passes` passes with 2 threads and `seed` into the
  * per-pass cells of t (frames: the frame count to record); *seconds the render's wall time. Fails the test on
  * an error, a suppressed non-finite sample or a missing pass. */

@@ -191,26 +191,6 @@ static void test_beams_unwarped_single_scatter_total(void **state)
     " \"photon_count\": 3000, \"volume_photon_count\": 1e6, \"gather_photon_count\": 256, \"gather_radius\": 0.15,"  \
     " \"volume_gather_radius\": 0.05, \"alpha\": 0.7, \"volume_alpha\": 0.7, " BOX_GATE
 
-static double tiles_z(const char *label, const cell_totals *ref, const cell_totals *m, double bias)
-{
-    double zmax = 0.0, tot_r = 0, tot_m = 0, var_r = 0, var_m = 0;
-    int lit = 0;
-    for (int v = 0; v < NT + m->frames; v++) { /* the tiles, then each frame's total */
-        double mr, sr, mm, sm;
-        cell_mean_se(ref, v, &mr, &sr);
-        cell_mean_se(m, v, &mm, &sm);
-        assert_true(mr > 0.0 && mm > 0.0);
-        lit++;
-        tot_r += mr, tot_m += mm, var_r += sr * sr, var_m += sm * sm;
-        double d = fmax(0.0, fabs(mm - mr) - bias * mr);
-        zmax = fmax(zmax, d / sqrt(sr * sr + sm * sm));
-    }
-    print_message("  %-28s total %.5g (se %.2g) vs path tracer %.5g (se %.2g), %+.2f %%; max |z| %.2f over %d cells "
-                  "(tiles, frames) after the bias budget\n", label, tot_m, sqrt(var_m), tot_r, sqrt(var_r), 100.0 * (tot_m - tot_r) / tot_r,
-                  zmax, lit);
-    return zmax;
-}
-
 /* Measured (2026-11-28): total +1.28 % (se 0.6 %), max |z| 1.79 after the budget; unwarped +1.64 %, 0.91.
  * Broken variant: the phase function evaluated towards +d (the camera ray's direction) instead of −d: total
  * −35.8 %, max |z| 27.9. The beams' bounce one too high (order 6 lost) passes here (−0.81 %, max |z| 1.71):
@@ -231,7 +211,7 @@ static void tiles_check_lights(const char *label, const char *lights, const char
     if (lights) lamp_box_text(text, sizeof text, keys, lights);
     else box_scene_text(text, sizeof text, 16, keys);
     cell_render(text, beam_passes, 29, frames, &m, &t_m);
-    double z = tiles_z(label, &ref, &m, BEAM_TILE_BIAS);
+    double z = cells_z(label, &ref, &m, BEAM_TILE_BIAS, NULL);
     print_message("  seconds: path tracer %.1f, beams %.1f\n", t_ref, t_m);
     free(ref.x);
     free(m.x);

@@ -152,27 +152,6 @@ static void ortho_box_text(char *text, size_t len, const char *keys)
     snprintf(at, len - (size_t)(at - text), "%s%s", ortho, rest);
 }
 
-static double tiles_z(const char *label, const cell_totals *ref, const cell_totals *m, double bias)
-{
-    double zmax = 0.0, tot_r = 0, tot_m = 0, var_r = 0, var_m = 0;
-    int dark = 0;
-    for (int v = 0; v < NT; v++) {
-        double mr, sr, mm, sm;
-        cell_mean_se(ref, v, &mr, &sr);
-        cell_mean_se(m, v, &mm, &sm);
-        dark += !(mr > 0.0 && mm > 0.0);
-        tot_r += mr, tot_m += mm, var_r += sr * sr, var_m += sm * sm;
-        double d = fmax(0.0, fabs(mm - mr) - bias * mr);
-        zmax = fmax(zmax, d / sqrt(sr * sr + sm * sm));
-    }
-    print_message("  %-34s total %.5g (se %.2g) vs path tracer %.5g (se %.2g), %+.2f %%; max |z| %.2f over 16 tiles%s\n",
-                  label, tot_m, sqrt(var_m), tot_r, sqrt(var_r), 100.0 * (tot_m - tot_r) / tot_r, zmax,
-                  bias > 0 ? " after the bias budget" : "");
-    if (dark) print_message("  %d tiles dark in one of the two\n", dark);
-    assert_int_equal(dark, 0); /* the box fills the film: every tile is lit */
-    return zmax;
-}
-
 /* The plain path tracer's tiles with `extra`, rendered once per (extra, passes) and kept for the next case. */
 static const cell_totals *pt_reference(const char *extra, long passes, double *seconds)
 {
@@ -206,7 +185,7 @@ static void tiles_check(const char *label, const char *keys, const char *extra, 
     snprintf(k, sizeof k, "%s%s", keys, extra);
     ortho_box_text(text, sizeof text, k);
     cell_render(text, passes, 29, 0, &m, &t_m);
-    double z = tiles_z(label, ref, &m, bias);
+    double z = cells_z(label, ref, &m, bias, NULL);
     print_message("  seconds: path tracer %.1f, %s %.1f\n", t_ref, label, t_m);
     free(m.x);
     assert_true(z < Z_MAX);

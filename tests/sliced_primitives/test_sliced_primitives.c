@@ -80,31 +80,6 @@ static void test_balls_unwarped_single_scatter(void **state)
     " \"volume_gather_radius\": 0.05, \"alpha\": 0.7, \"volume_alpha\": 0.7, " BOX_GATE
 
 /* The largest |z| over the tiles (and frames) after the bias budget; *z_total that of the image total. */
-static double tiles_z(const char *label, const cell_totals *ref, const cell_totals *m, double bias, double *z_total)
-{
-    double zmax = 0.0, tot_r = 0, tot_m = 0, var_r = 0, var_m = 0;
-    int worst = 0;
-    for (int v = 0; v < NT + m->frames; v++) {
-        double mr, sr, mm, sm;
-        cell_mean_se(ref, v, &mr, &sr);
-        cell_mean_se(m, v, &mm, &sm);
-        assert_true(mr > 0.0 && mm > 0.0);
-        tot_r += mr, tot_m += mm, var_r += sr * sr, var_m += sm * sm;
-        double d = fmax(0.0, fabs(mm - mr) - bias * mr);
-        if (d / sqrt(sr * sr + sm * sm) > zmax) zmax = d / sqrt(sr * sr + sm * sm), worst = v;
-    }
-    double mr, sr, mm, sm;
-    cell_mean_se(ref, worst, &mr, &sr);
-    cell_mean_se(m, worst, &mm, &sm);
-    print_message("  worst cell %d: %.5g (se %.2g) vs path tracer %.5g (se %.2g), %+.2f %%\n", worst, mm, sm, mr, sr,
-                  100.0 * (mm - mr) / mr);
-    *z_total = fmax(0.0, fabs(tot_m - tot_r) - bias * tot_r) / sqrt(var_r + var_m);
-    print_message("  %-34s total %.5g (se %.2g) vs path tracer %.5g (se %.2g), %+.2f %% (|z| %.2f after the budget); "
-                  "max |z| %.2f over %d cells\n", label, tot_m, sqrt(var_m), tot_r, sqrt(var_r),
-                  100.0 * (tot_m - tot_r) / tot_r, *z_total, zmax, NT + m->frames);
-    return zmax;
-}
-
 /* Per tile (and frame) against the path tracer on the fog box (its point light, or `lights`) with volume_photon_type
  * `type` and `extra` keys (both renders; frames: 2 frames of width 2 from 3.2); bias: the budget of the paths the
  * beams fallback serves (0 where the type leaves them none). */
@@ -123,7 +98,7 @@ static void tiles_check(const char *label, const char *lights, const char *type,
     if (lights) lamp_box_text(text, sizeof text, keys, lights);
     else box_scene_text(text, sizeof text, 16, keys);
     cell_render(text, passes, 29, frames, &m, &t_m);
-    double zt, z = tiles_z(label, &ref, &m, bias, &zt);
+    double zt, z = cells_z(label, &ref, &m, bias, &zt);
     print_message("  seconds: path tracer %.1f, %s %.1f\n", t_ref, type, t_m);
     free(ref.x);
     free(m.x);
@@ -210,7 +185,7 @@ static void planes_tiles_check(const char *label, const char *type, const char *
              bounces, type);
     box_scene_text(text, sizeof text, 16, keys);
     cell_render(text, passes, 29, 0, &m, &t_m);
-    double zt, z = tiles_z(label, &ref, &m, bias, &zt);
+    double zt, z = cells_z(label, &ref, &m, bias, &zt);
     print_message("  seconds: path tracer %.1f, %s %.1f\n", t_ref, label, t_m);
     free(ref.x);
     free(m.x);
@@ -243,7 +218,7 @@ static void fog_order2_check(const char *label, const char *type, long passes, d
              " \"volume_gather_radius\": 0.05, \"volume_alpha\": 0.7, \"volume_photon_type\": \"%s\"", type);
     snprintf(text, sizeof text, fmt, keys);
     cell_render(text, passes, 29, 0, &m, &t_m);
-    double zt, z = tiles_z(label, &ref, &m, bias, &zt);
+    double zt, z = cells_z(label, &ref, &m, bias, &zt);
     print_message("  seconds: path tracer %.1f, %s %.1f\n", t_ref, label, t_m);
     free(ref.x);
     free(m.x);
@@ -324,7 +299,7 @@ static void types_vs_path_tracer(const char *lights_label, const char *lights, c
         lamp_box_text(text, sizeof text, keys, lights);
         cell_render(text, 100, 29, 0, &m, &t_m);
         snprintf(label, sizeof label, "%s: %s", types[i], lights_label);
-        double zt, z = tiles_z(label, &ref, &m, SLICE_TILE_BIAS, &zt);
+        double zt, z = cells_z(label, &ref, &m, SLICE_TILE_BIAS, &zt);
         print_message("  seconds: %s %.1f\n", types[i], t_m);
         free(m.x);
         assert_true(z < 4.2); /* Bonferroni over 16 tiles */
