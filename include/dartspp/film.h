@@ -13,7 +13,8 @@
  * frame is exactly the gate image of its window (docs/time.md §4). In frame mode the gate image is the image of
  * the union window. A pass splats into the pass layer, which joins the sums at film_commit_pass; an
  * interrupted pass is dropped with film_drop_pass, so the sums only ever hold completed passes. */
-typedef struct {
+typedef struct film film;
+struct film {
     int width, height;
     time_window window;
     double *sum;       /* 3 per pixel: completed passes */
@@ -25,14 +26,21 @@ typedef struct {
     double weight_sum; /* Σ of their weights */
     double last_weight;/* the weight of the last completed pass (its estimate is the sums' increment / this) */
     long nonfinite;    /* non-finite contributions suppressed (never written into an image) */
-} film;
+    film *deriv;       /* deriv_count films of the same size and window: the derivative images ∂I/∂θ_k
+                        * (include/dartspp/derivative.h), committed, dropped and copied with this one */
+    int deriv_count;
+};
 
 int film_init(film *f, int width, int height, const time_window *tw, dp_error *err);
+/* Adds k derivative films (f->deriv) to an initialised film without any. 0, or -1 with err. */
+int film_init_derivs(film *f, int k, dp_error *err);
+/* Frees the film and its derivative films. */
 void film_free(film *f);
 /* The completed passes of `from` (sums, pass count, weights, non-finite count) into `to`, a film of the same
- * size and frames; the pass in progress is not copied. */
+ * size, frames and derivative films; the pass in progress is not copied. */
 void film_copy_sums(film *to, const film *from);
-/* A new film `to` (film_init) holding the completed passes of `from`. 0, or -1 with err (out of memory). */
+/* A new film `to` (film_init, its derivative films too) holding the completed passes of `from`. 0, or -1 with
+ * err (out of memory). */
 int film_copy(film *to, const film *from, dp_error *err);
 /* Under a delta gate (window.delta), the box of the pass in progress: [center − w/2, center + w/2) with weight
  * 1/w, the temporal kernel K_τ of this iteration (plan_gate_width); every reader of f->window (film_time_slot,
@@ -42,6 +50,7 @@ int film_copy(film *to, const film *from, dp_error *err);
 static inline void film_set_pass_gate(film *f, double w)
 {
     if (!f->window.delta) return;
+    for (int k = 0; k < f->deriv_count; k++) film_set_pass_gate(&f->deriv[k], w);
     f->window.width = w;
     f->window.start = f->window.center - 0.5 * w;
 }
@@ -137,7 +146,7 @@ static inline void film_slot_add(film *f, size_t px, const film_slot *s, vec3 c)
  * Returns 0 when c was non-finite or too large for the film (FILM_VALUE_MAX) and was dropped (the caller
  * counts it). */
 int film_splat(film *f, size_t px, double t, vec3 c, int frame, int order);
-/* The pass layer joins the sums with weight w > 0 (passes + 1), or is cleared. */
+/* The pass layer joins the sums with weight w > 0 (passes + 1), or is cleared (the derivative films' too). */
 void film_commit_pass(film *f, double w);
 void film_drop_pass(film *f);
 /* Layer k of frame_sum (a frame, or an order layer: film_order_layer) as the weighted mean over passes. */

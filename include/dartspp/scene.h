@@ -282,6 +282,39 @@ static inline int scene_key_read_by(const scene_key *k, int t)
     return (k->read_by & KEY_READ_BY(t)) != 0;
 }
 
+/* ---- derivatives (docs/derivatives.md; Yi et al. 2021) ----
+ * A parameter θ a render differentiates (`--derivative POINTER`, the Python API's derivatives=[...]): a JSON
+ * Pointer (RFC 6901) into the scene file, resolved when the scene loads (src/scene/diff_params.c) to what θ
+ * moves, as the derivative of the scene's internal values with respect to it. The derivative images are
+ * ∂I/∂θ in the units of the value the pointer names. */
+#define DIFF_PARAM_MAX 8
+typedef enum {
+    DIFF_MEDIUM,      /* index: a medium, or MEDIUM_VACUUM (its speed of light only): dsigma_s, dsigma_a, deta */
+    DIFF_PHASE_G,     /* index: a medium with a Henyey–Greenstein (or isotropic, g = 0) phase function; dg/dθ = 1 */
+    DIFF_EMISSION,    /* index: a light; dlog: ∂ ln(its emitted radiance)/∂θ per channel */
+    DIFF_ALBEDO,      /* index: a BSDF linear in its constant albedo; dlog: ∂ ln(albedo)/∂θ per channel */
+    DIFF_PULSE_START, /* index: a light; its pulse's start */
+    DIFF_PULSE_WIDTH, /* index: a light; its pulse's width (> 0) */
+    DIFF_WINDOW,      /* the time window: d_start, d_width (gate [start, start + width), or the frames) */
+    DIFF_TRANSLATE    /* target: what moves, along `axis` (a unit vector): a primitive, a light, the camera */
+} diff_kind;
+typedef enum { DIFF_TARGET_SURFACES, DIFF_TARGET_LIGHT, DIFF_TARGET_CAMERA } diff_target;
+typedef struct {
+    char pointer[256];       /* as given */
+    diff_kind kind;
+    int index;               /* medium, light or BSDF index, as kind says; -1 where none */
+    vec3 dsigma_s, dsigma_a; /* DIFF_MEDIUM: ∂σs/∂θ, ∂σa/∂θ per channel (density applied) */
+    double deta;             /* DIFF_MEDIUM: ∂η/∂θ (η = 1/speed_of_light: time per length) */
+    vec3 dlog;               /* DIFF_EMISSION, DIFF_ALBEDO */
+    double d_start, d_width; /* DIFF_WINDOW: ∂start/∂θ and ∂width/∂θ of the window (gate centre: 1, 0; gate
+                              * width, centred: −1/2, 1; frame start: 1, 0; frame width: 0, 1) */
+    int target;              /* DIFF_TRANSLATE: diff_target */
+    int first_surface, surface_count; /* DIFF_TRANSLATE of a primitive: its surfaces [first, first + count) */
+    int light;               /* DIFF_TRANSLATE: the light that moves with it (a point light, or the primitive's
+                              * area light), else -1 */
+    vec3 axis;               /* DIFF_TRANSLATE: ∂position/∂θ */
+} diff_param;
+
 /* ---- the scene ---- */
 typedef struct scene scene;
 struct scene {
@@ -309,12 +342,16 @@ struct scene {
     char *mesh_files;        /* the mesh files read, one resolved path per line (a render's outputs must not
                               * overwrite them); may be NULL */
     void *rt_device, *rt_scene; /* Embree handles */
+    diff_param diffs[DIFF_PARAM_MAX]; /* the derivatives asked for (scene_load_options.derivatives), in order */
+    int diff_count;
 };
 
 typedef struct {
     const char *const *sets; /* "key=value" overrides of integrator/renderer keys (--set) */
     int set_count;
     int verbose;             /* also list ignored keys in notes */
+    const char *const *derivatives; /* JSON Pointers of the parameters to differentiate (at most DIFF_PARAM_MAX) */
+    int derivative_count;
 } scene_load_options;
 
 int scene_load(const char *path, const scene_load_options *opt, scene *s, dp_error *err);

@@ -27,8 +27,22 @@ int film_init(film *f, int width, int height, const time_window *tw, dp_error *e
     return 0;
 }
 
+int film_init_derivs(film *f, int k, dp_error *err)
+{
+    if (k <= 0) return 0;
+    f->deriv = calloc((size_t)k, sizeof *f->deriv);
+    if (!f->deriv) return dp_fail_kind(err, DP_ERROR_MEMORY, "out of memory for %d derivative films", k);
+    for (int i = 0; i < k; i++) {
+        if (film_init(&f->deriv[i], f->width, f->height, &f->window, err)) return -1; /* film_free frees the rest */
+        f->deriv_count = i + 1;
+    }
+    return 0;
+}
+
 void film_free(film *f)
 {
+    for (int i = 0; i < f->deriv_count; i++) film_free(&f->deriv[i]);
+    free(f->deriv);
     free(f->sum);
     free(f->pass);
     free(f->frame_sum);
@@ -45,11 +59,16 @@ void film_copy_sums(film *to, const film *from)
     to->weight_sum = from->weight_sum;
     to->last_weight = from->last_weight;
     to->nonfinite = from->nonfinite;
+    for (int i = 0; i < from->deriv_count && i < to->deriv_count; i++) film_copy_sums(&to->deriv[i], &from->deriv[i]);
 }
 
 int film_copy(film *to, const film *from, dp_error *err)
 {
     if (film_init(to, from->width, from->height, &from->window, err)) return -1;
+    if (film_init_derivs(to, from->deriv_count, err)) {
+        film_free(to);
+        return -1;
+    }
     film_copy_sums(to, from);
     return 0;
 }
@@ -82,6 +101,7 @@ void film_commit_pass(film *f, double w)
     f->passes++;
     f->weight_sum += w;
     f->last_weight = w;
+    for (int i = 0; i < f->deriv_count; i++) film_commit_pass(&f->deriv[i], w);
 }
 
 /* Clears the pass layer: an unfinished pass leaves no trace. */
@@ -90,6 +110,7 @@ void film_drop_pass(film *f)
     size_t n = (size_t)f->width * f->height * 3, nf = n * (size_t)time_window_layers(&f->window);
     memset(f->pass, 0, n * sizeof(double));
     if (nf > 0) memset(f->frame_pass, 0, nf * sizeof(float));
+    for (int i = 0; i < f->deriv_count; i++) film_drop_pass(&f->deriv[i]);
 }
 
 /* Image k (k < 0: the gate image; else layer k of frame_sum) as float32 into out (NULL: only counted), a pixel with a non-finite channel
@@ -146,6 +167,6 @@ double film_sample_pixels(film *f, const camera *cam, uint64_t seed, long pass, 
             bad += pixel.nonfinite;
         }
     }
-    f->nonfinite += bad;
+    f->nonfinite += bad; /* a derivative film's dropped contributions count here, with the image's */
     return rays;
 }
