@@ -103,7 +103,10 @@ static double sm_pdf(smooth r, double t)
 /* g'(t), σ > 0 */
 static double sm_dpdf(smooth r, double t)
 {
-    if (r.tau == 0.0) return -t / (r.sig * r.sig) * sm_pdf(r, t);
+    if (r.tau == 0.0) {
+        double g = sm_pdf(r, t);
+        return g > 0.0 ? -t / r.sig * (g / r.sig) : 0.0; /* 0, not ∞·0, far out */
+    }
     return (npdf(t / r.sig) / r.sig - emg_e(r, t) / r.tau) / r.tau;
 }
 
