@@ -63,27 +63,27 @@ static int cmp_double(const void *a, const void *b)
 }
 
 /* (1): sup |F_n − F| over the sorted draws (both sides of each step), times sqrt(n) */
-static double ks_stat(const time_kernel *k, uint64_t seed, int DRAWS)
+static double ks_stat(const time_kernel *k, uint64_t seed, int n)
 {
-    double *o = malloc((size_t)DRAWS * sizeof *o);
+    double *o = malloc((size_t)n * sizeof *o);
     assert_non_null(o);
     dp_rng rng = rng_stream(seed, 50, 2);
-    for (int i = 0; i < DRAWS; i++) o[i] = emitter_pulse_sample(&k->pulse, &rng) + sensor_response_sample(k->response, &rng);
-    qsort(o, DRAWS, sizeof *o, cmp_double);
+    for (int i = 0; i < n; i++) o[i] = emitter_pulse_sample(&k->pulse, &rng) + sensor_response_sample(k->response, &rng);
+    qsort(o, (size_t)n, sizeof *o, cmp_double);
     double d = 0.0;
-    for (int i = 0; i < DRAWS;) {
+    for (int i = 0; i < n;) {
         int j = i;
-        while (j < DRAWS && o[j] == o[i]) j++; /* ties (the delta pulse without a response) */
+        while (j < n && o[j] == o[i]) j++; /* ties (the delta pulse without a response) */
         /* F(o_i) against the share of draws <= o_i, and F just below o_i against the share below it */
-        double hi = fabs(time_kernel_cdf(k, o[i]) - (double)j / DRAWS);
+        double hi = fabs(time_kernel_cdf(k, o[i]) - (double)j / n);
         double Fm = time_kernel_has_density(k) ? time_kernel_cdf(k, o[i]) : time_kernel_cdf(k, nextafter(o[i], -INFINITY));
-        double lo = fabs(Fm - (double)i / DRAWS);
+        double lo = fabs(Fm - (double)i / n);
         if (lo > d) d = lo;
         if (hi > d) d = hi;
         i = j;
     }
     free(o);
-    return d * sqrt((double)DRAWS);
+    return d * sqrt((double)n);
 }
 
 /* The points where the density (check 2) or F in the width (check 3) jumps or has a jump in its slope, to
