@@ -1,13 +1,13 @@
 /* tier: quick */
-/* The offset's distribution (include/dartspp/derivative.h, src/derivative/time_kernel.c, docs/derivatives.md
- * §2) for every pulse (delta, box, Gaussian) with every response (off, Gaussian, Gaussian + exponential tail,
- * tail only, a table written here): (1) the CDF against the empirical CDF of 200,000 draws of
- * emitter_pulse_sample + sensor_response_sample (Kolmogorov–Smirnov, α = 1e-3 per case); (2) the density
- * against central differences of the CDF; (3) ∂F/∂width against central differences of the CDF in the width;
- * (4) limits, bounds, monotonicity and no NaN/Inf out to ±1e300. Plus extreme parameters (50,000 draws each) (σ ≪ τ, σ ≫ τ, a
- * box far narrower and far wider than the response, a narrow Gaussian pulse on a table) for (2)–(4), and the
- * one quadrature (Gaussian pulse ⊗ table) against an independent one over the table's variable.
- * Broken variants and how each failed: tests/README.md (derivative/). */
+/* The offset's distribution (include/dartspp/derivative.h, src/derivative/time_kernel.c,
+ * docs/derivatives.md §2) for every pulse (delta, box, Gaussian) with every response (off, Gaussian,
+ * Gaussian + exponential tail, tail only, a table written here): (1) the CDF against the empirical CDF of
+ * 200,000 draws of emitter_pulse_sample + sensor_response_sample (Kolmogorov–Smirnov, α = 1e-3 per case);
+ * (2) the density against central differences of the CDF; (3) ∂F/∂width against central differences of the
+ * CDF in the width; (4) limits, bounds, monotonicity and no NaN/Inf out to ±1e300. Plus extreme parameters
+ * (50,000 draws each) (σ ≪ τ, σ ≫ τ, a box far narrower and far wider than the response, a narrow Gaussian
+ * pulse on a table) for (1)–(4), and the one quadrature (Gaussian pulse ⊗ table) against an independent one
+ * over the table's variable. Broken variants and how each failed: tests/README.md (derivative/). */
 #include <float.h>
 #include <math.h>
 #include <setjmp.h>
