@@ -28,11 +28,13 @@ static const double gl8_w[4] = {0.3626837833783620, 0.3137066458778873, 0.222381
 static double npdf(double u) { return INV_SQRT_2PI * exp(-0.5 * u * u); }
 
 /* The continued fraction of the Mills ratio, u >= MILLS_FROM: Φ(−u) = φ(u)/d1 with
- * d1 = u + 1/d2, d2 = u + 2/d3, ... (evaluated from k = 60 down; converged to rounding for u >= 5). */
+ * d1 = u + 1/d2, d2 = u + 2/d3, ... evaluated from k = 8 + 600/u² down (converged to 1e-16 relative: 24
+ * terms needed at u = 5, 12 at u = 10, 8 at u = 20; far tails take the fewest). */
 static void mills(double u, double *d1, double *d2)
 {
     double d = u;
-    for (int k = 60; k >= 2; k--) d = u + k / d;
+    int top = u < 1e3 ? 8 + (int)(600.0 / (u * u)) : 8;
+    for (int k = top; k >= 2; k--) d = u + k / d;
     *d2 = d;
     *d1 = u + 1.0 / d;
 }
