@@ -91,7 +91,16 @@ static void ptr_prefix(const json_ptr *p, int k, char *out, size_t n)
     }
 }
 
-/* The value the pointer names, or a refusal ("names nothing"). */
+/* Whether the first k tokens are a BSDF or medium reference, which may be a name (src/scene/scene_load.c). */
+static int is_reference(const json_ptr *p, int k)
+{
+    if (k == 3 && !strcmp(p->tok[0], "primitives"))
+        return !strcmp(p->tok[2], "bsdf") || !strcmp(p->tok[2], "int_medium") || !strcmp(p->tok[2], "ext_medium");
+    return k == 2 && !strcmp(p->tok[0], "camera") && !strcmp(p->tok[1], "medium");
+}
+
+/* The value the pointer names: 0; 1 when a reference by name stops the walk (*out the name); or a refusal
+ * ("names nothing"). */
 static int ptr_walk(const diff_ctx *d, const json_ptr *p, const cJSON **out)
 {
     const cJSON *v = d->root;
@@ -111,6 +120,9 @@ static int ptr_walk(const diff_ctx *d, const json_ptr *p, const cJSON **out)
             if (!next)
                 return dfail(d, p, "names nothing: %s is not in the file (a default is not a value of the file: write "
                              "the key, or --set it, to differentiate it)", pre);
+        } else if (is_reference(p, i) && cJSON_IsString(v)) {
+            *out = v;
+            return 1; /* a name: the caller says where what it names is */
         } else {
             return dfail(d, p, "names nothing: %s is inside a %s, which has no members", pre,
                          cJSON_IsString(v) ? "string" : "number");
@@ -441,11 +453,12 @@ static int resolve_one(const diff_ctx *d, const json_ptr *p, diff_param *r)
 {
     const cJSON *v = NULL;
     if (p->n == 1 && !p->tok[0][0]) return dfail(d, p, "names nothing: an empty key at the top level");
-    if (ptr_walk(d, p, &v)) return -1;
-    if (cJSON_IsObject(v) || (cJSON_IsArray(v) && !is_vec3(v)))
+    int rc = ptr_walk(d, p, &v);
+    if (rc < 0) return -1;
+    if (!rc && (cJSON_IsObject(v) || (cJSON_IsArray(v) && !is_vec3(v))))
         return dfail(d, p, "names %s, not a parameter: name one of its values (it can: %s)",
                      cJSON_IsObject(v) ? "an object" : "an array", DIFFERENTIABLE);
-    if (!cJSON_IsNumber(v) && !cJSON_IsArray(v))
+    if (!rc && !cJSON_IsNumber(v) && !cJSON_IsArray(v) && !cJSON_IsString(v)) /* a string: said by its reader */
         return dfail(d, p, "not a parameter dartspp differentiates: not a number (it can: %s)", DIFFERENTIABLE);
     *r = (diff_param){.index = -1, .light = -1, .first_surface = -1};
     snprintf(r->pointer, sizeof r->pointer, "%s", p->text);
