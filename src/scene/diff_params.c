@@ -17,7 +17,7 @@ static const char DIFFERENTIABLE[] =
     "(or one channel); camera/transform/position/<0|1|2>; integrator: transient_time_center, transient_time_width, "
     "start_time, vaccum_speed_of_light";
 
-/* A pointer split into its reference tokens, ~1 and ~0 undone (RFC 6901 §4). */
+/* A pointer split into its reference tokens, ~1 and ~0 undone (RFC 6901). */
 typedef struct {
     const char *text;
     char tok[PTR_TOKENS][128];
@@ -71,7 +71,7 @@ static int ptr_parse(const diff_ctx *d, const char *text, json_ptr *p)
     return 0;
 }
 
-/* An array index token: digits without a leading zero (RFC 6901 §4); -1 otherwise. */
+/* An array index token: digits without a leading zero (RFC 6901); -1 otherwise. */
 static int ptr_index(const char *t)
 {
     size_t n = strlen(t);

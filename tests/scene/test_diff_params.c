@@ -203,6 +203,7 @@ static void test_refusals(void **state)
         {"media/0/sigma_s", NULL, NULL, NULL, "must start with '/'"},
         {"/media/0/sig~2ma_s", NULL, NULL, NULL, "bad escape '~2'"},
         {"/media/3/sigma_s", NULL, NULL, NULL, "names nothing: /media/3 does not exist (the array has 2 elements)"},
+        {"/media/2/sigma_s", NULL, NULL, NULL, "names nothing: /media/2 does not exist (the array has 2 elements)"},
         {"/media/01/sigma_s", NULL, NULL, NULL, "not an array index"},
         {"/primitives/0/pulse_start", NULL, NULL, NULL, "names nothing: /primitives/0/pulse_start is not in the file"},
         {"/integrator/max_bounces", NULL, NULL, NULL, "not a parameter dartspp differentiates (it can:"},
