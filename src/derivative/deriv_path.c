@@ -15,6 +15,10 @@ int deriv_plan_init(deriv_plan *d, const scene *s, dp_error *err)
     d->kernel = calloc((size_t)s->light_count, sizeof *d->kernel);
     if (!d->kernel) return dp_fail_kind(err, DP_ERROR_MEMORY, "out of memory for the derivatives' time kernels");
     for (int i = 0; i < s->light_count; i++) d->kernel[i] = (time_kernel){s->lights[i].pulse, &s->cam.response};
+    if (deriv_geometry_init(d, s, err)) {
+        deriv_plan_free(d);
+        return -1;
+    }
     return 0;
 }
 
@@ -22,6 +26,7 @@ void deriv_plan_free(deriv_plan *d)
 {
     free(d->kernel);
     d->kernel = NULL;
+    deriv_geometry_free(d);
 }
 
 void deriv_transmittance(const deriv_plan *d, deriv_path *p, int med, double len)
@@ -190,4 +195,13 @@ void deriv_splat(const deriv_plan *d, film_pixel *pix, const deriv_path *p, int 
         vec3 vg = v3_mul(c, v3_add(dl, v3s(sg))), vf = v3_mul(c, v3_add(dl, v3s(sf)));
         if (!add_layers(&f->deriv[k], pix->px, &s, vg, vf)) pix->nonfinite++;
     }
+}
+
+void deriv_splat_value(const deriv_plan *d, film_pixel *pix, int k, double t, vec3 value, int frame, int order)
+{
+    film *f = pix->f;
+    if (!deriv_on(d) || k >= f->deriv_count || v3_is_zero(value)) return;
+    film_slot s = film_time_slot(f, t, frame, order);
+    if (!s.counts) return;
+    if (!add_layers(&f->deriv[k], pix->px, &s, value, value)) pix->nonfinite++;
 }

@@ -159,6 +159,7 @@ static void connect_control_vertex(pixel_ctx *c, const path_state *ps, const med
     cv.time = ps->time + m->eta * t;
     cv.tr_done = 0;
     pt_deriv_segment(c, &cv, t);
+    pt_geom_vertex(c, &cv, t, 0);
     if (c->pass->deriv) deriv_medium_vertex(c->pass->deriv, &cv.dv, ps->medium);
     cv.depth = ps->depth + 1;
     cv.beta = v3_mul(ps->beta, v3_scale(v3_mul(m->sigma_s, v3_exp_neg(v3_scale(m->sigma_t, t))), 1.0 / pdf));

@@ -54,6 +54,7 @@ void pt_connect_sample(pixel_ctx *c, const path_state *ps, int i, const emitter_
     if (D) {
         dv = ps->dv;
         if (!ss) deriv_phase(D, &dv, ps->medium, ps->d, wl);
+        pt_geom_leg(c, &dv, i, x, ps->medium, pf, ps->d, ss);
     }
     if (!scene_transmittance_segments(s, o, ss ? surface_medium_toward(ss, ps->medium, wl) : ps->medium,
                                       shadow_target(s, ed), &tr, &t, &end, D ? leg_segment : NULL, &leg))
@@ -174,6 +175,7 @@ static int scatter_medium(pixel_ctx *c, path_state *ps, double t)
     ps->o = v3_add(ps->o, v3_scale(ps->d, t));
     ps->time += segment_time(c, ps, m->eta, t);
     pt_deriv_segment(c, ps, t);
+    pt_geom_vertex(c, ps, t, 0);
     if (D) deriv_medium_vertex(D, &ps->dv, ps->medium);
     ps->depth++;
     ps->after_delta = 0;
@@ -199,6 +201,7 @@ static int scatter_surface(pixel_ctx *c, path_state *ps, const hit_record *h)
     const bsdf *b = &s->bsdfs[sf->bsdf];
     ps->time += segment_time(c, ps, medium_eta(s, ps->medium), h->t);
     pt_deriv_segment(c, ps, h->t);
+    pt_geom_vertex(c, ps, h->t, 1);
     hit_emission(c, ps, h);
     if (bsdf_is_passthrough(b)) {
         vec3 n_out = v3_dot(ps->d, h->ng) < 0.0 ? v3_neg(h->ng) : h->ng; /* the far side */
@@ -254,6 +257,7 @@ static void trace_camera_path(pixel_ctx *c, vec3 o, vec3 d)
 {
     const scene *s = c->pass->s;
     path_state ps = {.o = o, .d = d, .medium = s->cam.medium, .beta = v3s(1.0), .after_delta = 1};
+    if (c->pass->geom) deriv_camera_start(c->pass->deriv, &ps.dv);
     if (c->pass->aimed && !pt_aim_start(c, &ps)) return;
     for (int guard = 0; guard < 100000; guard++) {
         if (ps.depth >= c->pass->p->bounces.max - 1) return; /* no later path can count */
@@ -261,7 +265,9 @@ static void trace_camera_path(pixel_ctx *c, vec3 o, vec3 d)
         c->pix->rays += 1;
         int hit = scene_intersect(s, ps.o, ps.d, INFINITY, &h);
         double tmax = hit ? h.t : INFINITY;
+        pt_geom_segment(c, &ps, hit ? &h : NULL);
         if (ps.medium != MEDIUM_VACUUM) {
+            pt_shadow_crossings(c, &ps, tmax);
             int event;
             double t;
             if (!medium_distance(c, &ps, tmax, &event, &t)) return;
@@ -284,8 +290,10 @@ int path_tracer_pass(const scene *s, const render_plan *p, const eda_set *eda, f
                      long pass, const dp_stop_flag *stop, render_stats *st, dp_error *err)
 {
     pt_pass pp = {.s = s, .p = p, .eda = eda, .deriv = deriv_on(&p->deriv) ? &p->deriv : NULL};
+    pp.geom = pp.deriv && pp.deriv->geom;
     if (pt_pass_aim_init(&pp, err)) return -1;
     st->rays += film_sample_pixels(f, &s->cam, seed, pass, stop, sample_pixel, &pp);
+    pt_shadow_surfaces(&pp, f, seed, pass);
     pt_pass_aim_free(&pp);
     return 0;
 }

@@ -17,6 +17,7 @@ typedef struct {
     darts_guide *guide;  /* light_count entries (aimed) */
     double *light_cdf;   /* light_count entries, the last 1 (aimed) */
     const deriv_plan *deriv; /* the derivatives (include/dartspp/derivative.h), or NULL without any */
+    int geom;                /* deriv has translations (docs/derivatives.md §6) */
 } pt_pass;
 
 /* An aimed camera path (path_aim.c): the one light it serves, chosen with probability sel_pdf, its target
@@ -52,6 +53,8 @@ typedef struct {
     int tr_done;     /* derivatives: the current segment's transmittance term is already in dv (uniform time's
                       * extended-space distance) */
     deriv_path dv;   /* derivatives: ∂ ln f and ∂τ of the path so far (used when pass->deriv) */
+    double seg_D;    /* translations: the current segment's distance to the surface ahead (INFINITY: none) */
+    double seg_dD[DIFF_PARAM_MAX]; /* and its ∂D/∂θ_k (deriv_hit_distance) */
 } path_state;
 
 typedef struct {
@@ -89,6 +92,27 @@ void pt_beam_crossing(pixel_ctx *c, const path_state *ps, int i, double tmax, in
 /* Derivatives (path_tracer.c): a segment of length len in the path's region up to its next vertex (its
  * transmittance unless ps->tr_done, and its time unless it is the unwarped camera segment). */
 void pt_deriv_segment(const pixel_ctx *c, path_state *ps, double len);
+
+/* ---- translations (path_geometry_deriv.c, boundary_shadow.c; docs/derivatives.md §6) ---- */
+/* The segment from ps->o along ps->d up to the hit h (NULL: none): ps->seg_D and ps->seg_dD. */
+void pt_geom_segment(const pixel_ctx *c, path_state *ps, const hit_record *h);
+/* The vertex at distance t of that segment (a medium vertex, or the surface at t = seg_D): its sliding. */
+void pt_geom_vertex(const pixel_ctx *c, path_state *ps, double t, int surface);
+/* The light leg from vertex x (velocity dv->dx) to point light i: ∂ ln of its transmittance, the light's
+ * value and the phase function (pf, arriving along w_in, in region med) or the BSDF·cos of ss, and ∂τ of
+ * its time, by central differences along the ends' velocities. */
+void pt_geom_leg(const pixel_ctx *c, deriv_path *dv, int i, vec3 x, int med, const phase_function *pf, vec3 w_in,
+                 const surface_site *ss);
+/* The light leg's value Tr·(I/r²)·f from x to point light i shifted by `shift` (f: pf along w_in, or the
+ * site ss) and its time; 0 when the leg is blocked. */
+int pt_leg_value(const scene *s, int i, vec3 x, vec3 shift, int med, const phase_function *pf, vec3 w_in,
+                 const surface_site *ss, vec3 *value, double *time);
+/* The boundary term of the shadows that the current medium segment (ps->o along ps->d up to tmax, throughput
+ * ps->beta at its start) crosses: Yi et al. 2021 eq. 16 on the sheets of the point lights' silhouette edges. */
+void pt_shadow_crossings(pixel_ctx *c, const path_state *ps, double tmax);
+/* The boundary term of the shadow edges on the surfaces the camera sees (edge sampling from the light; run
+ * after the pass's pixels, serially): adds to the derivative films' pass layer. */
+void pt_shadow_surfaces(const pt_pass *pp, film *f, uint64_t seed, long pass);
 
 /* Whether a time-0 camera segment (unwarped) is the current one: no DARTS sampler aims along it. */
 static inline int pt_unwarped_camera_segment(const pixel_ctx *c, const path_state *ps)
