@@ -57,6 +57,8 @@ typedef struct deriv_geometry {
     double **edge_cdf;  /* per light: the edges' CDF by length (the last 1) */
     double *edge_total; /* per light: their total length */
     double eps;         /* the offset across a boundary at which its two sides are evaluated */
+    int boundary;       /* the boundary terms are on (the environment's DARTSPP_DERIV_NO_BOUNDARY turns them
+                         * off: the broken variant of tests/derivative/test_deriv_geometry.c) */
 } deriv_geometry;
 
 /* The render's derivatives: the scene's parameters and the offset kernel of every light. */

@@ -68,7 +68,7 @@ void deriv_slide(const deriv_plan *d, deriv_path *p, vec3 dir, double t, double 
 /* ---- edges ---- */
 
 typedef struct {
-    uint32_t lo, hi, tri;
+    uint32_t lo, hi, tri, corner; /* position ids of the ends; the triangle; its corner the edge starts at */
 } edge_rec;
 
 static int edge_cmp(const void *a, const void *b)
@@ -92,22 +92,73 @@ static vec3 tri_normal(const scene *s, uint32_t t)
     return v3_cross(v3_sub(vertex(s, v[1]), p0), v3_sub(vertex(s, v[2]), p0));
 }
 
-/* The edges of surface i, sorted so that the triangles sharing one are adjacent; NULL when out of memory. */
+typedef struct {
+    float p[3];
+    uint32_t corner;
+} corner_rec;
+
+static int corner_cmp(const void *a, const void *b)
+{
+    const corner_rec *x = a, *y = b;
+    for (int j = 0; j < 3; j++)
+        if (x->p[j] != y->p[j]) return x->p[j] < y->p[j] ? -1 : 1;
+    return (x->corner > y->corner) - (x->corner < y->corner);
+}
+
+/* Per corner of surface i's triangles, the id of its position (meshes that split vertices per face, as the
+ * cube does, share edges by position); NULL when out of memory. */
+static uint32_t *corner_ids(const scene *s, const surface *sf)
+{
+    size_t n = 3 * (size_t)sf->tri_count;
+    corner_rec *c = malloc((n ? n : 1) * sizeof *c);
+    uint32_t *id = malloc((n ? n : 1) * sizeof *id);
+    if (!c || !id) {
+        free(c), free(id);
+        return NULL;
+    }
+    for (size_t j = 0; j < n; j++) {
+        uint32_t v = s->tris[3 * (size_t)sf->first_tri + j];
+        c[j] = (corner_rec){{s->verts[3 * (size_t)v], s->verts[3 * (size_t)v + 1], s->verts[3 * (size_t)v + 2]}, (uint32_t)j};
+    }
+    qsort(c, n, sizeof *c, corner_cmp);
+    uint32_t g = 0;
+    for (size_t j = 0; j < n; j++) {
+        if (j > 0 && memcmp(c[j].p, c[j - 1].p, sizeof c[j].p)) g++;
+        id[c[j].corner] = g;
+    }
+    free(c);
+    return id;
+}
+
+/* The edges of surface i (by position ids), sorted so that the triangles sharing one are adjacent; NULL when
+ * out of memory. */
 static edge_rec *surface_edges(const scene *s, int i, size_t *n)
 {
     const surface *sf = &s->surfaces[i];
     *n = 3 * (size_t)sf->tri_count;
     edge_rec *e = malloc((*n ? *n : 1) * sizeof *e);
-    if (!e) return NULL;
-    for (uint32_t t = 0; t < sf->tri_count; t++) {
-        const uint32_t *v = &s->tris[3 * (size_t)(sf->first_tri + t)];
-        for (int j = 0; j < 3; j++) {
-            uint32_t a = v[j], b = v[(j + 1) % 3];
-            e[3 * (size_t)t + j] = (edge_rec){a < b ? a : b, a < b ? b : a, sf->first_tri + t};
-        }
+    uint32_t *id = corner_ids(s, sf);
+    if (!e || !id) {
+        free(e), free(id);
+        return NULL;
     }
+    for (uint32_t t = 0; t < sf->tri_count; t++)
+        for (int j = 0; j < 3; j++) {
+            uint32_t a = id[3 * (size_t)t + j], b = id[3 * (size_t)t + (j + 1) % 3];
+            e[3 * (size_t)t + j] = (edge_rec){a < b ? a : b, a < b ? b : a, sf->first_tri + t, 3 * t + (uint32_t)j};
+        }
+    free(id);
     qsort(e, *n, sizeof *e, edge_cmp);
     return e;
+}
+
+/* The ends of edge record r: the corners j and j + 1 of its triangle. */
+static void edge_ends(const scene *s, const edge_rec *r, vec3 *a, vec3 *b)
+{
+    const uint32_t *v = &s->tris[3 * (size_t)r->tri];
+    int j = (int)(r->corner % 3);
+    *a = vertex(s, v[j]);
+    *b = vertex(s, v[(j + 1) % 3]);
 }
 
 /* Whether every edge of surface i is shared by exactly two triangles (a closed mesh): -1 out of memory. */
@@ -155,7 +206,8 @@ static int surface_silhouettes(const scene *s, int i, vec3 y, edge_list *l)
     while (j < n && !rc) {
         size_t k = j;
         while (k < n && e[k].lo == e[j].lo && e[k].hi == e[j].hi) k++;
-        vec3 a = vertex(s, e[j].lo), b = vertex(s, e[j].hi);
+        vec3 a, b;
+        edge_ends(s, &e[j], &a, &b);
         int sil = k - j != 2;
         if (!sil) sil = (v3_dot(tri_normal(s, e[j].tri), v3_sub(y, a)) > 0.0) !=
                         (v3_dot(tri_normal(s, e[j + 1].tri), v3_sub(y, a)) > 0.0);
@@ -289,6 +341,7 @@ int deriv_geometry_init(deriv_plan *d, const scene *s, dp_error *err)
         d->geom = g;
         g->light_count = n;
         g->eps = 1e-4 * s->ray_offset_scale;
+        g->boundary = getenv("DARTSPP_DERIV_NO_BOUNDARY") == NULL;
         g->edge = calloc((size_t)(n ? n : 1), sizeof *g->edge);
         g->edge_count = calloc((size_t)(n ? n : 1), sizeof *g->edge_count);
         g->edge_cdf = calloc((size_t)(n ? n : 1), sizeof *g->edge_cdf);

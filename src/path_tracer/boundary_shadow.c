@@ -97,9 +97,9 @@ static void shadow_sample(shadow_pass *sp, int i, const deriv_edge *e, double u,
 
 void pt_shadow_surfaces(const pt_pass *pp, film *f, uint64_t seed, long pass)
 {
-    const deriv_geometry *g = pp->deriv->geom;
+    const deriv_geometry *g = pp->geom ? pp->deriv->geom : NULL;
     const scene *s = pp->s;
-    if (!pp->geom || !bounces_count(&pp->p->bounces, 2) || s->light_count == 0) return;
+    if (!pp->geom || !g->boundary || !bounces_count(&pp->p->bounces, 2) || s->light_count == 0) return;
     long n = (long)f->width * f->height;
     shadow_pass sp = {pp, f, rng_stream(seed, (uint64_t)pass, (uint64_t)n + (1ull << 40)), 1.0 / (double)n};
     for (long j = 0; j < n; j++) {

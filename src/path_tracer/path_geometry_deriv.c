@@ -158,7 +158,7 @@ static void light_crossings(pixel_ctx *c, const path_state *ps, double tmax, cro
 void pt_shadow_crossings(pixel_ctx *c, const path_state *ps, double tmax)
 {
     const scene *s = c->pass->s;
-    if (!c->pass->geom || ps->medium == MEDIUM_VACUUM) return;
+    if (!c->pass->geom || !c->pass->deriv->geom->boundary || ps->medium == MEDIUM_VACUUM) return;
     const medium *m = &s->media[ps->medium];
     if (!medium_scatters(m) || ps->medium_events + 1 > m->max_bounces || !bounces_count(&c->pass->p->bounces, ps->depth + 2))
         return;

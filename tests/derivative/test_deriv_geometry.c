@@ -1,0 +1,288 @@
+/* Translations (docs/derivatives.md §6) against central finite differences with common random numbers, per
+ * image tile and on the total (the z-test of tests/derivative/test_deriv_fd.c): a fog cube (a closed forward
+ * surface) lit by a point light outside it, seen by a pinhole camera outside it; the camera moving, the light
+ * moving, a large wall moving along its normal, and a small occluder moving between the light and the wall —
+ * out of the camera's view, its shadow in the fog and on the wall in view — with the boundary terms and, as
+ * the broken variant, without them (DARTSPP_DERIV_NO_BOUNDARY); and linearity ∂I/∂θ_x + ∂I/∂θ_y = ∂I/∂θ_(x+y)
+ * (Yi et al. 2021 Fig. 7) for the occluder. */
+#include "render_fixtures.h"
+
+#include "dartspp/derivative.h"
+
+enum { T_CAMERA, T_LIGHT, T_WALL, T_OCCLUDER };
+
+typedef struct {
+    int wall, occluder, max_bounces;
+    vec3 cam, light, occ; /* positions */
+    double wall_z;
+    const char *integrator;
+} geo_scene;
+
+static void scene_text(char *text, size_t n, const geo_scene *g)
+{
+    char prims[2048] = "";
+    size_t at = 0;
+    if (g->wall)
+        at += (size_t)snprintf(prims + at, sizeof prims - at,
+                               "{ \"type\": \"quad\", \"bsdf\": \"white\", \"transform\": { \"position\": [0, 1, %.17g],"
+                               " \"scale\": [6, 1, 6], \"rotation\": [-90, 0, 0] } },", g->wall_z);
+    if (g->occluder)
+        at += (size_t)snprintf(prims + at, sizeof prims - at,
+                               "{ \"type\": \"quad\", \"bsdf\": \"white\", \"transform\": { \"position\": [%.17g, %.17g, %.17g],"
+                               " \"scale\": [0.5, 1, 0.5] } },", g->occ.x, g->occ.y, g->occ.z);
+    snprintf(text, n,
+             "{ \"media\": [ { \"name\": \"fog\", \"type\": \"homogeneous\", \"sigma_s\": 0.35, \"sigma_a\": 0.05,"
+             "    \"phase_function\": { \"type\": \"henyey_greenstein\", \"g\": 0.3 } } ],"
+             "  \"bsdfs\": [ { \"name\": \"white\", \"type\": \"lambert\", \"albedo\": 0.7 },"
+             "               { \"name\": \"boundary\", \"type\": \"forward\" } ],"
+             "  \"primitives\": [ { \"type\": \"cube\", \"bsdf\": \"boundary\", \"int_medium\": \"fog\","
+             "      \"transform\": { \"position\": [0, 1, 0], \"scale\": [3, 3, 3] } }, %s"
+             "    { \"type\": \"point\", \"power\": 30, \"pulse_start\": 0.2, \"pulse_width\": 0.6,"
+             "      \"transform\": { \"position\": [%.17g, %.17g, %.17g] } } ],"
+             "  \"camera\": { \"type\": \"pinhole\", \"resolution\": [8, 8], \"fov\": 30,"
+             "    \"transform\": { \"position\": [%.17g, %.17g, %.17g], \"x_axis\": [-1, 0, 0], \"y_axis\": [0, 1, 0],"
+             "      \"z_axis\": [0, 0, 1] } },"
+             "  \"integrator\": { \"type\": \"path_tracer\", \"max_bounces\": %d, \"transient_time_center\": 7,"
+             "    \"transient_time_width\": 6 %s },"
+             "  \"renderer\": { \"spp\": 1 } }",
+             prims, g->light.x, g->light.y, g->light.z, g->cam.x, g->cam.y, g->cam.z, g->max_bounces, g->integrator);
+}
+
+static geo_scene base_scene(void)
+{
+    return (geo_scene){.wall = 1, .occluder = 0, .max_bounces = 2, .cam = {0, 1, -3}, .light = {0, 3.4, -0.5},
+                       .occ = {0, 2.3, 0.3}, .wall_z = 1.0, .integrator = ""};
+}
+
+typedef struct {
+    long n, cap;
+    double *x; /* per pass: NT primal tiles, then NT tiles of each derivative */
+    int nd;
+    double last[4 * NT];
+} fd_probe;
+
+static void tiles_of(const film *f, double *v)
+{
+    for (int i = 0; i < NT; i++) v[i] = 0.0;
+    for (int y = 0; y < f->height; y++)
+        for (int x = 0; x < f->width; x++)
+            for (int c = 0; c < 3; c++)
+                v[(y * TILES / f->height) * TILES + x * TILES / f->width] += f->sum[3 * ((size_t)y * f->width + x) + c];
+}
+
+static int fd_after(void *ctx, const film *f, const render_stats *st, dp_error *err)
+{
+    (void)err;
+    fd_probe *t = ctx;
+    int w = (1 + t->nd) * NT;
+    if (st->passes == 1) memset(t->last, 0, sizeof t->last);
+    if (t->n == t->cap) {
+        t->cap = t->cap ? 2 * t->cap : 1024;
+        t->x = realloc(t->x, (size_t)t->cap * w * sizeof(double));
+        assert_non_null(t->x);
+    }
+    double v[4 * NT] = {0};
+    tiles_of(f, v);
+    for (int k = 0; k < t->nd && k < f->deriv_count; k++) tiles_of(&f->deriv[k], v + (1 + k) * NT);
+    for (int i = 0; i < w; i++) {
+        t->x[(size_t)t->n * w + i] = (v[i] - t->last[i]) / f->last_weight;
+        t->last[i] = v[i];
+    }
+    t->n++;
+    return 0;
+}
+
+static void geo_probe(const geo_scene *g, const diff_param *dp, int nd, long passes, fd_probe *t)
+{
+    static char text[8192];
+    scene_text(text, sizeof text, g);
+    tmp_scene ts;
+    tmp_scene_write(&ts, text);
+    scene s;
+    load_scene(ts.path, NULL, 0, &s);
+    for (int k = 0; k < nd; k++) {
+        s.diffs[k] = dp[k];
+        snprintf(s.diffs[k].pointer, sizeof s.diffs[k].pointer, "/test/%d", k);
+    }
+    s.diff_count = nd;
+    memset(t, 0, sizeof *t);
+    t->nd = nd;
+    render_options ro = {.threads = 2, .seed = 11, .spp = passes, .after_pass = fd_after, .after_pass_ctx = t};
+    film f;
+    render_stats st;
+    dp_error err;
+    if (render_scene(&s, &ro, &f, &st, &err)) fail_msg("%s", err.msg);
+    assert_int_equal(st.nonfinite, 0);
+    assert_int_equal(t->n, passes);
+    film_free(&f);
+    scene_free(&s);
+    tmp_scene_remove(&ts);
+}
+
+/* z of the mean of per-pass differences e_i (0 when they vanish) */
+static double z_of(double s1, double s2, long n)
+{
+    double m = s1 / n, se = sqrt(fmax(0.0, (s2 - n * m * m) / (n - 1)) / n);
+    return se > 0 ? fabs(m) / se : (m == 0 ? 0 : INFINITY);
+}
+
+static geo_scene moved(geo_scene g, int what, vec3 axis, double eps)
+{
+    switch (what) {
+    case T_CAMERA: g.cam = v3_add(g.cam, v3_scale(axis, eps)); break;
+    case T_LIGHT: g.light = v3_add(g.light, v3_scale(axis, eps)); break;
+    case T_WALL: g.wall_z += eps * axis.z; break;
+    default: g.occ = v3_add(g.occ, v3_scale(axis, eps)); break;
+    }
+    return g;
+}
+
+static diff_param param_of(const geo_scene *g, int what, vec3 axis)
+{
+    diff_param q = {.kind = DIFF_TRANSLATE, .index = -1, .light = -1, .first_surface = -1, .axis = axis};
+    if (what == T_CAMERA) q.target = DIFF_TARGET_CAMERA;
+    if (what == T_LIGHT) q.target = DIFF_TARGET_LIGHT, q.light = 0;
+    if (what == T_WALL) q.target = DIFF_TARGET_SURFACES, q.first_surface = 1, q.surface_count = 1;
+    if (what == T_OCCLUDER) q.target = DIFF_TARGET_SURFACES, q.first_surface = 1 + g->wall, q.surface_count = 1;
+    return q;
+}
+
+/* The finite difference against derivative 0 of the render at θ: the largest |z| over the tiles and the total. */
+static double fd_compare(const char *label, const geo_scene *g, int what, vec3 axis, double eps, long passes)
+{
+    fd_probe a, b, d;
+    geo_scene lo = moved(*g, what, axis, -eps), hi = moved(*g, what, axis, eps);
+    diff_param q = param_of(g, what, axis);
+    geo_probe(&lo, NULL, 0, passes, &a);
+    geo_probe(&hi, NULL, 0, passes, &b);
+    geo_probe(g, &q, 1, passes, &d);
+    double zmax = 0.0, tot_fd = 0.0, tot_d = 0.0, s_e = 0.0, s_e2 = 0.0;
+    for (long i = 0; i < passes; i++) {
+        double e_tot = 0.0;
+        for (int v = 0; v < NT; v++) {
+            double fd = (b.x[i * NT + v] - a.x[i * NT + v]) / (2.0 * eps), dv = d.x[i * 2 * NT + NT + v];
+            tot_fd += fd / passes, tot_d += dv / passes, e_tot += fd - dv;
+        }
+        s_e += e_tot, s_e2 += e_tot * e_tot;
+    }
+    for (int v = 0; v < NT; v++) {
+        double s1 = 0, s2 = 0;
+        for (long i = 0; i < passes; i++) {
+            double e = (b.x[i * NT + v] - a.x[i * NT + v]) / (2.0 * eps) - d.x[i * 2 * NT + NT + v];
+            s1 += e, s2 += e * e;
+        }
+        zmax = fmax(zmax, z_of(s1, s2, passes));
+    }
+    double zt = z_of(s_e, s_e2, passes);
+    print_message("  %-34s total dI %.5g, finite difference %.5g (%+.2f %%), |z| %.2f total, max |z| %.2f over %d tiles\n",
+                  label, tot_d, tot_fd, 100.0 * (tot_d - tot_fd) / fabs(tot_fd), zt, zmax, NT);
+    free(a.x), free(b.x), free(d.x);
+    return fmax(zmax, zt);
+}
+
+static long passes_or(long n)
+{
+    return getenv("FD_PASSES") ? atol(getenv("FD_PASSES")) : n;
+}
+
+static void test_camera(void **state)
+{
+    (void)state;
+    geo_scene g = base_scene();
+    g.wall = 0, g.max_bounces = 4; /* the fog alone: every order */
+    assert_true(fd_compare("camera x, fog", &g, T_CAMERA, v3(1, 0, 0), 0.02, passes_or(1500)) < 4.0);
+    g.wall = 1, g.max_bounces = 2; /* hits sliding over the wall */
+    assert_true(fd_compare("camera z, fog and wall", &g, T_CAMERA, v3(0, 0, 1), 0.02, passes_or(1500)) < 4.0);
+}
+
+static void test_light(void **state)
+{
+    (void)state;
+    geo_scene g = base_scene();
+    g.wall = 0, g.max_bounces = 4;
+    assert_true(fd_compare("light x, fog", &g, T_LIGHT, v3(1, 0, 0), 0.02, passes_or(1500)) < 4.0);
+    g.wall = 1, g.max_bounces = 2;
+    assert_true(fd_compare("light y, fog and wall", &g, T_LIGHT, v3(0, 1, 0), 0.02, passes_or(1500)) < 4.0);
+}
+
+static void test_wall(void **state)
+{
+    (void)state;
+    geo_scene g = base_scene();
+    assert_true(fd_compare("wall z (along its normal)", &g, T_WALL, v3(0, 0, 1), 0.02, passes_or(1500)) < 4.0);
+}
+
+static void test_occluder(void **state)
+{
+    (void)state;
+    geo_scene g = base_scene();
+    g.occluder = 1;
+    double z = fd_compare("occluder x", &g, T_OCCLUDER, v3(1, 0, 0), 0.02, passes_or(2000));
+    if (getenv("DARTSPP_DERIV_NO_BOUNDARY")) print_message("  (boundary terms off: the broken variant)\n");
+    assert_true(z < 4.0);
+}
+
+/* Linearity (Yi et al. 2021 Fig. 7): the occluder along x, along y and along x + y in one render, on the same
+ * paths: per pass and tile, ∂I/∂θ_x + ∂I/∂θ_y = ∂I/∂θ_(x+y) to the central differences' rounding. */
+static void test_linearity(void **state)
+{
+    (void)state;
+    geo_scene g = base_scene();
+    g.occluder = 1;
+    diff_param q[3] = {param_of(&g, T_OCCLUDER, v3(1, 0, 0)), param_of(&g, T_OCCLUDER, v3(0, 1, 0)),
+                       param_of(&g, T_OCCLUDER, v3(1, 1, 0))};
+    fd_probe d;
+    long passes = 200;
+    geo_probe(&g, q, 3, passes, &d);
+    double worst = 0.0, scale = 0.0;
+    for (long i = 0; i < passes; i++)
+        for (int v = 0; v < NT; v++) {
+            const double *r = &d.x[i * 4 * NT];
+            worst = fmax(worst, fabs(r[NT + v] + r[2 * NT + v] - r[3 * NT + v]));
+            scale = fmax(scale, fabs(r[3 * NT + v]));
+        }
+    print_message("  linearity: max |dx + dy - d(x+y)| %.3g against max |d(x+y)| %.3g per pass and tile\n", worst, scale);
+    assert_true(scale > 0.0);
+    assert_true(worst <= 1e-6 * scale);
+    free(d.x);
+}
+
+/* What is refused names the pointer: an orthographic camera, a light that is not a point light, max_bounces 3
+ * with an opaque surface, the occluder's silhouette in view. */
+static void test_refusals(void **state)
+{
+    (void)state;
+    static char text[8192];
+    geo_scene g = base_scene();
+    g.occluder = 1;
+    g.occ = v3(0, 1.2, 0.3); /* in view */
+    scene_text(text, sizeof text, &g);
+    tmp_scene ts;
+    tmp_scene_write(&ts, text);
+    scene s;
+    load_scene(ts.path, NULL, 0, &s);
+    s.diffs[0] = param_of(&g, T_OCCLUDER, v3(1, 0, 0));
+    snprintf(s.diffs[0].pointer, sizeof s.diffs[0].pointer, "/primitives/2/transform/position/0");
+    s.diff_count = 1;
+    render_options ro = {.threads = 1, .seed = 1, .spp = 1};
+    film f;
+    render_stats st;
+    dp_error err;
+    assert_int_not_equal(render_scene(&s, &ro, &f, &st, &err), 0);
+    print_message("  refused: %s\n", err.msg);
+    assert_non_null(strstr(err.msg, "/primitives/2/transform/position/0"));
+    assert_non_null(strstr(err.msg, "silhouette"));
+    s.integrator.max_bounces = 3;
+    assert_int_not_equal(render_scene(&s, &ro, &f, &st, &err), 0);
+    assert_non_null(strstr(err.msg, "max_bounces"));
+    scene_free(&s);
+    tmp_scene_remove(&ts);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {cmocka_unit_test(test_refusals), cmocka_unit_test(test_linearity),
+                                       cmocka_unit_test(test_camera),   cmocka_unit_test(test_light),
+                                       cmocka_unit_test(test_wall),     cmocka_unit_test(test_occluder)};
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
