@@ -54,10 +54,12 @@ static void shadow_sample(shadow_pass *sp, int i, const deriv_edge *e, double u,
     hit_record hl, hc;
     if (!first_opaque(s, v3_add(pe, v3_scale(om, D->geom->eps)), om, &hl)) return;
     vec3 c = hl.p, nw = hl.ng, dc;
-    double lam = v3_len(v3_sub(c, y)) / v3_len(a), imp, rc;
+    double lam = v3_len(v3_sub(c, y)) / v3_len(a), imp = 0.0, rc;
     long px = camera_pixel(cam, c, nw, &imp, &dc, &rc);
     /* the camera must see c itself: its ray's first opaque hit is c's surface there */
-    if (px < 0 || !first_opaque(s, cam->pos, dc, &hc) || hc.surface != hl.surface || fabs(hc.t - rc) > 1e3 * D->geom->eps) return;
+    if (px < 0 || !first_opaque(s, cam->pos, dc, &hc) || hc.surface != hl.surface ||
+        v3_len(v3_sub(hc.p, c)) > 1e3 * D->geom->eps)
+        return;
     surface_site ss;
     if (!surface_site_init(&ss, s, &sp->pp->p->shading, &hc, dc)) return;
     vec3 trc;
