@@ -210,6 +210,10 @@ int plan_json(const render_plan *p, const scene *s, char *out, size_t n)
             if (p->darts.eda[i].on)
                 cJSON_AddNumberToObject(cJSON_AddObjectToObject(eda, s->media[i].name), "alpha", p->darts.eda[i].alpha);
     }
+    if (s->diff_count > 0) { /* the derivative images (docs/derivatives.md §5), in their order */
+        cJSON *d = cJSON_AddArrayToObject(root, "derivatives");
+        for (int k = 0; k < s->diff_count; k++) cJSON_AddItemToArray(d, cJSON_CreateString(s->diffs[k].pointer));
+    }
     char *text = cJSON_PrintUnformatted(root);
     cJSON_Delete(root);
     int fits = text && strlen(text) < n;
