@@ -29,11 +29,15 @@ struct film {
     film *deriv;       /* deriv_count films of the same size and window: the derivative images ∂I/∂θ_k
                         * (include/dartspp/derivative.h), committed, dropped and copied with this one */
     int deriv_count;
+    const char *label; /* a derivative film's parameter (its JSON Pointer, owned by the scene); NULL otherwise */
 };
 
 int film_init(film *f, int width, int height, const time_window *tw, dp_error *err);
-/* Adds k derivative films (f->deriv) to an initialised film without any. 0, or -1 with err. */
-int film_init_derivs(film *f, int k, dp_error *err);
+/* Adds k derivative films (f->deriv) to an initialised film without any, labelled labels[i] (may be NULL).
+ * 0, or -1 with err. */
+int film_init_derivs(film *f, int k, const char *const *labels, dp_error *err);
+/* film_init with the size, window and derivative films (their labels) of `like`. */
+int film_init_like(film *f, const film *like, dp_error *err);
 /* Frees the film and its derivative films. */
 void film_free(film *f);
 /* The completed passes of `from` (sums, pass count, weights, non-finite count) into `to`, a film of the same

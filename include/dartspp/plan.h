@@ -8,6 +8,7 @@
 #define DARTSPP_PLAN_H
 
 #include "dartspp/darts.h"
+#include "dartspp/derivative.h"
 #include "dartspp/scene.h"
 #include "dartspp/surface_site.h"
 
@@ -67,6 +68,8 @@ typedef struct render_plan {
     int uniform_time;                /* time_sampling "uniform" runs: gated, a medium, a light, one η */
     /* DARTS (both integrators) */
     darts_plan darts;
+    /* the derivatives the scene asks for (scene.diffs; count 0: none) and their time kernels */
+    deriv_plan deriv;
     /* renderer (the command line may override) */
     long spp;
     double timeout, checkpoint_interval; /* seconds */

@@ -23,6 +23,8 @@ typedef struct {
     const char *scene_path;
     const char *const *sets;     /* "key=value" overrides (--set), set_count of them */
     int set_count;
+    const char *const *derivatives; /* JSON Pointers of the parameters to differentiate (--derivative), derivative_count */
+    int derivative_count;
     const char *output;          /* NULL: the scene's hdr_output_file, else <scene stem>.exr */
     int skip;                    /* RENDER_SKIP_CUBE, RENDER_SKIP_VIEWER (--no-cube, --no-viewer) */
     int verbose, quiet;

@@ -388,6 +388,11 @@ int scene_transmittance(const scene *s, vec3 p, int med, vec3 q, vec3 *tr, doubl
 /* scene_transmittance, with *end the region at q (the sliced primitives' displaced vertices: σs and the phase
  * function there). */
 int scene_transmittance_region(const scene *s, vec3 p, int med, vec3 q, vec3 *tr, double *time, int *end);
+/* scene_transmittance_region, calling on_segment(ctx, region, length) for every straight piece it crosses
+ * (the derivatives' transmittance and time per region; NULL: none). */
+typedef void (*scene_segment_fn)(void *ctx, int region, double len);
+int scene_transmittance_segments(const scene *s, vec3 p, int med, vec3 q, vec3 *tr, double *time, int *end,
+                                 scene_segment_fn on_segment, void *ctx);
 
 /* Whether a region (medium index or MEDIUM_VACUUM) occurs in the scene: the camera's, a light's, or a side
  * of a surface that sets media (a surface that sets none keeps the medium it is crossed from). */

@@ -30,7 +30,7 @@ static void usage(FILE *f)
     fprintf(f,
             "usage: dartspp render SCENE.json [--threads N] [--seed S] [--spp N] [--time SECONDS]\n"
             "                      [--output PATH.exr|.pfm] [--checkpoint SECONDS] [--resume | --overwrite]\n"
-            "                      [--set key=value ...]\n"
+            "                      [--set key=value ...] [--derivative POINTER ...]\n"
             "                      [--reference REF.exr --log RUN.csv [--log-every SECONDS]]\n"
             "                      [--max-memory SIZE] [--no-cube] [--no-viewer] [--verbose] [--quiet]\n"
             "                      [--reduce-every SECONDS]  (dartspp-mpi: the checkpoint state's interval)\n"

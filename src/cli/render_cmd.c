@@ -21,6 +21,8 @@ static void render_usage(FILE *f)
                "  --threads N         worker threads, 0 (all cores, the default) to %d\n"
                "  --seed S            an integer 0 to 18446744073709551615 (default 1)\n"
                "  --set KEY=VALUE     overrides an integrator or renderer key (repeatable; dartspp keys lists them)\n"
+               "  --derivative POINTER  the derivative of every image with respect to the scene value the JSON\n"
+               "                      Pointer names, e.g. /media/0/sigma_s (repeatable; docs/derivatives.md §1)\n"
                "  --checkpoint SECONDS  all outputs and the state <stem>.state every SECONDS of rendering (0: none)\n"
                "  --resume            goes on from the checkpoint state <stem>.state\n"
                "  --overwrite         replaces a checkpoint state holding more passes than this run renders\n"
@@ -53,12 +55,13 @@ static int option(const char *o, const char *v, render_opt_value *out)
     return dp_exit_status(DP_ERROR_INPUT);
 }
 
-/* The flags into rq; sets (argc entries) receives the --set values. 0, or the exit status of bad input with
+/* The flags into rq; sets and derivs (argc entries each) receive the --set and --derivative values. 0, or the
+ * exit status of bad input with
  * the message on stderr. */
-static int parse_args(int argc, char **argv, render_request *rq, const char **sets)
+static int parse_args(int argc, char **argv, render_request *rq, const char **sets, const char **derivs)
 {
     *rq = (render_request){.seed = 1, .spp = -1, .time_limit = -1, .checkpoint = -1, .log_every = 1.0, .reduce_every = 30.0,
-                          .sets = sets};
+                          .sets = sets, .derivatives = derivs};
     for (int i = 0; i < argc; i++) {
         const char *o = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
         if (!strcmp(o, "--verbose")) rq->verbose = 1;
@@ -91,6 +94,10 @@ static int parse_args(int argc, char **argv, render_request *rq, const char **se
         } else if (!strcmp(o, "--set")) {
             if (!v || !strchr(v, '=')) return bad_arg(o, v, "expected key=value");
             sets[rq->set_count++] = argv[++i];
+        } else if (!strcmp(o, "--derivative")) {
+            /* checked against the scene when it loads (src/scene/diff_params.c) */
+            if (!v) return bad_arg(o, v, "expected a JSON Pointer, e.g. /media/0/sigma_s");
+            derivs[rq->derivative_count++] = argv[++i];
         } else if (o[0] == '-') return bad_arg(o, NULL, "unknown option");
         else if (rq->scene_path) return bad_arg(o, NULL, "only one scene file");
         else rq->scene_path = o;
@@ -120,7 +127,8 @@ int cli_render_cluster(int argc, char **argv, const render_cluster *cluster)
     }
     render_request rq;
     const char **sets = calloc((size_t)argc + 1, sizeof(char *));
-    int rc = parse_args(argc, argv, &rq, sets);
+    const char **derivs = calloc((size_t)argc + 1, sizeof(char *));
+    int rc = sets && derivs ? parse_args(argc, argv, &rq, sets, derivs) : dp_exit_status(DP_ERROR_MEMORY);
     /* --reduce-every paces dartspp-mpi's reductions; one process has none (accepted, so that one command line
      * serves both binaries, but said) */
     for (int i = 0; !rc && !cluster && i < argc; i++)
@@ -129,5 +137,6 @@ int cli_render_cluster(int argc, char **argv, const render_cluster *cluster)
                             "dartspp-mpi's\n");
     rc = rc ? render_run_refused(cluster, rc) : render_run(&rq, cluster);
     free(sets);
+    free(derivs);
     return rc;
 }

@@ -27,14 +27,27 @@ int film_init(film *f, int width, int height, const time_window *tw, dp_error *e
     return 0;
 }
 
-int film_init_derivs(film *f, int k, dp_error *err)
+int film_init_derivs(film *f, int k, const char *const *labels, dp_error *err)
 {
     if (k <= 0) return 0;
     f->deriv = calloc((size_t)k, sizeof *f->deriv);
     if (!f->deriv) return dp_fail_kind(err, DP_ERROR_MEMORY, "out of memory for %d derivative films", k);
     for (int i = 0; i < k; i++) {
         if (film_init(&f->deriv[i], f->width, f->height, &f->window, err)) return -1; /* film_free frees the rest */
+        f->deriv[i].label = labels ? labels[i] : NULL;
         f->deriv_count = i + 1;
+    }
+    return 0;
+}
+
+int film_init_like(film *f, const film *like, dp_error *err)
+{
+    if (film_init(f, like->width, like->height, &like->window, err)) return -1;
+    const char *labels[64] = {0};
+    for (int i = 0; i < like->deriv_count && i < 64; i++) labels[i] = like->deriv[i].label;
+    if (film_init_derivs(f, like->deriv_count, labels, err)) {
+        film_free(f);
+        return -1;
     }
     return 0;
 }
@@ -64,11 +77,7 @@ void film_copy_sums(film *to, const film *from)
 
 int film_copy(film *to, const film *from, dp_error *err)
 {
-    if (film_init(to, from->width, from->height, &from->window, err)) return -1;
-    if (film_init_derivs(to, from->deriv_count, err)) {
-        film_free(to);
-        return -1;
-    }
+    if (film_init_like(to, from, err)) return -1;
     film_copy_sums(to, from);
     return 0;
 }

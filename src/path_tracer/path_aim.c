@@ -86,6 +86,7 @@ int pt_aim_start(pixel_ctx *c, path_state *ps)
     const emitter *L = &s->lights[i];
     a->pre_r = -1.0;
     ps->time = path_time_offset(s, L, c->rng);
+    ps->offset = ps->time;
     /* the light's point for this path: the target of its samplers and of its connections */
     double up[2] = {0.0, 0.0};
     if (emitter_direct_draws(L)) up[0] = rng_uniform(c->rng), up[1] = rng_uniform(c->rng);
@@ -156,9 +157,22 @@ static void connect_control_vertex(pixel_ctx *c, const path_state *ps, const med
     path_state cv = *ps;
     cv.o = v3_add(ps->o, v3_scale(ps->d, t));
     cv.time = ps->time + m->eta * t;
+    cv.tr_done = 0;
+    pt_deriv_segment(c, &cv, t);
+    if (c->pass->deriv) deriv_medium_vertex(c->pass->deriv, &cv.dv, ps->medium);
     cv.depth = ps->depth + 1;
     cv.beta = v3_mul(ps->beta, v3_scale(v3_mul(m->sigma_s, v3_exp_neg(v3_scale(m->sigma_t, t))), 1.0 / pdf));
     pt_aim_connect(c, &cv, cv.o, &m->phase, NULL);
+}
+
+/* ∂ ln σt/∂θ per channel, the extended-space surface factor's own term (σt > 0 in every channel there). */
+static void predrawn_dlog_sigma_t(const deriv_plan *d, deriv_path *p, const medium *m, int med)
+{
+    for (int k = 0; k < d->count; k++) {
+        const diff_param *q = &d->param[k];
+        if (q->kind == DIFF_MEDIUM && q->index == med)
+            p->dlog[k] = v3_add(p->dlog[k], v3_mul(v3_add(q->dsigma_s, q->dsigma_a), (vec3){1.0 / m->sigma_t.x, 1.0 / m->sigma_t.y, 1.0 / m->sigma_t.z}));
+    }
 }
 
 /* Uniform time: the distance drawn at the vertex before its direction (Jarabo et al. 2014 §5.1: exponential, λ = σt), used
@@ -176,6 +190,11 @@ static void predrawn_distance(pixel_ctx *c, path_state *ps, const medium *m, dou
     *t = *event ? r : tmax;
     vec3 f = v3_mul(*event ? m->sigma_s : m->sigma_t, e);
     ps->beta = p > 0.0 ? v3_mul(ps->beta, v3_scale(f, 1.0 / p)) : v3s(0.0);
+    if (c->pass->deriv && !*event) { /* the surface's extended-space factor σt·e^{−σt·r} at the drawn r ≥ tmax */
+        deriv_transmittance(c->pass->deriv, &ps->dv, ps->medium, r);
+        predrawn_dlog_sigma_t(c->pass->deriv, &ps->dv, m, ps->medium);
+        ps->tr_done = 1;
+    }
 }
 
 int pt_aim_medium_segment(pixel_ctx *c, path_state *ps, double tmax, int *event, double *t)

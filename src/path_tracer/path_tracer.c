@@ -21,23 +21,55 @@ static vec3 shadow_target(const scene *s, const emitter_direct *ed)
     return scene_offset_ray_origin(s, ed->y, v3_dot(ed->wi, ed->n) < 0.0 ? ed->n : v3_neg(ed->n));
 }
 
+/* The light leg's pieces into the connection's derivative state (scene_transmittance_segments). */
+typedef struct {
+    const deriv_plan *d;
+    deriv_path *p;
+} leg_deriv;
+
+static void leg_segment(void *ctx, int region, double len)
+{
+    leg_deriv *l = ctx;
+    deriv_transmittance(l->d, l->p, region, len);
+    deriv_time(l->d, l->p, region, len);
+}
+
 void pt_connect_sample(pixel_ctx *c, const path_state *ps, int i, const emitter_direct *ed, vec3 x,
                        const phase_function *pf, const surface_site *ss, int draw_emission, double w, int frame)
 {
     const scene *s = c->pass->s;
     const emitter *L = &s->lights[i];
+    const deriv_plan *D = c->pass->deriv;
     vec3 wl = ed->wi;
     vec3 f = ss ? surface_eval_cos(ss, wl, BSDF_LOBES_ALL) : v3s(phase_eval(pf, ps->d, wl));
     if (v3_max(f) <= 0.0) return;
     vec3 tr;
-    double t = ps->time + (draw_emission ? path_time_offset(s, L, c->rng) : 0.0);
+    double offset = draw_emission ? path_time_offset(s, L, c->rng) : ps->offset;
+    double t = ps->time + (draw_emission ? offset : 0.0);
     c->pix->rays += 1;
     vec3 o = ss ? surface_spawn(s, ss, wl) : x;
-    if (!scene_transmittance(s, o, ss ? surface_medium_toward(ss, ps->medium, wl) : ps->medium, shadow_target(s, ed),
-                             &tr, &t))
+    int end;
+    deriv_path dv;
+    leg_deriv leg = {D, &dv};
+    if (D) {
+        dv = ps->dv;
+        if (!ss) deriv_phase(D, &dv, ps->medium, ps->d, wl);
+    }
+    if (!scene_transmittance_segments(s, o, ss ? surface_medium_toward(ss, ps->medium, wl) : ps->medium,
+                                      shadow_target(s, ed), &tr, &t, &end, D ? leg_segment : NULL, &leg))
         return;
-    film_pixel_splat(c->pix, t, v3_scale(v3_mul(v3_mul(v3_mul(ps->beta, tr), ed->value), f), w / ed->denom), frame,
-                     ps->depth); /* the vertices so far, this one included */
+    vec3 value = v3_scale(v3_mul(v3_mul(v3_mul(ps->beta, tr), ed->value), f), w / ed->denom);
+    film_pixel_splat(c->pix, t, value, frame, ps->depth); /* the vertices so far, this one included */
+    if (D) deriv_splat(D, c->pix, &dv, i, t, offset, value, frame, ps->depth);
+}
+
+void pt_deriv_segment(const pixel_ctx *c, path_state *ps, double len)
+{
+    const deriv_plan *D = c->pass->deriv;
+    if (!D) return;
+    if (!ps->tr_done) deriv_transmittance(D, &ps->dv, ps->medium, len);
+    ps->tr_done = 0;
+    if (!pt_unwarped_camera_segment(c, ps)) deriv_time(D, &ps->dv, ps->medium, len);
 }
 
 /* The light connection of light i from x, by its direct-light sample. A medium vertex does not connect to a
@@ -92,6 +124,9 @@ void pt_beam_crossing(pixel_ctx *c, const path_state *ps, int i, double tmax, in
     path_state v = *ps;
     v.o = v3_add(ps->o, v3_scale(ps->d, t));
     v.time = ps->time + (c->pass->p->window.camera_unwarp && ps->depth == 0 ? 0.0 : m->eta * t);
+    v.tr_done = 0;
+    pt_deriv_segment(c, &v, t);
+    if (c->pass->deriv) deriv_medium_vertex(c->pass->deriv, &v.dv, ps->medium);
     v.depth = ps->depth + 1;
     v.beta = v3_mul(ps->beta, v3_scale(v3_mul(m->sigma_s, v3_exp_neg(v3_scale(m->sigma_t, t))), 1.0 / pdf));
     emitter_direct ed;
@@ -110,12 +145,16 @@ static void hit_emission(pixel_ctx *c, const path_state *ps, const hit_record *h
     const emitter *L = &s->lights[i];
     vec3 le = emitter_hit_radiance(L, ps->d, h->ng);
     if (v3_is_zero(le)) return;
+    const deriv_plan *D = c->pass->deriv;
     if (c->aim.on) {
-        film_pixel_splat(c->pix, ps->time, v3_scale(v3_mul(ps->beta, le), 1.0 / (c->aim.sel_pdf * c->aim.bin.pdf)),
-                         c->aim.bin.frame, ps->depth);
+        vec3 v = v3_scale(v3_mul(ps->beta, le), 1.0 / (c->aim.sel_pdf * c->aim.bin.pdf));
+        film_pixel_splat(c->pix, ps->time, v, c->aim.bin.frame, ps->depth);
+        if (D) deriv_splat(D, c->pix, &ps->dv, i, ps->time, ps->offset, v, c->aim.bin.frame, ps->depth);
         return;
     }
-    film_pixel_splat(c->pix, ps->time + path_time_offset(s, L, c->rng), v3_mul(ps->beta, le), -1, ps->depth);
+    double offset = path_time_offset(s, L, c->rng);
+    film_pixel_splat(c->pix, ps->time + offset, v3_mul(ps->beta, le), -1, ps->depth);
+    if (D) deriv_splat(D, c->pix, &ps->dv, i, ps->time + offset, offset, v3_mul(ps->beta, le), -1, ps->depth);
 }
 
 /* Time of a segment of length len in a region of index eta: η·len, but nothing for the camera segment
@@ -131,18 +170,23 @@ static int scatter_medium(pixel_ctx *c, path_state *ps, double t)
 {
     const scene *s = c->pass->s;
     const medium *m = &s->media[ps->medium];
+    const deriv_plan *D = c->pass->deriv;
     ps->o = v3_add(ps->o, v3_scale(ps->d, t));
     ps->time += segment_time(c, ps, m->eta, t);
+    pt_deriv_segment(c, ps, t);
+    if (D) deriv_medium_vertex(D, &ps->dv, ps->medium);
     ps->depth++;
     ps->after_delta = 0;
     if (++ps->medium_events > m->max_bounces) return 0;
     if (!ps->connected && bounces_count(&c->pass->p->bounces, ps->depth + 1)) connect_lights(c, ps, ps->o, &m->phase, NULL);
+    vec3 w_in = ps->d;
     if (c->aim.on) {
         pt_aim_scatter_direction(c, ps);
-        return 1;
+    } else {
+        double u1 = rng_uniform(c->rng), u2 = rng_uniform(c->rng);
+        ps->d = phase_sample(&m->phase, ps->d, u1, u2);
     }
-    double u1 = rng_uniform(c->rng), u2 = rng_uniform(c->rng);
-    ps->d = phase_sample(&m->phase, ps->d, u1, u2);
+    if (D) deriv_phase(D, &ps->dv, ps->medium, w_in, ps->d);
     return 1;
 }
 
@@ -154,6 +198,7 @@ static int scatter_surface(pixel_ctx *c, path_state *ps, const hit_record *h)
     const surface *sf = &s->surfaces[h->surface];
     const bsdf *b = &s->bsdfs[sf->bsdf];
     ps->time += segment_time(c, ps, medium_eta(s, ps->medium), h->t);
+    pt_deriv_segment(c, ps, h->t);
     hit_emission(c, ps, h);
     if (bsdf_is_passthrough(b)) {
         vec3 n_out = v3_dot(ps->d, h->ng) < 0.0 ? v3_neg(h->ng) : h->ng; /* the far side */
@@ -165,6 +210,7 @@ static int scatter_surface(pixel_ctx *c, path_state *ps, const hit_record *h)
     ps->medium_events = 0;
     surface_site ss;
     if (!surface_site_init(&ss, s, &c->pass->p->shading, h, ps->d)) return 0;
+    if (c->pass->deriv) deriv_surface_vertex(c->pass->deriv, &ps->dv, sf->bsdf);
     if ((bsdf_lobes(b) & ~BSDF_LOBE_SPECULAR) && bounces_count(&c->pass->p->bounces, ps->depth + 1))
         connect_lights(c, ps, h->p, NULL, &ss);
     double u[3] = {rng_uniform(c->rng), rng_uniform(c->rng), rng_uniform(c->rng)};
@@ -237,7 +283,7 @@ static void sample_pixel(void *ctx, film_pixel *pix, vec3 o, vec3 dir, dp_rng *r
 int path_tracer_pass(const scene *s, const render_plan *p, const eda_set *eda, film *f, uint64_t seed,
                      long pass, const dp_stop_flag *stop, render_stats *st, dp_error *err)
 {
-    pt_pass pp = {.s = s, .p = p, .eda = eda};
+    pt_pass pp = {.s = s, .p = p, .eda = eda, .deriv = deriv_on(&p->deriv) ? &p->deriv : NULL};
     if (pt_pass_aim_init(&pp, err)) return -1;
     st->rays += film_sample_pixels(f, &s->cam, seed, pass, stop, sample_pixel, &pp);
     pt_pass_aim_free(&pp);

@@ -16,6 +16,7 @@ typedef struct {
     int aimed;
     darts_guide *guide;  /* light_count entries (aimed) */
     double *light_cdf;   /* light_count entries, the last 1 (aimed) */
+    const deriv_plan *deriv; /* the derivatives (include/dartspp/derivative.h), or NULL without any */
 } pt_pass;
 
 /* An aimed camera path (path_aim.c): the one light it serves, chosen with probability sel_pdf, its target
@@ -47,6 +48,10 @@ typedef struct {
                     * vertex): the vertex makes none */
     int after_delta; /* the last vertex was the camera or a delta lobe: a hit on an area light counts its
                       * emission (elsewhere next-event estimation has counted it) */
+    double offset;   /* aimed: the offset path_time_offset drew into time at the start (0 on plain paths) */
+    int tr_done;     /* derivatives: the current segment's transmittance term is already in dv (uniform time's
+                      * extended-space distance) */
+    deriv_path dv;   /* derivatives: ∂ ln f and ∂τ of the path so far (used when pass->deriv) */
 } path_state;
 
 typedef struct {
@@ -81,6 +86,10 @@ void pt_connect_sample(pixel_ctx *c, const path_state *ps, int i, const emitter_
 /* Parallel beams: the connection of a medium segment (ps->o along ps->d, next surface at tmax) to beam i by a
  * vertex sampled where the segment crosses the beam (docs/emitters.md §4.2), scaled by w, in `frame`. */
 void pt_beam_crossing(pixel_ctx *c, const path_state *ps, int i, double tmax, int draw_emission, double w, int frame);
+/* Derivatives (path_tracer.c): a segment of length len in the path's region up to its next vertex (its
+ * transmittance unless ps->tr_done, and its time unless it is the unwarped camera segment). */
+void pt_deriv_segment(const pixel_ctx *c, path_state *ps, double len);
+
 /* Whether a time-0 camera segment (unwarped) is the current one: no DARTS sampler aims along it. */
 static inline int pt_unwarped_camera_segment(const pixel_ctx *c, const path_state *ps)
 {

@@ -70,6 +70,10 @@ int plan_resolve(const scene *s, render_plan *p, dp_error *err)
         plan_free(p);
         return -1;
     }
+    if (deriv_plan_init(&p->deriv, s, err)) {
+        plan_free(p);
+        return -1;
+    }
     p->spp = s->renderer.spp;
     p->timeout = s->renderer.timeout;
     p->checkpoint_interval = s->renderer.checkpoint_interval;
@@ -79,6 +83,7 @@ int plan_resolve(const scene *s, render_plan *p, dp_error *err)
 void plan_free(render_plan *p)
 {
     darts_plan_free(&p->darts);
+    deriv_plan_free(&p->deriv);
 }
 
 double plan_surface_slack(const render_plan *p, long iteration)

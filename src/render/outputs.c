@@ -177,6 +177,42 @@ static int write_orders(const film *f, const char *stem, void (*wrote)(const cha
     return 0;
 }
 
+/* The derivative images (docs/derivatives.md §5): film k's gate image as <stem>_d<k><ext>, its frames,
+ * cube and orders under the stem <stem>_d<k> as the image's (no PNG preview and no viewer: the values are
+ * signed), and <stem>_derivatives.csv naming each k's parameter. */
+static int write_derivatives(const film *f, const char *stem, const char *dot, image_meta meta, int skip,
+                             void (*wrote)(const char *path), dp_error *err)
+{
+    for (int k = 0; k < f->deriv_count; k++) {
+        const film *d = &f->deriv[k];
+        char dstem[STAGED_PATH_MAX], path[STAGED_PATH_MAX + 16];
+        snprintf(dstem, sizeof dstem, "%s_d%d", stem, k);
+        snprintf(path, sizeof path, "%s%s", dstem, dot);
+        image_rgb img = {0};
+        if (film_image(d, -1, &img, err)) return -1;
+        image_meta m = meta;
+        m.frame_index = -1;
+        int rc = write_one(path, &img, &m, wrote, err);
+        image_free(&img);
+        if (!rc && d->window.frame_count > 0) rc = write_frames(d, dstem, dot, m, skip | RENDER_SKIP_VIEWER, wrote, err);
+        if (!rc && d->window.orders > 0) rc = write_orders(d, dstem, wrote, err);
+        if (rc) return -1;
+    }
+    char csv[STAGED_PATH_MAX + 32];
+    snprintf(csv, sizeof csv, "%s_derivatives.csv", stem);
+    atomic_file af;
+    FILE *fp = atomic_fopen(csv, "w", &af, err);
+    if (!fp) return -1;
+    fprintf(fp, "k,pointer,image\n");
+    const char *base = strrchr(stem, '/');
+    base = base ? base + 1 : stem;
+    for (int k = 0; k < f->deriv_count; k++)
+        fprintf(fp, "%d,\"%s\",%s_d%d%s\n", k, f->deriv[k].label ? f->deriv[k].label : "", base, k, dot);
+    if (atomic_fclose(&af, ferror(fp), err)) return -1;
+    if (wrote) wrote(csv);
+    return 0;
+}
+
 static int write_all(const film *f, const char *stem, const char *dot, const char *integrator, const char *plan,
                      int skip, void (*wrote)(const char *path), dp_error *err)
 {
@@ -196,6 +232,7 @@ static int write_all(const film *f, const char *stem, const char *dot, const cha
     image_free(&img);
     if (!rc && tw->frame_count > 0) rc = write_frames(f, stem, dot, meta, skip, wrote, err);
     if (!rc && tw->orders > 0) rc = write_orders(f, stem, wrote, err);
+    if (!rc && f->deriv_count > 0) rc = write_derivatives(f, stem, dot, meta, skip, wrote, err);
     return rc;
 }
 
@@ -375,6 +412,18 @@ static int list_outputs(file_list *l, const char *path, const scene *s, const re
                (!(rq->skip & RENDER_SKIP_CUBE) && list_add(l, "the transient cube", "%s_cube.npy", stem)) ||
                (!(rq->skip & RENDER_SKIP_VIEWER) && list_add(l, "the viewer", "%s_viewer.html", stem));
     if (tw->orders > 0 && !fail) fail = list_add(l, "the scattering orders", "%s_orders.npy", stem);
+    for (int k = 0; k < s->diff_count && !fail; k++) {
+        fail = list_add(l, "a derivative image", "%s_d%d%s", stem, k, ext);
+        for (int j = 0; j < tw->frame_count && !fail; j++) {
+            char dstem[OUTPUT_PATH_MAX + 16], frame[STAGED_PATH_MAX];
+            snprintf(dstem, sizeof dstem, "%s_d%d", stem, k);
+            frame_path(frame, sizeof frame, dstem, tw->frame_count, j, ext);
+            fail = list_add(l, "a derivative frame", "%s", frame);
+        }
+        if (tw->frame_count > 0 && !(rq->skip & RENDER_SKIP_CUBE) && !fail)
+            fail = list_add(l, "a derivative cube", "%s_d%d_cube.npy", stem, k);
+    }
+    if (s->diff_count > 0 && !fail) fail = list_add(l, "the derivatives' sidecar", "%s_derivatives.csv", stem);
     for (int k = 0; k < GROUND_TRUTH_IMAGES && s->renderer.ground_truth && !fail; k++)
         fail = list_add(l, "a ground-truth image", "%s_%s%s", stem, GROUND_TRUTH_NAMES[k], ext);
     if (rq->log && !fail) {

@@ -81,7 +81,7 @@ static int sum_onto_rank0(const render_cluster *c, const film *f, const render_s
                           render_stats *all, dp_error *err)
 {
     *all = *st;
-    if (film_init(total, f->width, f->height, &f->window, err)) return -1;
+    if (film_init_like(total, f, err)) return -1;
     if (c->reduce(c, f, total, st, all, err)) {
         film_free(total);
         return -1;
@@ -225,13 +225,21 @@ static int film_resume(film *f, const film *from, dp_error *err)
     return 0;
 }
 
+/* The derivative films the scene asks for (scene.diffs), labelled with their pointers. */
+static int render_film_derivs(const scene *s, film *f, dp_error *err)
+{
+    const char *labels[DIFF_PARAM_MAX];
+    for (int k = 0; k < s->diff_count; k++) labels[k] = s->diffs[k].pointer;
+    return film_init_derivs(f, s->diff_count, labels, err);
+}
+
 /* The passes, with the plan resolved and the film initialised. */
 static int render_passes(const scene *s, const render_plan *p, const render_options *opt, film *f, render_stats *st,
                          dp_error *err)
 {
     eda_set eda = {0};
     int ready = !eda_set_prepare(s, &p->darts, &p->window, &eda, opt->messages, err) &&
-                !film_init(f, s->cam.width, s->cam.height, &p->window, err) &&
+                !film_init(f, s->cam.width, s->cam.height, &p->window, err) && !render_film_derivs(s, f, err) &&
                 !(opt->resume && film_resume(f, opt->resume, err));
     const render_cluster *c = opt->cluster && opt->cluster->size > 1 ? opt->cluster : NULL;
     /* a rank without its EDA tables or film: none starts, and every rank exits with the largest status (2 when

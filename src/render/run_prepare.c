@@ -36,7 +36,8 @@ static void output_path(const render_request *rq, const scene *s, char *out, siz
 static int load_scene(render_run_job *j, dp_error *err)
 {
     const render_request *rq = j->rq;
-    scene_load_options lo = {.sets = rq->sets, .set_count = rq->set_count, .verbose = rq->verbose};
+    scene_load_options lo = {.sets = rq->sets, .set_count = rq->set_count, .verbose = rq->verbose,
+                            .derivatives = rq->derivatives, .derivative_count = rq->derivative_count};
     double t0 = dp_seconds();
     if (scene_load(rq->scene_path, &lo, &j->s, err)) return -1;
     j->load_seconds = dp_seconds() - t0;

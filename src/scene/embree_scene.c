@@ -186,6 +186,12 @@ int scene_transmittance(const scene *s, vec3 p, int med, vec3 q, vec3 *tr, doubl
 
 int scene_transmittance_region(const scene *s, vec3 p, int med, vec3 q, vec3 *tr, double *time, int *end)
 {
+    return scene_transmittance_segments(s, p, med, q, tr, time, end, NULL, NULL);
+}
+
+int scene_transmittance_segments(const scene *s, vec3 p, int med, vec3 q, vec3 *tr, double *time, int *end,
+                                 scene_segment_fn on_segment, void *ctx)
+{
     *end = med;
     *tr = v3s(1.0);
     for (int crossing = 0; crossing < 256; crossing++) {
@@ -198,6 +204,7 @@ int scene_transmittance_region(const scene *s, vec3 p, int med, vec3 q, vec3 *tr
         double seg = hit ? h.t : dist;
         if (med != MEDIUM_VACUUM) *tr = v3_mul(*tr, v3_exp_neg(v3_scale(s->media[med].sigma_t, seg)));
         *time += medium_eta(s, med) * seg;
+        if (on_segment) on_segment(ctx, med, seg);
         if (!hit) return 1;
         const surface *sf = &s->surfaces[h.surface];
         if (!bsdf_is_passthrough(&s->bsdfs[sf->bsdf])) break;

@@ -106,4 +106,15 @@ int texture_fetch(json_ctx *c, scene *s, const char *where, const char *key, con
 vec3 texture_mean(const texture *t);
 void texture_free_all(scene *s);
 
+/* ---- derivatives (diff_params.c; docs/derivatives.md §1) ---- */
+/* What a JSON primitive became: its surface (or -1) and its light (or -1, an area light's or a light primitive's),
+ * recorded by the loader per index of `primitives`. */
+typedef struct {
+    int surface, light;
+} prim_slot;
+/* The `--derivative` JSON Pointers into s->diffs[], s->diff_count, against the parsed file (root, with the --set
+ * overrides applied) and the loaded scene. 0, or -1 with the error (file, pointer, reason) in c. */
+int diff_params_resolve(json_ctx *c, const cJSON *root, scene *s, const prim_slot *prims, int prim_count,
+                        const char *const *pointers, int count);
+
 #endif

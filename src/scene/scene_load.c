@@ -326,12 +326,14 @@ static int unsupported_primitive(json_ctx *c, const char *where, const char *typ
                  lights);
 }
 
-static int parse_primitives(json_ctx *c, const cJSON *root, scene *s, const cJSON *names)
+/* slots (one per primitive, or NULL): what each primitive became, for the derivatives' pointers */
+static int parse_primitives(json_ctx *c, const cJSON *root, scene *s, const cJSON *names, prim_slot *slots)
 {
     const cJSON *arr = jget_item(c, root, "primitives");
     if (!arr) return 0;
     if (!cJSON_IsArray(arr)) return jfail(c, "primitives", NULL, "expected an array");
     for (int i = 0; i < cJSON_GetArraySize(arr); i++) {
+        int surfaces = s->surface_count, lights = s->light_count;
         char w[64];
         snprintf(w, sizeof w, "primitives[%d]", i);
         const cJSON *v = cJSON_GetArrayItem(arr, i);
@@ -349,6 +351,7 @@ static int parse_primitives(json_ctx *c, const cJSON *root, scene *s, const cJSO
             rc = parse_surface(c, s, names, v, w, type, &T);
         else rc = unsupported_primitive(c, w, type);
         if (rc) return rc;
+        if (slots) slots[i] = (prim_slot){s->surface_count > surfaces ? surfaces : -1, s->light_count > lights ? lights : -1};
         jnote_unread_keys(c, v, w, mark);
     }
     return 0;
@@ -554,15 +557,22 @@ static int parse_all(json_ctx *c, cJSON *root, scene *s, const scene_load_option
     if (!cJSON_IsObject(root)) return jfail(c, "(top level)", NULL, "expected a JSON object");
     if (settings_apply_overrides(c, root, opt ? opt->sets : NULL, opt ? opt->set_count : 0)) return -1;
     const cJSON *names = NULL;
+    int derivs = opt && opt->derivative_count > 0;
+    const cJSON *prims = cJSON_GetObjectItemCaseSensitive(root, "primitives");
+    int prim_count = derivs && cJSON_IsArray(prims) ? cJSON_GetArraySize(prims) : 0;
+    prim_slot *slots = derivs ? calloc((size_t)prim_count + 1, sizeof *slots) : NULL;
+    if (derivs && !slots) return jfail(c, "(top level)", NULL, "out of memory");
     int rc = parse_media(c, root, s);
     if (!rc) rc = parse_bsdfs(c, root, s, &names);
-    if (!rc) rc = parse_primitives(c, root, s, names);
+    if (!rc) rc = parse_primitives(c, root, s, names, slots);
     if (!rc) rc = parse_camera(c, root, s);
     if (!rc) rc = settings_parse(c, root, s);
     if (!rc) rc = load_sensor_response(c, s);
     if (!rc) jnote_unread_keys(c, root, "", 0);
     if (!rc) warn_dark_scene(c, s);
     if (!rc) warn_light_outside_medium(c, s);
+    if (!rc && derivs) rc = diff_params_resolve(c, root, s, slots, prim_count, opt->derivatives, opt->derivative_count);
+    free(slots);
     cJSON_Delete((cJSON *)names);
     return rc;
 }

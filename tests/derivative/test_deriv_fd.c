@@ -1,0 +1,195 @@
+/* Derivative images against central finite differences with common random numbers (docs/derivatives.md §6):
+ * per pass and per image tile, (I(θ + ε) − I(θ − ε))/(2ε) from two renders of the same seed against the
+ * derivative image of a third render of that seed at θ; the paired per-pass differences give a z-test per tile
+ * and on the image total. Every parameter kind the path tracers differentiate, on the fog box with a point light
+ * of a box pulse, with the plain, DARTS and uniform-time path tracers. */
+#include "render_fixtures.h"
+
+#include "dartspp/derivative.h"
+
+/* The scene with θ written in: %s slots for every parameter, filled from a table of values. */
+enum { P_SIGMA_S, P_SIGMA_A, P_G, P_POWER, P_PULSE_START, P_PULSE_WIDTH, P_CENTER, P_WIDTH, P_ALBEDO, P_SPEED, P_COUNT };
+static const double BASE[P_COUNT] = {0.45, 0.05, 0.3, 4.0, 0.2, 0.6, 4.2, 1.5, 0.7, 1.0};
+
+static double fd_rel = 0.05;
+
+/* walls: the box's floor, back and red wall (surface paths, the albedo); without: an unbounded fog, where the
+ * paths of θ ± ε with common random numbers differ smoothly (no path leaves a wall for another). */
+static int walls = 1;
+/* steady: no gate (the coefficients' finite differences in a gate are dominated by contributions whose sampled
+ * emission time carries them across the gate's edges: a step that common random numbers cannot make smooth) */
+static int steady = 0;
+
+static void scene_text(char *text, size_t n, const double *v, const char *integrator)
+{
+    char prims[1024] = "";
+    if (walls)
+        snprintf(prims, sizeof prims, "%s",
+                 "    { \"type\": \"quad\", \"bsdf\": \"white\", \"transform\": { \"position\": [0, 0, 0], \"scale\": [2, 1, 2] } },"
+                 "    { \"type\": \"quad\", \"bsdf\": \"white\", \"transform\": { \"position\": [0, 1, 1], \"scale\": [2, 1, 2],"
+                 "      \"rotation\": [-90, 0, 0] } },"
+                 "    { \"type\": \"quad\", \"bsdf\": \"red\", \"transform\": { \"position\": [1, 1, 0], \"scale\": [2, 1, 2],"
+                 "      \"rotation\": [0, 0, 90] } },");
+    snprintf(text, n,
+             "{ \"media\": [ { \"name\": \"fog\", \"type\": \"homogeneous\", \"sigma_s\": %.17g, \"sigma_a\": %.17g,"
+             "    \"speed_of_light\": %.17g, \"phase_function\": { \"type\": \"henyey_greenstein\", \"g\": %.17g } } ],"
+             "  \"bsdfs\": [ { \"name\": \"white\", \"type\": \"lambert\", \"albedo\": %.17g },"
+             "               { \"name\": \"red\", \"type\": \"lambert\", \"albedo\": [0.7, 0.15, 0.1] } ],"
+             "  \"primitives\": [ %s"
+             "    { \"type\": \"collimated\", \"radius\": 0.3, \"emission\": %.17g, \"pulse_start\": %.17g,"
+             "      \"pulse_width\": %.17g, \"ext_medium\": \"fog\","
+             "      \"transform\": { \"position\": [-1.2, 1.6, 0.2], \"look_at\": [1, 0.6, 0.4], \"up\": [0, 1, 0] } } ],"
+             "  \"camera\": { \"type\": \"pinhole\", \"resolution\": [8, 8], \"fov\": 50, \"medium\": \"fog\","
+             "    \"transform\": { \"position\": [0, 1, -2.5], \"look_at\": [0, 1, 0], \"up\": [0, 1, 0] } },"
+             "  \"integrator\": { \"type\": \"path_tracer\", \"max_bounces\": 4, \"transient_time_center\": %.17g,"
+             "    \"transient_time_width\": %.17g %s },"
+             "  \"renderer\": { \"spp\": 1 } }",
+             v[P_SIGMA_S], v[P_SIGMA_A], v[P_SPEED], v[P_G], v[P_ALBEDO], prims, v[P_POWER], v[P_PULSE_START], v[P_PULSE_WIDTH],
+             v[P_CENTER], steady ? 0.0 : v[P_WIDTH], integrator);
+}
+
+/* Per pass: the gate image's tile totals and the derivative image's (when there is one). */
+typedef struct {
+    long n, cap;
+    double *x; /* per pass: NT primal tiles, then NT derivative tiles */
+    double last[2 * NT];
+} fd_probe;
+
+static void tiles_of(const film *f, double *v)
+{
+    for (int i = 0; i < NT; i++) v[i] = 0.0;
+    for (int y = 0; y < f->height; y++)
+        for (int x = 0; x < f->width; x++)
+            for (int c = 0; c < 3; c++)
+                v[(y * TILES / f->height) * TILES + x * TILES / f->width] += f->sum[3 * ((size_t)y * f->width + x) + c];
+}
+
+static int fd_after(void *ctx, const film *f, const render_stats *st, dp_error *err)
+{
+    (void)err;
+    fd_probe *t = ctx;
+    if (st->passes == 1) memset(t->last, 0, sizeof t->last);
+    if (t->n == t->cap) {
+        t->cap = t->cap ? 2 * t->cap : 1024;
+        t->x = realloc(t->x, (size_t)t->cap * 2 * NT * sizeof(double));
+        assert_non_null(t->x);
+    }
+    double v[2 * NT] = {0};
+    tiles_of(f, v);
+    if (f->deriv_count > 0) tiles_of(&f->deriv[0], v + NT);
+    for (int i = 0; i < 2 * NT; i++) {
+        t->x[(size_t)t->n * 2 * NT + i] = (v[i] - t->last[i]) / f->last_weight;
+        t->last[i] = v[i];
+    }
+    t->n++;
+    return 0;
+}
+
+static void render_probe_fd(const char *text, const diff_param *dp, long passes, fd_probe *t)
+{
+    tmp_scene ts;
+    tmp_scene_write(&ts, text);
+    scene s;
+    load_scene(ts.path, NULL, 0, &s);
+    if (dp) {
+        s.diffs[0] = *dp;
+        s.diff_count = 1;
+    }
+    memset(t, 0, sizeof *t);
+    render_options ro = {.threads = 2, .seed = 11, .spp = passes, .after_pass = fd_after, .after_pass_ctx = t};
+    film f;
+    render_stats st;
+    dp_error err;
+    if (render_scene(&s, &ro, &f, &st, &err)) fail_msg("%s", err.msg);
+    assert_int_equal(st.nonfinite, 0);
+    assert_int_equal(t->n, passes);
+    film_free(&f);
+    scene_free(&s);
+    tmp_scene_remove(&ts);
+}
+
+/* The finite difference against the derivative, per tile and on the total: returns the largest |z|. */
+static double fd_compare(const char *label, int p, const diff_param *dp, const char *integrator, long passes)
+{
+    /* ε: 5 % of a coefficient; 0.05 of the time unit for the pulse and the gate (their curvature is on the scale
+     * of the pulse's width) */
+    int timing = p == P_PULSE_START || p == P_PULSE_WIDTH || p == P_CENTER || p == P_WIDTH;
+    double lo[P_COUNT], hi[P_COUNT], eps = timing ? 0.05 : fd_rel * BASE[p];
+    memcpy(lo, BASE, sizeof lo);
+    memcpy(hi, BASE, sizeof hi);
+    lo[p] -= eps, hi[p] += eps;
+    static char text[8192];
+    fd_probe a, b, d;
+    scene_text(text, sizeof text, lo, integrator);
+    render_probe_fd(text, NULL, passes, &a);
+    scene_text(text, sizeof text, hi, integrator);
+    render_probe_fd(text, NULL, passes, &b);
+    scene_text(text, sizeof text, BASE, integrator);
+    render_probe_fd(text, dp, passes, &d);
+    double zmax = 0.0, tot_fd = 0.0, tot_d = 0.0, s_e = 0.0, s_e2 = 0.0;
+    for (long i = 0; i < passes; i++) {
+        double e_tot = 0.0;
+        for (int v = 0; v < NT; v++) {
+            double fd = (b.x[i * 2 * NT + v] - a.x[i * 2 * NT + v]) / (2.0 * eps), dv = d.x[i * 2 * NT + NT + v];
+            tot_fd += fd / passes, tot_d += dv / passes, e_tot += fd - dv;
+        }
+        s_e += e_tot, s_e2 += e_tot * e_tot;
+    }
+    for (int v = 0; v < NT; v++) {
+        double s1 = 0, s2 = 0;
+        for (long i = 0; i < passes; i++) {
+            double e = (b.x[i * 2 * NT + v] - a.x[i * 2 * NT + v]) / (2.0 * eps) - d.x[i * 2 * NT + NT + v];
+            s1 += e, s2 += e * e;
+        }
+        double m = s1 / passes, se = sqrt(fmax(0.0, (s2 - passes * m * m) / (passes - 1)) / passes);
+        double z = se > 0 ? fabs(m) / se : (m == 0 ? 0 : INFINITY);
+        if (z > zmax) zmax = z;
+    }
+    double m = s_e / passes, se = sqrt(fmax(0.0, (s_e2 - passes * m * m) / (passes - 1)) / passes);
+    double zt = se > 0 ? fabs(m) / se : 0.0;
+    print_message("  %-28s total dI %.5g, finite difference %.5g (%+.2f %%), |z| %.2f total, max |z| %.2f over %d tiles\n",
+                  label, tot_d, tot_fd, 100.0 * (tot_d - tot_fd) / fabs(tot_fd), zt, zmax, NT);
+    free(a.x), free(b.x), free(d.x);
+    return fmax(zmax, zt);
+}
+
+static diff_param medium_param(vec3 ds, vec3 da, double deta)
+{
+    return (diff_param){.kind = DIFF_MEDIUM, .index = 0, .dsigma_s = ds, .dsigma_a = da, .deta = deta};
+}
+
+static void run_kinds(const char *integrator, long passes)
+{
+    diff_param q[P_COUNT] = {
+        [P_SIGMA_S] = medium_param(v3s(1), v3s(0), 0),
+        [P_SIGMA_A] = medium_param(v3s(0), v3s(1), 0),
+        [P_G] = {.kind = DIFF_PHASE_G, .index = 0},
+        [P_POWER] = {.kind = DIFF_EMISSION, .index = 0, .dlog = v3s(1.0 / BASE[P_POWER])},
+        [P_PULSE_START] = {.kind = DIFF_PULSE_START, .index = 0},
+        [P_PULSE_WIDTH] = {.kind = DIFF_PULSE_WIDTH, .index = 0},
+        [P_CENTER] = {.kind = DIFF_WINDOW, .index = -1, .d_start = 1.0},
+        [P_WIDTH] = {.kind = DIFF_WINDOW, .index = -1, .d_start = -0.5, .d_width = 1.0},
+        [P_ALBEDO] = {.kind = DIFF_ALBEDO, .index = 0, .dlog = v3s(1.0 / BASE[P_ALBEDO])},
+        [P_SPEED] = medium_param(v3s(0), v3s(0), -1.0 / (BASE[P_SPEED] * BASE[P_SPEED])),
+    };
+    static const char *names[P_COUNT] = {"sigma_s", "sigma_a", "g", "power", "pulse_start", "pulse_width",
+                                         "transient_time_center", "transient_time_width", "albedo", "speed_of_light"};
+    for (int p = 0; p < P_COUNT; p++) {
+        walls = p == P_ALBEDO || getenv("FD_WALLS");
+        steady = (p == P_SIGMA_S || p == P_SIGMA_A || p == P_G) && !getenv("FD_GATED");
+        double z = fd_compare(names[p], p, &q[p], integrator, passes);
+        assert_true(z < 4.0);
+    }
+}
+
+static void test_plain(void **state)
+{
+    (void)state;
+    run_kinds("", getenv("FD_PASSES") ? atol(getenv("FD_PASSES")) : 3000);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {cmocka_unit_test(test_plain)};
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
