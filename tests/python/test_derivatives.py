@@ -93,6 +93,6 @@ def test_fog_inverse_example_runs(tmp_path):
     assert float(rows[0]["sigma_s"]) == pytest.approx(2 * fog["sigma_s"], rel=1e-12)
     assert float(rows[0]["sigma_a"]) == pytest.approx(0.5 * fog["sigma_a"], rel=1e-12)
     assert all(np.isfinite(float(r["loss"])) and float(r["loss"]) > 0 for r in rows)
-    assert "recovered sigma_s" in run.stdout
+    assert "recovered (mean of iterates 1..2): sigma_s" in run.stdout
     svg, png = tmp_path / "fog_inverse.svg", tmp_path / "fog_inverse.png"
     assert png.exists() or ET.parse(svg).getroot().tag.endswith("svg")
