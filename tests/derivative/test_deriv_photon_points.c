@@ -196,23 +196,31 @@ static void check_kinds(const char *label, const char *pp_keys, long pt_passes, 
         probe ref, m;
         render_derivs(PT_KEYS, groups[gi], sizes[gi], pt_passes, 11, &ref, NULL);
         render_derivs(keys, groups[gi], sizes[gi], pp_passes, 13, &m, NULL);
-        if (gi == 0) assert_true(compare("image", &ref, &m, 0) < Z_LIMIT);
-        for (int j = 0; j < sizes[gi]; j++) assert_true(compare(NAMES[groups[gi][j]], &ref, &m, 1 + j) < Z_LIMIT);
+        double z = gi == 0 ? compare("image", &ref, &m, 0) : 0.0; /* every kind printed, then the worst judged */
+        for (int j = 0; j < sizes[gi]; j++) z = fmax(z, compare(NAMES[groups[gi][j]], &ref, &m, 1 + j));
+        assert_true(z < Z_LIMIT);
         free(ref.x);
         free(m.x);
     }
 }
 
+/* The default tier's passes (about 50 s under the sanitizers in all); the stress program
+ * (test_deriv_photon_points_stress.c) sets more. DERIV_PT_PASSES and DERIV_PP_PASSES override either. */
+#ifndef PT_PASSES
+#define PT_PASSES 300
+#define PP_PASSES 30
+#endif
+
 static void test_baseline(void **state)
 {
     (void)state;
-    check_kinds("baseline photon pass", PP_BASE, passes_of("DERIV_PT_PASSES", 4000), passes_of("DERIV_PP_PASSES", 300));
+    check_kinds("baseline photon pass", PP_BASE, passes_of("DERIV_PT_PASSES", PT_PASSES), passes_of("DERIV_PP_PASSES", PP_PASSES));
 }
 
 static void test_darts(void **state)
 {
     (void)state;
-    check_kinds("DARTS photon pass", PP_DARTS, passes_of("DERIV_PT_PASSES", 4000), passes_of("DERIV_PP_PASSES", 300));
+    check_kinds("DARTS photon pass", PP_DARTS, passes_of("DERIV_PT_PASSES", PT_PASSES), passes_of("DERIV_PP_PASSES", PP_PASSES));
 }
 
 /* ∂S/∂(pulse start) = −∂S/∂(gate start) for every contribution (S depends on the gate's edges minus the
