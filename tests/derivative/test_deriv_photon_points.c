@@ -204,11 +204,11 @@ static void check_kinds(const char *label, const char *pp_keys, long pt_passes, 
     }
 }
 
-/* The default tier's passes (about 50 s under the sanitizers in all); the stress program
+/* The default tier's passes (about 35 s under the sanitizers in all); the stress program
  * (test_deriv_photon_points_stress.c) sets more. DERIV_PT_PASSES and DERIV_PP_PASSES override either. */
 #ifndef PT_PASSES
-#define PT_PASSES 300
-#define PP_PASSES 30
+#define PT_PASSES 600
+#define PP_PASSES 60
 #endif
 
 static void test_baseline(void **state)
