@@ -14,24 +14,25 @@
 #define W_GATE 1.0
 #define S_PULSE 0.1
 #define W_PULSE 0.3
+#define DENSITY 1.5
 
 static void fog_scene(char *text, size_t n, const char *integrator)
 {
     snprintf(text, n,
              "{ \"media\": [ { \"name\": \"fog\", \"type\": \"guided_homo\", \"sigma_s\": [0.5, 0.4, 0.6], \"sigma_a\": 0.1,"
-             "    \"density\": 1.5, \"phase_function\": { \"type\": \"henyey_greenstein\", \"g\": 0.4 } } ],"
+             "    \"density\": %g, \"phase_function\": { \"type\": \"henyey_greenstein\", \"g\": 0.4 } } ],"
              "  \"bsdfs\": [ { \"name\": \"white\", \"type\": \"lambert\", \"albedo\": 0.6 } ],"
              "  \"primitives\": ["
              "    { \"type\": \"quad\", \"bsdf\": \"white\", \"transform\": { \"position\": [0, 0, 0], \"scale\": [3, 1, 3] } },"
              "    { \"type\": \"quad\", \"bsdf\": \"white\", \"emission\": 4, \"pulse_start\": %g, \"pulse_width\": %g,"
              "      \"int_medium\": \"fog\", \"ext_medium\": \"fog\","
              "      \"transform\": { \"position\": [0.2, 1.6, 0.3], \"scale\": [0.6, 1, 0.6], \"rotation\": [180, 0, 0] } } ],"
-             "  \"camera\": { \"type\": \"pinhole\", \"resolution\": [12, 12], \"fov\": 60, \"medium\": \"fog\","
+             "  \"camera\": { \"type\": \"pinhole\", \"resolution\": [8, 8], \"fov\": 60, \"medium\": \"fog\","
              "    \"transform\": { \"position\": [0, 1, -1.5], \"look_at\": [0, 0.8, 0], \"up\": [0, 1, 0] } },"
              "  \"integrator\": { \"type\": \"path_tracer\", \"max_bounces\": 6, \"transient_time_center\": %g,"
              "    \"transient_time_width\": %g %s },"
              "  \"renderer\": { \"spp\": 1 } }",
-             S_PULSE, W_PULSE, C_GATE, W_GATE, integrator);
+             DENSITY, S_PULSE, W_PULSE, C_GATE, W_GATE, integrator);
 }
 
 /* A render with the derivatives `ptr` (count n); *f holds the films (the caller frees them). */
@@ -81,19 +82,19 @@ static void check_integrator(const char *label, const char *integrator)
                           "/media/0/sigma_s", "/media/0/density", "/media/0/sigma_s/0", "/media/0/sigma_s/1",
                           "/media/0/sigma_s/2"};
     film f;
-    render_derivs(text, ptr, 8, 400, &f);
+    render_derivs(text, ptr, 8, 60, &f);
     double I = total(&f);
     assert_true(I > 0.0);
     /* pulse start against gate centre */
     const film *centre[1] = {&f.deriv[1]};
     double e_shift = combo_error(&f.deriv[0], centre, (double[]){-1.0}, 1);
     /* σa: the ratio of totals in the path-length bounds */
-    double ratio = total(&f.deriv[2]) / I;
+    double ratio = total(&f.deriv[2]) / I / DENSITY; /* the file's σa: ∂σa/∂θ = density */
     double lo = -(C_GATE + 0.5 * W_GATE - S_PULSE), hi = -(C_GATE - 0.5 * W_GATE - S_PULSE - W_PULSE);
-    /* density 1.5: σs = 1.5·(0.5, 0.4, 0.6) and σa = 1.5·0.1, so ∂/∂density = (0.5, 0.4, 0.6)·∂/∂σs_c + 0.1·∂/∂σa, the
-     * file's σs being a vector: its channels' images, each weighted by the channel's value */
+    /* σs = ρ·(0.5, 0.4, 0.6) and σa = ρ·0.1 (ρ the density), so ∂/∂ρ = Σ_c σs_c·∂/∂σs_c + σa·∂/∂σa inside, and the
+     * file's coefficients' images are ρ times those inside: ∂/∂ρ = Σ_c (σs_c/ρ)·∂/∂σs_file,c + (σa/ρ)·∂/∂σa_file */
     const film *parts[4] = {&f.deriv[5], &f.deriv[6], &f.deriv[7], &f.deriv[2]};
-    double e_density = combo_error(&f.deriv[4], parts, (double[]){0.5, 0.4, 0.6, 0.1}, 4);
+    double e_density = combo_error(&f.deriv[4], parts, (double[]){0.5 / DENSITY, 0.4 / DENSITY, 0.6 / DENSITY, 0.1 / DENSITY}, 4);
     const film *chans[3] = {&f.deriv[5], &f.deriv[6], &f.deriv[7]};
     double e_channels = combo_error(&f.deriv[3], chans, (double[]){1.0, 1.0, 1.0}, 3);
     print_message("  %-14s I %.4g; pulse vs centre %.2g; dI/dσa / I = %.4f in [%.3f, %.3f]; density %.2g; channels %.2g\n",
