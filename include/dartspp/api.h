@@ -35,6 +35,10 @@ typedef struct {
     /* Set asynchronously (a signal handler): the pass in progress is dropped; the API sets it too when progress
      * asks to stop. May be NULL. */
     dp_stop_flag *stop;
+    /* Derivatives (docs/derivatives.md): JSON Pointers into the scene of the parameters θ_k to differentiate
+     * the images by, as `dartspp render --derivative` (at most DIFF_PARAM_MAX); NULL/0: none. */
+    const char *const *derivatives;
+    int derivative_count;
 } dp_render_request;
 
 #define DP_LOG_COLUMNS 10 /* seconds, iterations, photon_paths, stored_photons, r_vol, r_surf, mse, rel_mse,
@@ -67,6 +71,9 @@ typedef struct {
     int stat_count;
     double *log;                  /* log_rows × DP_LOG_COLUMNS */
     int log_rows;
+    int deriv_count;              /* the request's derivative_count */
+    float *derivs;                /* deriv_count × height × width × 3: ∂(gate image)/∂θ_k, in the request's order */
+    float *deriv_frames;          /* deriv_count × frame_count × height × width × 3, NULL without frames */
 } dp_render_result;
 
 /* Loads, checks and renders. Returns 0 with res filled (res->passes may be 0 when stopped before the first

@@ -35,6 +35,11 @@ typedef struct {
     surface_shading shading;        /* BSDF frames and the gather/continue split (same as the photon pass) */
     int camera_leg_projected;       /* 0: Euclidean distance segment origin → photon (reference) */
     int camera_unwarp;              /* the camera segment adjacent to the sensor takes no time (docs/time.md §2.2) */
+    /* derivatives (docs/derivatives.md §4): the render's, or NULL; then the photons' photon_deriv records, in
+     * the order of vol_photons and surf_photons (a volume map visits its own order: volume_map_source) */
+    const deriv_plan *deriv;
+    const unsigned char *vol_deriv, *surf_deriv;
+    size_t deriv_stride;
     const dp_stop_flag *stop;       /* rows not started once it is set are skipped (may be NULL) */
 } gather_input;
 

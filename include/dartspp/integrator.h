@@ -89,7 +89,7 @@ void render_stats_unpack(render_stats *st, render_combine how, const double *v);
 /* ---- memory items ----
  * What a render will hold at its peak, item by item, each with the scene key that drives it (or NULL): the
  * driver counts the scene and the film (render_memory_estimate, render.h), each integrator what it adds. */
-#define MEMORY_ITEMS_MAX 12
+#define MEMORY_ITEMS_MAX 16
 typedef struct {
     const char *what;  /* e.g. "surface photons and their map" */
     const char *key;   /* e.g. "integrator.photon_count"; NULL for fixed costs */

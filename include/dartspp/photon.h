@@ -7,6 +7,7 @@
 
 #include "dartspp/core.h"
 #include "dartspp/darts.h"
+#include "dartspp/derivative.h"
 #include "dartspp/emitter.h"
 #include "dartspp/plan.h"
 #include "dartspp/scene.h"
@@ -19,6 +20,27 @@ typedef struct {
     int frame;        /* DARTS frame mode: the only frame this photon may be gathered in; -1: any */
     double time;      /* light-to-photon path time (optical path length) */
 } photon;
+
+/* A photon's derivative weights (docs/derivatives.md §4), in an array beside the photons, indexed like them,
+ * allocated only when the render asks for derivatives (the photon record does not grow): ∂ ln f/∂θ_k of its
+ * light path per channel and ∂τ/∂θ_k, the light it left and the offset path_time_offset drew for that path.
+ * A record is photon_deriv_stride(K) bytes (16 + 16·K); the kernel of the estimate does not depend on them. */
+typedef struct {
+    double offset;  /* the path's draw of path_time_offset (its time starts there) */
+    int light;      /* the light's index */
+    int unused;
+    float w[];      /* per derivative k: dlog_k (3 channels), then dtof_k */
+} photon_deriv;
+
+static inline size_t photon_deriv_stride(int k) { return k > 0 ? sizeof(photon_deriv) + 4 * (size_t)k * sizeof(float) : 0; }
+static inline const photon_deriv *photon_deriv_at(const unsigned char *side, size_t stride, size_t i)
+{
+    return (const photon_deriv *)(const void *)(side + i * stride);
+}
+/* The record of a light path's state (src/photon/photon_deriv.c), into `out` (stride of d->count). */
+void photon_deriv_write(const deriv_plan *d, const deriv_path *p, int light, double offset, void *out);
+/* Adds a record's weights to a camera path's state: the full path's ∂ ln f and ∂τ (a sum over its parts). */
+void photon_deriv_add(const deriv_plan *d, deriv_path *p, const photon_deriv *pd);
 
 /* A photon beam (volume_photon_type "beams", src/photon_beams): one medium segment of a light path from a
  * light, surface or medium vertex. Baseline pass: a short beam, to the next vertex (a medium event or a
@@ -106,6 +128,10 @@ typedef struct {
 void photon_map_query_beam_window(const volume_photon_map *m, vec3 o, vec3 d, double tmax, const beam_time_filter *w,
                                   beam_visit_fn visit, void *ctx);
 
+/* The index, in the array given to volume_map_build, of a photon a query visited (the map holds its photons in
+ * tree order: what is kept beside the photons, such as their photon_deriv records, is found by this). */
+size_t volume_map_source(const volume_photon_map *m, const photon *p);
+
 /* The same search as surface_map_query_knn, on a volume map (built with any r): k nearest within R in
  * (d2, index) order, indices into the array given to volume_map_build. */
 int volume_map_query_knn(const volume_photon_map *m, vec3 x, int k, double R, int *idx, double *d2);
@@ -148,6 +174,9 @@ typedef struct {
 typedef struct {
     photon *vol, *surf;
     size_t n_vol, n_surf;
+    unsigned char *vol_deriv, *surf_deriv; /* photon_pass_input.deriv: the photons' photon_deriv records, in the
+                                            * same order (NULL without derivatives) */
+    size_t deriv_stride;   /* their size, photon_deriv_stride(K) (0 without derivatives) */
     long paths;            /* light paths traced */
     long vol_paths;        /* paths the volume powers are divided by */
     long surf_paths;
@@ -182,6 +211,9 @@ typedef struct {
                                      * change across the surface gather radius, so the gather's own gate
                                      * test decides (plan_surface_slack) */
     surface_shading shading;        /* BSDF frames and the gather/continue split (same as the sensor pass) */
+    const deriv_plan *deriv;        /* the render's derivatives (the light paths carry a deriv_path and the photons
+                                     * their photon_deriv records), or NULL */
+    size_t deriv_stride;            /* photon_deriv_stride(deriv->count), 0 without */
     const eda_set *eda;             /* EDA tables per medium, or NULL: phase sampling everywhere */
     uint64_t seed;
     long iteration;

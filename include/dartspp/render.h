@@ -165,6 +165,8 @@ void error_log_close(error_log *l);
 /* ---- memory guard ----
  * The plan's peak memory, item by item (memory_estimate, integrator.h), checked against the memory available
  * before any work is spent. */
+/* The item of the derivative films (include/dartspp/derivative.h): K × the film's bytes, key "--derivative". */
+#define MEMORY_DERIV_FILMS "derivative films (each as large as the film)"
 /* have_reference: an error log holds a reference image. */
 void render_memory_estimate(const scene *s, const render_plan *p, int have_reference, memory_estimate *m);
 /* The guard: the estimate (into m) against max_memory bytes (0: memory_available()), shared by ranks_on_node
@@ -209,8 +211,9 @@ int render_write_outputs(const film *f, const char *path, const char *integrator
 #define OUTPUT_PATH_MAX 2048
 /* Before any work: the extension (.exr or .pfm), the folder (created), a probe file created and removed
  * there, the disk room and file count of the gate image, preview, frame files, cube and viewer (skip as
- * above). 0 or -1 with err. */
-int render_outputs_check(const char *path, int width, int height, int frame_count, int skip, dp_error *err);
+ * above), and of the derivs derivative images' with their frames and cubes. 0 or -1 with err. */
+int render_outputs_check(const char *path, int width, int height, int frame_count, int derivs, int skip,
+                         dp_error *err);
 /* Before any work (first of the output checks): refuses, naming both paths, an output of the render over one
  * of its inputs — any file it writes for `path` (image, preview, frames and their time axis, cube, viewer,
  * scattering orders, ground truth, checkpoint state, --log) that is the scene file, --reference, a texture,

@@ -57,6 +57,10 @@ class Result:
     log          error log rows against the reference (list of dicts, the CSV columns of `--log`); [] without one
     warnings     the scene's warnings (list of str)
     interrupted  True when stopped early (the progress callback asked, or Ctrl-C)
+    derivatives  (K, height, width, 3) float32: the gate image's derivative dI/dθ_k for each pointer of
+                 render(derivatives=...), in its order; None when none were asked for
+    derivative_frames  (K, frames, height, width, 3) float32: the frames' derivatives, or None
+    derivative_pointers  the pointers asked for (list of str, [] when none)
     """
 
     def __init__(self, d):
@@ -73,6 +77,9 @@ class Result:
         self.warnings = [w for w in d["warnings"].splitlines() if w]
         self._window = (d["gated"], d["camera_warped"], d["gate_start"], d["gate_end"])
         self._plan_json = d["plan_json"]
+        self.derivatives = d["derivatives"]
+        self.derivative_frames = d["derivative_frames"]
+        self.derivative_pointers = list(d["derivative_pointers"])
 
     def __repr__(self):
         h, w, _ = self.image.shape
@@ -120,6 +127,37 @@ def _sets(set):
     return out
 
 
+# include/dartspp/scene.h: DIFF_PARAM_MAX parameters at most, each pointer shorter than diff_param.pointer
+DERIVATIVES_MAX = 8
+_POINTER_BYTES = 255
+
+
+def _derivatives(derivatives):
+    """The derivatives argument checked: a list (or tuple) of at most DERIVATIVES_MAX JSON Pointers (RFC 6901),
+    each a str starting with '/'. What each names is resolved by the scene's loader (it refuses a pointer to no
+    parameter it can differentiate)."""
+    if derivatives is None:
+        return []
+    if isinstance(derivatives, (str, bytes)):
+        raise SceneError("derivatives: expected a list of JSON Pointers, not a single %s (write derivatives=[%r])"
+                         % (type(derivatives).__name__, derivatives))
+    if not isinstance(derivatives, (list, tuple)):
+        raise SceneError("derivatives: expected a list of JSON Pointers (str), not %s" % type(derivatives).__name__)
+    if len(derivatives) > DERIVATIVES_MAX:
+        raise SceneError("derivatives: %d pointers given; a render differentiates at most %d parameters"
+                         % (len(derivatives), DERIVATIVES_MAX))
+    for i, p in enumerate(derivatives):
+        if not isinstance(p, str):
+            raise SceneError("derivatives[%d]: expected a JSON Pointer (str), not %s" % (i, type(p).__name__))
+        if not p.startswith("/"):
+            raise SceneError("derivatives[%d]: %r is not a JSON Pointer to a parameter (one starts with '/', "
+                             "e.g. '/media/0/sigma_s')" % (i, p))
+        if "\0" in p or len(p.encode("utf-8", "surrogatepass")) > _POINTER_BYTES:
+            raise SceneError("derivatives[%d]: %r: a pointer has at most %d bytes and no NUL character"
+                             % (i, p[:40] + "..." if len(p) > 40 else p, _POINTER_BYTES))
+    return [str(p) for p in derivatives]
+
+
 def _scene_text(scene):
     """A dict scene as JSON text. JSON has no NaN or Inf (json.dumps would write them anyway, and the loader could
     then only say "malformed JSON" at a column of text the user never wrote), so a non-finite number is refused
@@ -163,7 +201,7 @@ def _option(name, value, absent):
 
 
 def render(scene, *, time=None, spp=None, seed=1, threads=None, set=None, reference=None, progress=None,
-           base_dir=None, log_every=1.0, max_memory=None):
+           base_dir=None, log_every=1.0, max_memory=None, derivatives=None):
     """Renders a scene and returns a Result.
 
     scene      a scene file's path, or a dict in the scene format (its relative paths resolve against
@@ -180,6 +218,8 @@ def render(scene, *, time=None, spp=None, seed=1, threads=None, set=None, refere
                stops the render after that pass (Result.interrupted), an exception stops it and propagates
     max_memory bytes the render may plan for (None: what the machine has available), or a size as
                `--max-memory` takes it ("8G")
+    derivatives  JSON Pointers into the scene of parameters θ to differentiate every image by, as
+               `--derivative` (at most 8): ["/media/0/sigma_s"]; Result.derivatives holds dI/dθ_k
     The options are parsed and range-checked by the command line's own code: a value `dartspp render`
     refuses raises SceneError with the same message.
 
@@ -209,12 +249,14 @@ def render(scene, *, time=None, spp=None, seed=1, threads=None, set=None, refere
             ref_path = os.fspath(reference)
         else:
             ref_array = reference
+    pointers = _derivatives(derivatives)
     if progress is not None and not callable(progress):
         raise SceneError("progress: expected a callable, not %s" % type(progress).__name__)
     catch = threading.current_thread() is threading.main_thread() and \
         signal.getsignal(signal.SIGINT) is signal.default_int_handler
     d = _dartspp.render(path, text, name, base_dir, _sets(set), seed, spp, float(time), threads, float(max_memory),
-                        ref_path, ref_array, float(log_every), progress, catch)
+                        ref_path, ref_array, float(log_every), progress, catch, pointers or None)
+    d["derivative_pointers"] = pointers
     result = Result(d)
     for w in result.warnings:
         warnings.warn(w, SceneWarning, stacklevel=2)

@@ -95,6 +95,18 @@ static PyObject *stats_dict(const dp_render_result *r)
     return d;
 }
 
+/* d["derivatives"]: (K, height, width, 3), d["derivative_frames"]: (K, frames, height, width, 3); None when
+ * none were asked for (and the frames None without frames). */
+static int put_derivs(PyObject *d, const dp_render_result *r)
+{
+    npy_intp img[4] = {r->deriv_count, r->height, r->width, 3};
+    npy_intp frames[5] = {r->deriv_count, r->frame_count, r->height, r->width, 3};
+    int have = r->deriv_count > 0 && r->derivs;
+    return put(d, "derivatives", have ? float_array(r->derivs, 4, img) : Py_NewRef(Py_None)) ||
+           put(d, "derivative_frames", have && r->deriv_frames ? float_array(r->deriv_frames, 5, frames)
+                                                                : Py_NewRef(Py_None));
+}
+
 static PyObject *result_dict(const dp_render_result *r)
 {
     PyObject *d = PyDict_New();
@@ -114,7 +126,7 @@ static PyObject *result_dict(const dp_render_result *r)
              put(d, "gate_end", PyFloat_FromDouble(r->gate_end)) || put(d, "passes", PyLong_FromLong(r->passes)) ||
              put(d, "interrupted", PyBool_FromLong(r->interrupted)) ||
              put(d, "seconds", PyFloat_FromDouble(r->seconds)) || put(d, "stats", stats_dict(r)) ||
-             put(d, "log", double_array(r->log, 2, log));
+             put(d, "log", double_array(r->log, 2, log)) || put_derivs(d, r);
     if (rc) Py_CLEAR(d);
     return d;
 }
@@ -139,25 +151,25 @@ static image_rgb image_of(PyArrayObject *a)
 /* ---- render ---- */
 typedef struct {
     const char *scene_path, *scene_text, *scene_name, *base_dir, *reference_path;
-    PyObject *sets, *reference, *progress;
+    PyObject *sets, *reference, *progress, *derivatives;
     unsigned long long seed;
     long spp;
     double time, log_every, max_memory;
     int threads, catch_sigint;
 } render_args;
 
-/* The "key=value" strings of a list of str: borrowed UTF-8 pointers into the list's items. */
-static int set_strings(PyObject *sets, const char ***out, int *n)
+/* The strings of a list of str (None: none): borrowed UTF-8 pointers into the list's items. */
+static int utf8_list(PyObject *list, const char ***out, int *n)
 {
     *out = NULL;
     *n = 0;
-    if (sets == Py_None) return 0;
-    Py_ssize_t len = PyList_Size(sets);
+    if (list == Py_None) return 0;
+    Py_ssize_t len = PyList_Size(list);
     if (len < 0) return -1;
     *out = PyMem_Calloc((size_t)len + 1, sizeof(char *));
     if (!*out) return PyErr_NoMemory(), -1;
     for (Py_ssize_t i = 0; i < len; i++)
-        if (!((*out)[i] = PyUnicode_AsUTF8(PyList_GET_ITEM(sets, i)))) return -1;
+        if (!((*out)[i] = PyUnicode_AsUTF8(PyList_GET_ITEM(list, i)))) return -1;
     *n = (int)len;
     return 0;
 }
@@ -167,22 +179,20 @@ static PyObject *py_render(PyObject *self, PyObject *args, PyObject *kw)
     (void)self;
     static char *names[] = {"scene_path", "scene_text", "scene_name", "base_dir", "sets", "seed", "spp", "time",
                             "threads", "max_memory", "reference_path", "reference", "log_every", "progress",
-                            "catch_sigint", NULL};
-    render_args a = {.sets = Py_None, .reference = Py_None, .progress = Py_None};
-    if (!PyArg_ParseTupleAndKeywords(args, kw, "zzzzOKldidzOdOp", names, &a.scene_path, &a.scene_text,
+                            "catch_sigint", "derivatives", NULL};
+    render_args a = {.sets = Py_None, .reference = Py_None, .progress = Py_None, .derivatives = Py_None};
+    if (!PyArg_ParseTupleAndKeywords(args, kw, "zzzzOKldidzOdOpO", names, &a.scene_path, &a.scene_text,
                                      &a.scene_name, &a.base_dir, &a.sets, &a.seed, &a.spp, &a.time, &a.threads,
                                      &a.max_memory, &a.reference_path, &a.reference, &a.log_every, &a.progress,
-                                     &a.catch_sigint))
+                                     &a.catch_sigint, &a.derivatives))
         return NULL;
-    const char **sets;
-    int set_count;
-    if (set_strings(a.sets, &sets, &set_count)) {
-        PyMem_Free(sets);
-        return NULL;
-    }
+    const char **sets, **derivs = NULL;
+    int set_count, deriv_count = 0;
     PyArrayObject *ref = NULL;
-    if (a.reference != Py_None && !(ref = rgb_array(a.reference, "reference"))) {
+    if (utf8_list(a.sets, &sets, &set_count) || utf8_list(a.derivatives, &derivs, &deriv_count) ||
+        (a.reference != Py_None && !(ref = rgb_array(a.reference, "reference")))) {
         PyMem_Free(sets);
+        PyMem_Free(derivs);
         return NULL;
     }
     progress_ctx pc = {.callback = a.progress != Py_None ? a.progress : NULL};
@@ -193,7 +203,8 @@ static PyObject *py_render(PyObject *self, PyObject *args, PyObject *kw)
         .threads = a.threads, .max_memory = a.max_memory, .reference_path = a.reference_path,
         .reference_rgb = ref ? PyArray_DATA(ref) : NULL, .ref_width = ref ? (int)PyArray_DIM(ref, 1) : 0,
         .ref_height = ref ? (int)PyArray_DIM(ref, 0) : 0, .log_every = a.log_every, .progress = call_progress,
-        .progress_ctx = &pc, .stop = a.catch_sigint ? &sigint_stop : &own_stop};
+        .progress_ctx = &pc, .stop = a.catch_sigint ? &sigint_stop : &own_stop, .derivatives = derivs,
+        .derivative_count = deriv_count};
     struct sigaction ours = {.sa_handler = on_sigint}, before;
     sigemptyset(&ours.sa_mask);
     if (a.catch_sigint) {
@@ -211,6 +222,7 @@ static PyObject *py_render(PyObject *self, PyObject *args, PyObject *kw)
     if (a.catch_sigint) sigaction(SIGINT, &before, NULL);
     Py_XDECREF(ref);
     PyMem_Free(sets);
+    PyMem_Free(derivs);
     PyObject *out = NULL;
     if (pc.exc_type) PyErr_Restore(pc.exc_type, pc.exc_value, pc.exc_tb);
     else if (rc) raise_error(&err);

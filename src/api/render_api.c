@@ -42,7 +42,8 @@ static int resolve_budget(const dp_render_request *rq, const scene *s, const ren
 
 static int load(const dp_render_request *rq, scene *s, dp_error *err)
 {
-    scene_load_options lo = {.sets = rq->sets, .set_count = rq->set_count};
+    scene_load_options lo = {.sets = rq->sets, .set_count = rq->set_count, .derivatives = rq->derivatives,
+                             .derivative_count = rq->derivative_count};
     if (rq->scene_path) return scene_load(rq->scene_path, &lo, s, err);
     if (!rq->scene_text) return dp_fail(err, "no scene: give a scene file or the scene's JSON text");
     return scene_load_text(rq->scene_text, rq->scene_name ? rq->scene_name : "<scene>", rq->base_dir, &lo, s, err);
@@ -128,6 +129,36 @@ static void fill_stats(const render_stats *st, dp_render_result *res)
     }
 }
 
+/* A film's gate image into image and its frame_count frames into frames (each width × height × 3 floats). */
+static int film_images(const film *f, int frame_count, float *image, float *frames, dp_error *err)
+{
+    size_t px = (size_t)f->width * f->height * 3;
+    for (int k = -1; k < frame_count; k++) {
+        image_rgb img = {0};
+        if (film_image(f, k, &img, err)) return -1;
+        memcpy(k < 0 ? image : frames + px * k, img.rgb, px * sizeof(float));
+        image_free(&img);
+    }
+    return 0;
+}
+
+/* The derivative films' images (f->deriv, one per parameter asked for, in its order) into res. */
+static int fill_derivs(const film *f, int frame_count, dp_render_result *res, dp_error *err)
+{
+    size_t px = (size_t)f->width * f->height * 3, k_count = (size_t)f->deriv_count;
+    res->deriv_count = f->deriv_count;
+    if (!f->deriv_count) return 0;
+    res->derivs = malloc(k_count * px * sizeof(float));
+    res->deriv_frames = frame_count > 0 ? malloc(k_count * frame_count * px * sizeof(float)) : NULL;
+    if (!res->derivs || (frame_count > 0 && !res->deriv_frames))
+        return dp_fail_kind(err, DP_ERROR_MEMORY, "out of memory for %d derivative images", f->deriv_count);
+    for (int k = 0; k < f->deriv_count; k++)
+        if (film_images(&f->deriv[k], frame_count, res->derivs + px * k,
+                        res->deriv_frames ? res->deriv_frames + px * frame_count * k : NULL, err))
+            return -1;
+    return 0;
+}
+
 /* The film's images, the time window and the figures of the run into res. */
 static int fill_result(const film *f, const render_stats *st, const render_plan *p, dp_render_result *res,
                        dp_error *err)
@@ -145,16 +176,12 @@ static int fill_result(const film *f, const render_stats *st, const render_plan 
     res->frame_times = tw->frame_count > 0 ? malloc(2 * (size_t)tw->frame_count * sizeof(double)) : NULL;
     if (!res->image || (tw->frame_count > 0 && (!res->frames || !res->frame_times)))
         return dp_fail_kind(err, DP_ERROR_MEMORY, "out of memory");
-    for (int k = -1; k < tw->frame_count; k++) {
-        image_rgb img = {0};
-        if (film_image(f, k, &img, err)) return -1;
-        memcpy(k < 0 ? res->image : res->frames + px * k, img.rgb, px * sizeof(float));
-        image_free(&img);
-        if (k >= 0) {
-            res->frame_times[2 * k] = tw->start + k * tw->width;
-            res->frame_times[2 * k + 1] = tw->start + (k + 1) * tw->width;
-        }
+    if (film_images(f, tw->frame_count, res->image, res->frames, err)) return -1;
+    for (int k = 0; k < tw->frame_count; k++) {
+        res->frame_times[2 * k] = tw->start + k * tw->width;
+        res->frame_times[2 * k + 1] = tw->start + (k + 1) * tw->width;
     }
+    if (fill_derivs(f, tw->frame_count, res, err)) return -1;
     res->passes = st->passes;
     res->interrupted = st->interrupted;
     res->seconds = st->seconds;
@@ -194,6 +221,9 @@ static int run(api_run *r, scene *s, render_plan *p, dp_error *err)
     film f;
     render_stats st;
     int rc = render_scene(s, &ro, &f, &st, err);
+    if (!rc && f.deriv_count != s->diff_count)
+        rc = dp_fail_kind(err, DP_ERROR_INTERNAL, "%s: the render made %d derivative images for the %d parameters "
+                                                  "asked for", s->path, f.deriv_count, s->diff_count);
     if (!rc) rc = log_row(r, &f, &st, 1, err);
     if (!rc) rc = fill_result(&f, &st, p, r->res, err);
     film_free(&f);
@@ -217,6 +247,12 @@ int dp_option_parse(const char *name, const char *text, double *value, uint64_t 
  * machine has) are the API's own. */
 static int check_options(const dp_render_request *rq, dp_error *err)
 {
+    if (rq->derivative_count < 0 || rq->derivative_count > DIFF_PARAM_MAX || (rq->derivative_count && !rq->derivatives))
+        return dp_fail(err, "derivatives: %d pointers given; a render differentiates at most %d parameters",
+                       rq->derivative_count, DIFF_PARAM_MAX);
+    for (int k = 0; k < rq->derivative_count; k++)
+        if (!rq->derivatives[k])
+            return dp_fail(err, "derivatives[%d]: no pointer (NULL)", k);
     return render_opt_check(RENDER_OPT_THREADS, rq->threads, NULL, err) ||
            (rq->spp >= 0 && render_opt_check(RENDER_OPT_SPP, (double)rq->spp, NULL, err)) ||
            (!(rq->time_limit < 0) && render_opt_check(RENDER_OPT_TIME, rq->time_limit, NULL, err)) ||
@@ -233,6 +269,12 @@ int dp_render(const dp_render_request *rq, dp_render_result *res, dp_error *err)
     scene s;
     if (load(rq, &s, err)) {
         err->kind = DP_ERROR_INPUT;
+        return -1;
+    }
+    if (s.diff_count != rq->derivative_count) {
+        dp_fail_kind(err, DP_ERROR_INTERNAL, "%s: the scene resolved %d of the %d derivatives asked for", s.path,
+                     s.diff_count, rq->derivative_count);
+        scene_free(&s);
         return -1;
     }
     render_plan p;
@@ -256,5 +298,7 @@ void dp_render_result_free(dp_render_result *res)
     free(res->integrator);
     free(res->warnings);
     free(res->log);
+    free(res->derivs);
+    free(res->deriv_frames);
     memset(res, 0, sizeof *res);
 }

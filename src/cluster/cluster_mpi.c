@@ -32,12 +32,35 @@ static int reduce_chunks(const void *mine, void *total, size_t n, MPI_Datatype t
     return 0;
 }
 
+/* The sums of a film and of its derivative films (film.h: deriv, each of the same size and layers; every rank
+ * has the same K, from the same scene and --derivative list) onto rank 0. */
+static int reduce_film_sums(const film *mine, film *total, int rank)
+{
+    size_t n = (size_t)mine->width * mine->height * 3, nf = n * (size_t)time_window_layers(&mine->window);
+    if (reduce_chunks(mine->sum, total->sum, n, MPI_DOUBLE, sizeof(double), rank) ||
+        (nf > 0 && reduce_chunks(mine->frame_sum, total->frame_sum, nf, MPI_FLOAT, sizeof(float), rank)))
+        return -1;
+    for (int k = 0; k < mine->deriv_count; k++)
+        if (reduce_film_sums(&mine->deriv[k], &total->deriv[k], rank)) return -1;
+    return 0;
+}
+
+/* A derivative film's passes and weights are its image's: the sums divide by the same weight sum. */
+static void set_deriv_counts(film *total)
+{
+    for (int k = 0; k < total->deriv_count; k++) {
+        film *d = &total->deriv[k];
+        d->passes = total->passes;
+        d->weight_sum = total->weight_sum;
+        d->last_weight = total->last_weight;
+        set_deriv_counts(d);
+    }
+}
+
 static int mpi_reduce(const render_cluster *c, const film *mine, film *total, const render_stats *st_mine,
                       render_stats *st_total, dp_error *err)
 {
-    size_t n = (size_t)mine->width * mine->height * 3, nf = n * (size_t)time_window_layers(&mine->window);
-    if (reduce_chunks(mine->sum, total->sum, n, MPI_DOUBLE, sizeof(double), c->rank) ||
-        (nf > 0 && reduce_chunks(mine->frame_sum, total->frame_sum, nf, MPI_FLOAT, sizeof(float), c->rank)))
+    if (reduce_film_sums(mine, total, c->rank))
         return dp_fail_kind(err, DP_ERROR_INTERNAL, "MPI: the reduction of the films failed");
     /* the scalars: the film's counts and weight sum, then the figures that add up over the ranks (RENDER_SUM),
      * and apart those of which the largest counts (RENDER_MAX); the other figures are rank 0's */
@@ -53,6 +76,7 @@ static int mpi_reduce(const render_cluster *c, const film *mine, film *total, co
     total->passes = (long)w[0];
     total->weight_sum = w[1];
     total->nonfinite = (long)w[2];
+    set_deriv_counts(total);
     *st_total = *st_mine;
     render_stats_unpack(st_total, RENDER_SUM, w + 3);
     render_stats_unpack(st_total, RENDER_MAX, m_all);

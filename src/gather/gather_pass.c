@@ -4,6 +4,7 @@
 
 #include "dartspp/gather.h"
 #include "dartspp/surface_site.h"
+#include "gather_deriv.h"
 #include "primary_line.h"
 
 typedef struct {
@@ -22,24 +23,39 @@ typedef struct {
     vec3 thr;        /* camera throughput up to the segment origin */
     double t_cam;    /* camera time up to the segment origin */
     int b_cam;       /* camera segments including this one */
+    const deriv_path *cam; /* derivatives: the camera path's state at o (NULL: none) */
 } beam_ctx;
 
 static vec3 photon_vec(const float *v) { return v3(v[0], v[1], v[2]); }
 
-void volume_photon_splat(const gather_input *g, film_pixel *pix, const medium *m, vec3 o, vec3 d, vec3 thr,
-                         double t_cam, int b_cam, const photon *p, double t, double d2)
+void volume_photon_splat_deriv(const gather_input *g, film_pixel *pix, const medium *m, vec3 o, vec3 d, vec3 thr,
+                               double t_cam, int b_cam, const photon *p, double t, double d2, const deriv_path *cam,
+                               const photon_deriv *pd)
 {
     if (!bounces_count(&g->bounces, p->bounce + b_cam)) return;
     double leg = g->camera_leg_projected ? t : v3_len(v3_sub(photon_vec(p->pos), o));
     if (g->camera_unwarp && b_cam == 1) leg = 0.0; /* the sensor's own segment takes no time */
-    film_slot slot = film_time_slot(pix->f, t_cam + p->time + m->eta * leg, p->frame, p->bounce + b_cam - 1);
-    if (slot.counts) volume_photon_splat_slot(g, pix, m, d, thr, p, t, d2, &slot); /* before the kernel and exp */
+    double time = t_cam + p->time + m->eta * leg;
+    int order = p->bounce + b_cam - 1;
+    film_slot slot = film_time_slot(pix->f, time, p->frame, order);
+    if (!slot.counts) return;
+    vec3 c = volume_photon_splat_slot(g, pix, m, d, thr, p, t, d2, &slot); /* before the kernel and exp */
+    if (cam && pd) gather_deriv_volume(g, pix, m, d, cam, p, pd, t, leg, time, c, order);
+}
+
+void volume_photon_splat(const gather_input *g, film_pixel *pix, const medium *m, vec3 o, vec3 d, vec3 thr,
+                         double t_cam, int b_cam, const photon *p, double t, double d2)
+{
+    volume_photon_splat_deriv(g, pix, m, o, d, thr, t_cam, b_cam, p, t, d2, NULL, NULL);
 }
 
 static void visit_volume_photon(void *ctx, const photon *p, double t, double d2)
 {
     const beam_ctx *b = ctx;
-    volume_photon_splat(b->g, b->pix, b->m, b->o, b->d, b->thr, b->t_cam, b->b_cam, p, t, d2);
+    const photon_deriv *pd = b->cam && b->g->vol_deriv
+                                 ? photon_deriv_at(b->g->vol_deriv, b->g->deriv_stride, volume_map_source(b->g->vol, p))
+                                 : NULL;
+    volume_photon_splat_deriv(b->g, b->pix, b->m, b->o, b->d, b->thr, b->t_cam, b->b_cam, p, t, d2, b->cam, pd);
 }
 
 /* The gate as the beam query's time window: the path time of volume_photon_splat (the sensor's own segment
@@ -56,9 +72,9 @@ static int gate_filter(const gather_input *g, const film *f, const medium *m, do
 }
 
 void volume_beam_gather(const gather_input *g, film_pixel *pix, const medium *m, vec3 o, vec3 d, double len, vec3 thr,
-                        double t_cam, int b_cam)
+                        double t_cam, int b_cam, const deriv_path *cam)
 {
-    beam_ctx b = {g, pix, m, o, d, thr, t_cam, b_cam};
+    beam_ctx b = {g, pix, m, o, d, thr, t_cam, b_cam, g->deriv ? cam : NULL};
     beam_time_filter w;
     if (gate_filter(g, pix->f, m, t_cam, b_cam, &w))
         photon_map_query_beam_window(g->vol, o, d, len, &w, visit_volume_photon, &b);
@@ -84,7 +100,8 @@ static int record_line_segment(primary_line *L, int med, vec3 o, vec3 d, double 
 
 /* Surface estimate at a hit, over the gathered lobes: k nearest within R, box kernel over the disc of the
  * k-th; each photon contributes P·f(ω_cam, −ω_p), the BSDF without the cosine (docs/reference-renderer.md §9.4). */
-static void gather_surface(pixel_ctx *c, const surface_site *ss, unsigned lobes, vec3 thr, double t_cam, int b_cam)
+static void gather_surface(pixel_ctx *c, const surface_site *ss, unsigned lobes, vec3 thr, double t_cam, int b_cam,
+                           const deriv_path *at)
 {
     const gather_input *g = c->g;
     if (!g->surf) return;
@@ -101,8 +118,11 @@ static void gather_surface(pixel_ctx *c, const surface_site *ss, unsigned lobes,
         if (!bounces_count(&g->bounces, p->bounce + b_cam)) continue;
         vec3 f = surface_eval(ss, v3_neg(photon_vec(p->dir)), lobes);
         if (v3_is_zero(f)) continue; /* e.g. arrived on the other side of an opaque surface */
-        film_pixel_splat(c->pix, t_cam + p->time, v3_mul(v3_mul(w, f), photon_vec(p->power)), p->frame,
-                         p->bounce + b_cam - 1); /* scattering events: the path's segments − 1 */
+        vec3 v = v3_mul(v3_mul(w, f), photon_vec(p->power));
+        film_pixel_splat(c->pix, t_cam + p->time, v, p->frame, p->bounce + b_cam - 1); /* scattering events: the path's segments − 1 */
+        if (at && g->surf_deriv)
+            gather_deriv_surface(g, c->pix, at, photon_deriv_at(g->surf_deriv, g->deriv_stride, (size_t)idx[i]),
+                                 t_cam + p->time, v, p->frame, p->bounce + b_cam - 1);
     }
 }
 
@@ -113,7 +133,7 @@ static void gather_surface(pixel_ctx *c, const surface_site *ss, unsigned lobes,
  * α raised to g->alpha_reg: a point light seen in a second glossy reflection is otherwise a highlight that
  * the first bounce's sampling finds by chance (the dragon's fireflies, docs/defaults.md §3.7). */
 static void direct_light(pixel_ctx *c, const surface_site *site, unsigned lobes, int med, vec3 thr, double t_cam,
-                         int b_cam, int after_glossy)
+                         int b_cam, int after_glossy, const deriv_path *at)
 {
     const scene *s = c->s;
     if (!bounces_count(&c->g->bounces, b_cam + 1)) return;
@@ -137,19 +157,27 @@ static void direct_light(pixel_ctx *c, const surface_site *site, unsigned lobes,
         vec3 f = surface_eval_cos(ss, ed.wi, lobes);
         if (v3_max(f) <= 0.0) continue;
         vec3 tr;
-        double t = t_cam + path_time_offset(s, L, c->rng);
+        double offset = path_time_offset(s, L, c->rng), t = t_cam + offset;
         c->pix->rays += 1;
         vec3 target = v3_is_zero(ed.n) ? ed.y
                       : scene_offset_ray_origin(s, ed.y, v3_dot(ed.wi, ed.n) < 0.0 ? ed.n : v3_neg(ed.n));
-        if (!scene_transmittance(s, surface_spawn(s, ss, ed.wi), surface_medium_toward(ss, med, ed.wi), target, &tr, &t))
+        deriv_path dv; /* derivatives: the camera's state and the leg's pieces */
+        gather_leg leg = {c->g->deriv, &dv};
+        if (at) dv = *at;
+        int end;
+        if (!scene_transmittance_segments(s, surface_spawn(s, ss, ed.wi), surface_medium_toward(ss, med, ed.wi), target,
+                                          &tr, &t, &end, at ? gather_deriv_leg : NULL, &leg))
             continue;
-        film_pixel_splat(c->pix, t, v3_scale(v3_mul(v3_mul(v3_mul(thr, tr), ed.value), f), 1.0 / ed.denom), -1, b_cam);
+        vec3 v = v3_scale(v3_mul(v3_mul(v3_mul(thr, tr), ed.value), f), 1.0 / ed.denom);
+        film_pixel_splat(c->pix, t, v, -1, b_cam);
+        if (at) deriv_splat(c->g->deriv, c->pix, &dv, i, t, offset, v, -1, b_cam);
     }
 }
 
 /* A camera walk hitting an area light from the camera or through delta lobes only: its emission (light
  * that reached the walk otherwise was gathered from photons or connected by direct_light). */
-static void hit_emission(pixel_ctx *c, const hit_record *h, vec3 d, vec3 thr, double t_cam, int b_cam)
+static void hit_emission(pixel_ctx *c, const hit_record *h, vec3 d, vec3 thr, double t_cam, int b_cam,
+                         const deriv_path *cam)
 {
     const scene *s = c->s;
     int i = s->surfaces[h->surface].emitter;
@@ -157,7 +185,9 @@ static void hit_emission(pixel_ctx *c, const hit_record *h, vec3 d, vec3 thr, do
     const emitter *L = &s->lights[i];
     vec3 le = emitter_hit_radiance(L, d, h->ng);
     if (v3_is_zero(le)) return;
-    film_pixel_splat(c->pix, t_cam + path_time_offset(s, L, c->rng), v3_mul(thr, le), -1, b_cam - 1);
+    double offset = path_time_offset(s, L, c->rng);
+    film_pixel_splat(c->pix, t_cam + offset, v3_mul(thr, le), -1, b_cam - 1);
+    if (cam) deriv_splat(c->g->deriv, c->pix, cam, i, t_cam + offset, offset, v3_mul(thr, le), -1, b_cam - 1);
 }
 
 /* The camera walk: volume gathers along every medium segment; at a surface, the gather over the lobes the
@@ -169,6 +199,8 @@ static void trace_sensor_path(pixel_ctx *c, vec3 o, vec3 d)
     int med = s->cam.medium, b_cam = 1, after_delta = 1, after_glossy = 0;
     double t_cam = 0.0;
     primary_line *line = c->line; /* set while the walk is still on the primary line */
+    deriv_path cdv, *cam = c->g->deriv ? &cdv : NULL; /* derivatives: the camera path's state (gather_deriv.h) */
+    if (cam) deriv_path_clear(cam);
     if (line) {
         line->o[0] = o.x;
         line->o[1] = o.y;
@@ -186,16 +218,18 @@ static void trace_sensor_path(pixel_ctx *c, vec3 o, vec3 d)
         if (med != MEDIUM_VACUUM) {
             const medium *m = &s->media[med];
             if (c->g->vol && !(line && record_line_segment(line, med, o, d, len, thr, t_cam)))
-                volume_beam_gather(c->g, c->pix, m, o, d, len, thr, t_cam, b_cam);
+                volume_beam_gather(c->g, c->pix, m, o, d, len, thr, t_cam, b_cam, cam);
             if (c->g->beams) photon_beams_gather(c->g->beams, s, c->pix, med, o, d, len, thr, t_cam, b_cam);
             if (c->g->slices) sliced_primitives_gather(c->g->slices, s, c->pix, med, o, d, len, thr, t_cam, b_cam, c->rng);
             thr = v3_mul(thr, v3_exp_neg(v3_scale(m->sigma_t, len)));
         }
         if (!hit || v3_is_zero(thr)) return;
-        if (!(c->g->camera_unwarp && b_cam == 1)) t_cam += medium_eta(s, med) * len;
+        int timed = !(c->g->camera_unwarp && b_cam == 1);
+        if (timed) t_cam += medium_eta(s, med) * len;
+        if (cam) gather_deriv_segment(c->g, cam, med, len, timed);
         const surface *sf = &s->surfaces[h.surface];
         const bsdf *bs = &s->bsdfs[sf->bsdf];
-        if (after_delta) hit_emission(c, &h, d, thr, t_cam, b_cam);
+        if (after_delta) hit_emission(c, &h, d, thr, t_cam, b_cam, cam);
         if (bsdf_is_passthrough(bs)) {
             vec3 n_out = v3_dot(d, h.ng) < 0.0 ? v3_neg(h.ng) : h.ng; /* the far side */
             med = surface_next_medium(sf, med, d, h.ng);
@@ -206,9 +240,10 @@ static void trace_sensor_path(pixel_ctx *c, vec3 o, vec3 d)
         surface_site ss;
         if (!surface_site_init(&ss, s, &c->g->shading, &h, d)) return;
         photon_split split = surface_photon_split(bs, &c->g->shading);
-        if (split.gather) gather_surface(c, &ss, split.gather, thr, t_cam, b_cam);
+        if (cam) deriv_surface_vertex(c->g->deriv, cam, sf->bsdf); /* every estimate here evaluates the BSDF */
+        if (split.gather) gather_surface(c, &ss, split.gather, thr, t_cam, b_cam, cam);
         if (!split.cont) return;
-        if (split.cont & ~BSDF_LOBE_SPECULAR) direct_light(c, &ss, split.cont, med, thr, t_cam, b_cam, after_glossy);
+        if (split.cont & ~BSDF_LOBE_SPECULAR) direct_light(c, &ss, split.cont, med, thr, t_cam, b_cam, after_glossy, cam);
         double u[3] = {rng_uniform(c->rng), rng_uniform(c->rng), rng_uniform(c->rng)};
         surface_sample smp;
         if (!surface_sample_bsdf(&ss, u, split.cont, 0, &smp)) return;
@@ -264,7 +299,9 @@ double gather_pass_bytes(const scene *s, int splat, const photon *sample, size_t
 double gather_pass(const scene *s, const gather_input *g, film *f, uint64_t seed, long iteration)
 {
     pass_ctx p = {s, g, NULL};
-    if (g->vol) p.lines = malloc(volume_splat_bytes(s->cam.width, s->cam.height)); /* NULL: queries in the walk */
+    /* NULL: queries in the walk; so with derivatives, whose camera state the walk carries (a primary line would
+     * need one per segment) */
+    if (g->vol && !g->deriv) p.lines = malloc(volume_splat_bytes(s->cam.width, s->cam.height));
     double rays = film_sample_pixels(f, &s->cam, seed, iteration, g->stop, sample_pixel, &p);
     if (p.lines && !dp_stopped(g->stop)) {
         int splat = g->volume_splat && volume_splat_applies(s, g);

@@ -51,14 +51,20 @@ void primary_line_gather_beam(const scene *s, const gather_input *g, film_pixel 
  * segments. Both gathers (beam queries and the splat) use it. */
 void volume_photon_splat(const gather_input *g, film_pixel *pix, const medium *m, vec3 o, vec3 d, vec3 thr,
                          double t_cam, int b_cam, const photon *p, double t, double d2);
+/* The same with derivatives (g->deriv): cam the camera path's state at o, pd the photon's record. */
+void volume_photon_splat_deriv(const gather_input *g, film_pixel *pix, const medium *m, vec3 o, vec3 d, vec3 thr,
+                               double t_cam, int b_cam, const photon *p, double t, double d2, const deriv_path *cam,
+                               const photon_deriv *pd);
 /* The beam query of a camera segment o + t·d, 0 <= t <= len, in medium m (thr, t_cam at o, b_cam camera
  * segments), each photon found given to volume_photon_splat. On a gated film the query skips the subtrees
  * whose photons all fall outside the gate (photon_map_query_beam_window): the same contributions, less walk. */
 void volume_beam_gather(const gather_input *g, film_pixel *pix, const medium *m, vec3 o, vec3 d, double len, vec3 thr,
-                        double t_cam, int b_cam);
+                        double t_cam, int b_cam, const deriv_path *cam);
+/* cam (with g->deriv): the camera path's derivative state at o; NULL without derivatives. */
 /* Its second half, once the bounce count is checked and the film slot of the path time is known to
- * count: inline, as the splat calls it for every pixel a photon covers. */
-static inline void volume_photon_splat_slot(const gather_input *g, film_pixel *pix, const medium *m, vec3 d, vec3 thr,
+ * count: inline, as the splat calls it for every pixel a photon covers. Returns the contribution added (0 when
+ * none). */
+static inline vec3 volume_photon_splat_slot(const gather_input *g, film_pixel *pix, const medium *m, vec3 d, vec3 thr,
                                             const photon *p, double t, double d2, const film_slot *slot)
 {
     double r2 = g->r_vol * g->r_vol;
@@ -69,9 +75,13 @@ static inline void volume_photon_splat_slot(const gather_input *g, film_pixel *p
     vec3 tr = m->sigma_t.x == m->sigma_t.y && m->sigma_t.y == m->sigma_t.z ? v3s(exp(-m->sigma_t.x * t))
                                                                             : v3_exp_neg(v3_scale(m->sigma_t, t));
     vec3 c = v3_scale(v3_mul(v3_mul(thr, tr), v3(p->power[0], p->power[1], p->power[2])), f);
-    if (v3_is_zero(c)) return;
-    if (!film_slot_fits(slot, c)) pix->nonfinite++;
-    else film_slot_add(pix->f, pix->px, slot, c);
+    if (v3_is_zero(c)) return c;
+    if (film_slot_fits(slot, c)) {
+        film_slot_add(pix->f, pix->px, slot, c);
+        return c;
+    }
+    pix->nonfinite++;
+    return v3s(0.0);
 }
 
 #endif

@@ -294,6 +294,6 @@ void primary_line_gather_beam(const scene *s, const gather_input *g, film_pixel 
     for (int k = 0; k < line->n; k++) {
         const line_segment *sg = &line->seg[k];
         volume_beam_gather(g, pix, &s->media[sg->medium], v3_add(o, v3_scale(d, sg->t0)), d, sg->t1 - sg->t0,
-                           v3(sg->thr[0], sg->thr[1], sg->thr[2]), sg->t_cam, 1);
+                           v3(sg->thr[0], sg->thr[1], sg->thr[2]), sg->t_cam, 1, NULL);
     }
 }

@@ -5,6 +5,7 @@
 
 #include <stdint.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include "dartspp/photon.h"
 #include "dartspp/scene.h"
@@ -12,21 +13,37 @@
 typedef struct {
     photon *p;
     size_t n, cap;
+    unsigned char *d; /* with derivatives: the photons' photon_deriv records (stride bytes each), else NULL */
 } photon_buf;
 
 #define PHOTON_BUF_FIRST 1024 /* a photon buffer's first capacity; it then doubles (photon_array_bytes) */
 
-static inline int buf_push(photon_buf *b, const photon *ph)
+/* Appends a photon and, when stride > 0, its derivative record `side` (the same index in b->d). */
+static inline int buf_push(photon_buf *b, const photon *ph, const void *side, size_t stride)
 {
     if (b->n == b->cap) {
         size_t cap = b->cap ? 2 * b->cap : PHOTON_BUF_FIRST;
         photon *q = realloc(b->p, cap * sizeof(photon));
         if (!q) return -1;
         b->p = q;
+        if (stride) {
+            unsigned char *e = realloc(b->d, cap * stride);
+            if (!e) return -1;
+            b->d = e;
+        }
         b->cap = cap;
     }
+    if (stride) memcpy(b->d + b->n * stride, side, stride);
     b->p[b->n++] = *ph;
     return 0;
+}
+
+static inline void buf_free(photon_buf *b)
+{
+    free(b->p);
+    free(b->d);
+    b->p = NULL;
+    b->d = NULL;
 }
 
 typedef struct {

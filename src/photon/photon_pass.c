@@ -44,9 +44,15 @@ typedef struct {
     vec3 vpos, vw_in;
     double vseg;           /* the length of the segment that arrived at it */
     int vregion;
+    /* derivatives (in->deriv): the light, the offset its time started at, and ∂ ln f, ∂τ of the path so far */
+    int light;
+    double offset;
+    deriv_path dv;
 } light_path;
 
-static void store(light_path *lp, photon_buf *b, uint32_t *count, vec3 x, vec3 d, vec3 power, int bounce, double t)
+/* A photon at x with the derivative state dv (in->deriv) of the light path up to it, its vertex included. */
+static void store(light_path *lp, photon_buf *b, uint32_t *count, vec3 x, vec3 d, vec3 power, int bounce, double t,
+                  const deriv_path *dv)
 {
     if (v3_is_zero(power)) return;
     photon ph;
@@ -56,8 +62,19 @@ static void store(light_path *lp, photon_buf *b, uint32_t *count, vec3 x, vec3 d
         lp->tb->nonfinite++;
         return;
     }
-    if (buf_push(b, &ph)) lp->tb->oom = 1;
+    _Alignas(photon_deriv) unsigned char side[sizeof(photon_deriv) + 4 * DIFF_PARAM_MAX * sizeof(float)];
+    if (lp->in->deriv) photon_deriv_write(lp->in->deriv, dv, lp->light, lp->offset, side);
+    if (buf_push(b, &ph, side, lp->in->deriv_stride)) lp->tb->oom = 1;
     else (*count)++;
+}
+
+/* Derivatives: a segment of length len in region med up to the path's next vertex: its transmittance, a factor
+ * of f whatever sampled the distance (f/p weights), and its time. */
+static void deriv_segment(const light_path *lp, deriv_path *dv, int med, double len)
+{
+    if (!lp->in->deriv) return;
+    deriv_transmittance(lp->in->deriv, dv, med, len);
+    deriv_time(lp->in->deriv, dv, med, len);
 }
 
 /* The DARTS samplers serve the volume map: they run only while its budget has room. */
@@ -219,8 +236,13 @@ static int medium_segment(light_path *lp, double tmax)
         }
         if (made) { /* W = σs e^{−σt t}/p(t) (docs/darts.md §5.2) */
             vec3 w = v3_scale(v3_mul(m->sigma_s, v3_exp_neg(v3_scale(m->sigma_t, t))), 1.0 / pdf);
+            deriv_path cv = lp->dv; /* the control vertex's segment and σs: factors of its photon only */
+            if (lp->in->deriv) {
+                deriv_segment(lp, &cv, lp->med, t);
+                deriv_medium_vertex(lp->in->deriv, &cv, lp->med);
+            }
             store(lp, &lp->tb->vol, &lp->pc->n_vol, v3_add(lp->o, v3_scale(lp->d, t)), lp->d, v3_mul(lp->beta, w),
-                  lp->bounce + 1, lp->time + m->eta * t);
+                  lp->bounce + 1, lp->time + m->eta * t, &cv);
         }
     }
     int event;
@@ -280,13 +302,16 @@ static int medium_event(light_path *lp, const medium *m, double t, int darts)
     const darts_guide *g = lp->g;
     lp->o = v3_add(lp->o, v3_scale(lp->d, t));
     lp->time += m->eta * t;
+    deriv_segment(lp, &lp->dv, lp->med, t);
+    if (in->deriv) deriv_medium_vertex(in->deriv, &lp->dv, lp->med); /* σs of the event weight */
     lp->bounce++;
     if (++lp->medium_events > m->max_bounces) return -1;
     /* classic photons (no control vertices); low_order_scattering off: none at the first vertex after a
      * light or surface */
     if (lp->volume_open && !in->beams && !(darts && g->enable_elliptical) && (in->low_order_scattering || lp->medium_events > 1))
-        store(lp, &lp->tb->vol, &lp->pc->n_vol, lp->o, lp->d, lp->beta, lp->bounce, lp->time);
+        store(lp, &lp->tb->vol, &lp->pc->n_vol, lp->o, lp->d, lp->beta, lp->bounce, lp->time, &lp->dv);
     new_vertex(lp);
+    vec3 w_in = lp->d;
     path_vertex v = vertex_begin(lp, PATH_VERTEX_VOLUME, lp->o, lp->beta, lp->med);
     const eda_table *et = darts && in->eda ? in->eda->table[lp->med] : NULL;
     if (et) { /* EDA with MIS against the phase function (docs/darts.md §8.2) */
@@ -298,6 +323,7 @@ static int medium_event(light_path *lp, const medium *m, double t, int darts)
         double u1 = rng_uniform(lp->rng), u2 = rng_uniform(lp->rng);
         lp->d = phase_sample(&m->phase, lp->d, u1, u2);
     }
+    if (in->deriv) deriv_phase(in->deriv, &lp->dv, lp->med, w_in, lp->d); /* f/p weights of either sampler */
     vertex_end(lp, &v, 1, 0);
     return 1;
 }
@@ -322,7 +348,7 @@ static int surface_event(light_path *lp, const hit_record *h)
     if (!surface_site_init(&ss, s, &lp->in->shading, h, lp->d)) return 0;
     if (surface_photon_split(b, &lp->in->shading).gather && lp->in->include_surfaces && surface_time_ok(lp, h->p))
         store(lp, &lp->tb->surf, &lp->pc->n_surf, h->p, lp->d, surface_photon_power(&ss, lp->beta), lp->bounce,
-              lp->time);
+              lp->time, &lp->dv);
     path_vertex v = vertex_begin(lp, PATH_VERTEX_SURFACE, h->p, lp->beta, lp->med);
     v.hit = *h;
     double u[3] = {rng_uniform(lp->rng), rng_uniform(lp->rng), rng_uniform(lp->rng)};
@@ -332,6 +358,7 @@ static int surface_event(light_path *lp, const hit_record *h)
         return 0;
     }
     lp->beta = v3_mul(lp->beta, smp.weight);
+    if (lp->in->deriv) deriv_surface_vertex(lp->in->deriv, &lp->dv, sf->bsdf); /* the albedo in f·|cos|/p */
     lp->d = smp.w;
     lp->med = surface_next_medium(sf, lp->med, lp->d, h->ng);
     lp->o = surface_spawn(s, &ss, lp->d);
@@ -365,6 +392,7 @@ void trace_light_path(const scene *s, const photon_pass_input *in, int volume_op
     vec3 start = fixed ? L->pos : er.p;
     light_path lp = {.s = s, .in = in, .g = g, .tb = tb, .pc = pc, .rng = rng, .o = start, .med = L->medium,
                      .volume_open = volume_open, .time = tau0, .vkind = -1, .vregion = MEDIUM_VACUUM,
+                     .light = li, .offset = tau0,
                      .bin = {.start = -INFINITY, .end = INFINITY, .pdf = 1.0, .frame = -1}};
     if (g->active && !darts_sample_bin(g, start, tau0, rng_uniform(rng), &lp.bin)) return;
     lp.reach = lp.bin; /* the early exit keeps every path whose surface photons could still count */
@@ -408,6 +436,7 @@ void trace_light_path(const scene *s, const photon_pass_input *in, int volume_op
         if (!hit) return;
         beam_end(&lp, &bs, h.t);
         lp.time += medium_eta(s, lp.med) * h.t;
+        deriv_segment(&lp, &lp.dv, lp.med, h.t);
         if (!surface_event(&lp, &h)) return;
     }
 }
@@ -430,7 +459,7 @@ typedef struct {
 } pass_totals;
 
 /* Appends the photons of one path from a thread buffer in path order, or closes the budget. */
-static int merge_path(photon_buf *dst, budget_state *bs, const photon_buf *src, size_t off, uint32_t n)
+static int merge_path(photon_buf *dst, budget_state *bs, const photon_buf *src, size_t off, uint32_t n, size_t stride)
 {
     if (bs->full) return 0;
     if (dst->n + n > bs->budget) {
@@ -438,7 +467,7 @@ static int merge_path(photon_buf *dst, budget_state *bs, const photon_buf *src, 
         return 0;
     }
     for (uint32_t i = 0; i < n; i++)
-        if (buf_push(dst, &src->p[off + i])) return -1;
+        if (buf_push(dst, &src->p[off + i], stride ? src->d + (off + i) * stride : NULL, stride)) return -1;
     bs->paths++;
     return 0;
 }
@@ -494,6 +523,8 @@ void photon_pass_input_init(photon_pass_input *in, const scene *s, const render_
                               .surface_chains = p->surface_chains,
                               .surface_slack = plan_surface_slack(p, iteration), .shading = p->shading,
                               .eda = eda, .seed = seed,
+                              .deriv = deriv_on(&p->deriv) ? &p->deriv : NULL,
+                              .deriv_stride = deriv_on(&p->deriv) ? photon_deriv_stride(p->deriv.count) : 0,
                               .iteration = iteration, .stop = stop};
     darts_guide_init(&p->darts, &p->window, s->cam.pos, &in->guide);
 }
@@ -530,8 +561,8 @@ static int independent_paths(const scene *s, const photon_pass_input *in, int nt
             pt->early += pc[i].early_exit;
             if (in->vertices) rc |= merge_vertices(pt, src, &pc[i]);
             else if (in->beams) rc |= merge_beams(&pt->beams, &pt->bv, &src->beams, pc[i].off_beams, pc[i].n_beams);
-            else rc |= merge_path(&pt->vol, &pt->bv, &src->vol, pc[i].off_vol, pc[i].n_vol);
-            rc |= merge_path(&pt->surf, &pt->bsf, &src->surf, pc[i].off_surf, pc[i].n_surf);
+            else rc |= merge_path(&pt->vol, &pt->bv, &src->vol, pc[i].off_vol, pc[i].n_vol, in->deriv_stride);
+            rc |= merge_path(&pt->surf, &pt->bsf, &src->surf, pc[i].off_surf, pc[i].n_surf, in->deriv_stride);
         }
         pt->next += nb;
     }
@@ -577,7 +608,7 @@ static int chain_paths(const scene *s, const photon_pass_input *in, int nt, thre
             }
         }
         for (int i = 0; i < nb && !rc && !pt->bsf.full; i++) {
-            rc |= merge_path(&pt->surf, &pt->bsf, &tb[cc[i].thread].surf, cc[i].off, cc[i].n);
+            rc |= merge_path(&pt->surf, &pt->bsf, &tb[cc[i].thread].surf, cc[i].off, cc[i].n, in->deriv_stride);
             if (!pt->bsf.full) chain_stats_add(&pt->chains, &cc[i].st); /* a chain that did not fit is dropped */
         }
     }
@@ -608,16 +639,16 @@ int photon_pass(const scene *s, const photon_pass_input *in, photon_set *out, dp
     for (int t = 0; t < nt && tb; t++) {
         out->nonfinite += tb[t].nonfinite;
         rc |= tb[t].oom ? -1 : 0;
-        free(tb[t].vol.p);
-        free(tb[t].surf.p);
+        buf_free(&tb[t].vol);
+        buf_free(&tb[t].surf);
         free(tb[t].beams.p);
         free(tb[t].verts.p);
     }
     free(tb);
     free(pc);
     if (rc) {
-        free(pt.vol.p);
-        free(pt.surf.p);
+        buf_free(&pt.vol);
+        buf_free(&pt.surf);
         free(pt.beams.p);
         free(pt.verts.p);
         return dp_fail_kind(err, DP_ERROR_MEMORY, "%s: out of memory in the photon pass", s->path);
@@ -647,6 +678,9 @@ int photon_pass(const scene *s, const photon_pass_input *in, photon_set *out, dp
     }
     out->vol = pt.vol.p;
     out->n_vol = pt.vol.n;
+    out->vol_deriv = pt.vol.d;
+    out->surf_deriv = pt.surf.d;
+    out->deriv_stride = in->deriv_stride;
     out->surf = pt.surf.p;
     out->n_surf = pt.surf.n;
     out->beams = pt.beams.p;
@@ -689,5 +723,7 @@ void photon_set_free(photon_set *ps)
     free(ps->beams);
     free(ps->vol);
     free(ps->surf);
+    free(ps->vol_deriv);
+    free(ps->surf_deriv);
     memset(ps, 0, sizeof *ps);
 }

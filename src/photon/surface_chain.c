@@ -41,20 +41,21 @@ void chain_scratch_free(chain_scratch *cs)
     if (!cs) return;
     rng_replay_free(&cs->a);
     rng_replay_free(&cs->b);
-    free(cs->pa.surf.p);
-    free(cs->pa.vol.p);
-    free(cs->pb.surf.p);
-    free(cs->pb.vol.p);
+    buf_free(&cs->pa.surf);
+    buf_free(&cs->pa.vol);
+    buf_free(&cs->pb.surf);
+    buf_free(&cs->pb.vol);
     free(cs);
 }
 
-/* The held state's photons into the thread buffer, once, with their powers times the steps it held. */
-static void flush_state(thread_bufs *dst, const thread_bufs *state, long hold, chain_count *cc)
+/* The held state's photons into the thread buffer, once, with their powers times the steps it held (their
+ * derivative records, stride bytes each, unchanged: a constant factor moves no ∂ ln f). */
+static void flush_state(thread_bufs *dst, const thread_bufs *state, long hold, size_t stride, chain_count *cc)
 {
     for (size_t i = 0; i < state->surf.n; i++) {
         photon ph = state->surf.p[i];
         for (int c = 0; c < 3; c++) ph.power[c] *= (float)hold;
-        if (buf_push(&dst->surf, &ph)) {
+        if (buf_push(&dst->surf, &ph, stride ? state->surf.d + i * stride : NULL, stride)) {
             dst->oom = 1;
             return;
         }
@@ -94,7 +95,7 @@ void surface_chain_run(const scene *s, const photon_pass_input *in, long index, 
             cc->st.accepted += visible;
         }
         if (visible) {
-            if (have) flush_state(tb, cur_ph, hold, cc);
+            if (have) flush_state(tb, cur_ph, hold, in->deriv_stride, cc);
             rng_replay *t = cur;
             cur = prop, prop = t;
             thread_bufs *tp = cur_ph;
@@ -107,5 +108,5 @@ void surface_chain_run(const scene *s, const photon_pass_input *in, long index, 
             cc->st.states++;
         }
     }
-    if (have) flush_state(tb, cur_ph, hold, cc);
+    if (have) flush_state(tb, cur_ph, hold, in->deriv_stride, cc);
 }

@@ -362,6 +362,11 @@ void volume_map_free(volume_photon_map *m)
 
 size_t volume_map_size(const volume_photon_map *m) { return m ? m->n : 0; }
 
+size_t volume_map_source(const volume_photon_map *m, const photon *p)
+{
+    return m->points[p - m->photons].src; /* the tree order's permutation, kept by the build */
+}
+
 /* ---- query ---- */
 
 typedef struct {

@@ -65,6 +65,10 @@ int photon_points_pass(const scene *s, const render_plan *p, const eda_set *eda,
         g.surf_photons = ps.surf;
         g.vol_photons = ps.vol;
         g.n_vol = ps.n_vol;
+        g.deriv = pin.deriv; /* derivatives: the photons' records beside them (docs/derivatives.md §4) */
+        g.vol_deriv = ps.vol_deriv;
+        g.surf_deriv = ps.surf_deriv;
+        g.deriv_stride = ps.deriv_stride;
         bg.map = bm;
         g.beams = bm ? &bg : NULL;
         sg.map = slm;

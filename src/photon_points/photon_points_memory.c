@@ -69,6 +69,10 @@ void photon_points_memory(const scene *s, const render_plan *p, memory_estimate 
                               schedule_radius(&p->r_vol, 0), V));
     if (p->include_surfaces || !volume)
         memory_item_add(m, "surface photons and their map", "integrator.photon_count", photon_array_bytes(S) + S * per_mapped);
+    if (deriv_on(&p->deriv)) /* the photons' derivative records (docs/derivatives.md §4), at the arrays' capacity */
+        memory_item_add(m, "photon derivative records", "--derivative",
+                        (photon_array_bytes(volume && !beams ? V : 0.0) + photon_array_bytes(p->include_surfaces || !volume ? S : 0.0) +
+                         photon_array_bytes(batch_photons)) / sizeof(photon) * (double)photon_deriv_stride(p->deriv.count));
     memory_item_add(m, "photon batch buffers", NULL, photon_array_bytes(batch_photons) + photon_beam_array_bytes(batch_beams) +
                     path_vertex_array_bytes(batch_verts));
     if (piloted) photon_set_free(&pilot);

@@ -51,6 +51,19 @@ static void resolve_photon_points(const integrator_settings *in, render_plan *p)
     p->glossy_regularization = pp ? in->glossy_regularization : 0.0;
 }
 
+/* Photon points differentiate volume photons only (docs/derivatives.md §4): photon beams and the sliced
+ * primitives carry no derivative records, so a render with derivatives refuses them before any work. */
+static int deriv_photon_check(const scene *s, const render_plan *p, dp_error *err)
+{
+    if (!deriv_on(&p->deriv) || p->type != INTEGRATOR_PHOTON_POINTS || p->volume_photon_type == VOLUME_PHOTON_POINTS ||
+        s->medium_count == 0)
+        return 0;
+    const scene_key *k = scene_key_find("volume_photon_type");
+    return dp_fail(err, "%s: integrator.volume_photon_type: %s carries no derivatives; --derivative %s needs "
+                   "volume_photon_type \"points\" (docs/derivatives.md §4) or the path tracer",
+                   s->path, k ? k->choices[p->volume_photon_type] : "this type", p->deriv.param[0].pointer);
+}
+
 int plan_resolve(const scene *s, render_plan *p, dp_error *err)
 {
     const integrator_settings *in = &s->integrator;
@@ -70,7 +83,7 @@ int plan_resolve(const scene *s, render_plan *p, dp_error *err)
         plan_free(p);
         return -1;
     }
-    if (deriv_plan_init(&p->deriv, s, err)) {
+    if (deriv_plan_init(&p->deriv, s, err) || deriv_photon_check(s, p, err)) {
         plan_free(p);
         return -1;
     }
@@ -209,6 +222,10 @@ int plan_json(const render_plan *p, const scene *s, char *out, size_t n)
         for (int i = 0; i < p->darts.medium_count; i++)
             if (p->darts.eda[i].on)
                 cJSON_AddNumberToObject(cJSON_AddObjectToObject(eda, s->media[i].name), "alpha", p->darts.eda[i].alpha);
+    }
+    if (s->diff_count > 0) { /* the derivative images (docs/derivatives.md §5), in their order */
+        cJSON *d = cJSON_AddArrayToObject(root, "derivatives");
+        for (int k = 0; k < s->diff_count; k++) cJSON_AddItemToArray(d, cJSON_CreateString(s->diffs[k].pointer));
     }
     char *text = cJSON_PrintUnformatted(root);
     cJSON_Delete(root);

@@ -35,6 +35,8 @@ void render_memory_estimate(const scene *s, const render_plan *p, int have_refer
     double film = 2 * px * 3 * sizeof(double) + 2 * px * 3 * (double)layers * sizeof(float);
     memory_item_add(m, "film (sums and the pass in progress)",
         p->window.orders > 0 ? "integrator.bounce_orders" : frames > 0 ? "integrator.frame_num" : "camera.resolution", film);
+    /* each derivative film (film.h: deriv) has the film's sums, frame and order layers and pass layers */
+    if (s->diff_count > 0) memory_item_add(m, MEMORY_DERIV_FILMS, "--derivative", s->diff_count * film);
     memory_item_add(m, "output and reference images", "camera.resolution", image * (have_reference ? 3 : 2));
     if (frames > 0) { /* written at the end: the viewer's embedded frames and histogram (io.h) */
         viewer_layout l;

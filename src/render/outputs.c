@@ -319,7 +319,7 @@ static void warn_older_frame_set(const char *stem, int frame_count)
                 manifest);
 }
 
-int render_outputs_check(const char *path, int width, int height, int frame_count, int skip, dp_error *err)
+int render_outputs_check(const char *path, int width, int height, int frame_count, int derivs, int skip, dp_error *err)
 {
     char stem[OUTPUT_PATH_MAX], dir[OUTPUT_PATH_MAX], probe[STAGED_PATH_MAX];
     const char *ext;
@@ -341,6 +341,14 @@ int render_outputs_check(const char *path, int width, int height, int frame_coun
     double files = 2 + (frame_count > 0 ? frame_count + 1 : 0);
     double bytes = (1.0 + frame_count) * ((double)width * height * 12 + 4096) + (double)width * height * 4;
     extras_room(width, height, frame_count, skip, &bytes, &files);
+    /* each derivative: its image, frames, manifest and cube (no preview, no viewer), and the sidecar */
+    double d_files = 1 + (frame_count > 0 ? frame_count + 1 : 0);
+    double d_bytes = (1.0 + frame_count) * ((double)width * height * 12 + 4096);
+    extras_room(width, height, frame_count, skip | RENDER_SKIP_VIEWER, &d_bytes, &d_files);
+    if (derivs > 0) {
+        files += derivs * d_files + 1;
+        bytes += derivs * d_bytes + 4096;
+    }
     struct statvfs vfs;
     if (statvfs(dir, &vfs) == 0) {
         double room = (double)vfs.f_bavail * vfs.f_frsize;
@@ -420,8 +428,10 @@ static int list_outputs(file_list *l, const char *path, const scene *s, const re
             frame_path(frame, sizeof frame, dstem, tw->frame_count, j, ext);
             fail = list_add(l, "a derivative frame", "%s", frame);
         }
-        if (tw->frame_count > 0 && !(rq->skip & RENDER_SKIP_CUBE) && !fail)
-            fail = list_add(l, "a derivative cube", "%s_d%d_cube.npy", stem, k);
+        if (tw->frame_count > 0 && !fail)
+            fail = list_add(l, "a derivative frames' time axis", "%s_d%d" ATOMIC_SET_MANIFEST, stem, k) ||
+                   (!(rq->skip & RENDER_SKIP_CUBE) && list_add(l, "a derivative cube", "%s_d%d_cube.npy", stem, k));
+        if (tw->orders > 0 && !fail) fail = list_add(l, "a derivative's scattering orders", "%s_d%d_orders.npy", stem, k);
     }
     if (s->diff_count > 0 && !fail) fail = list_add(l, "the derivatives' sidecar", "%s_derivatives.csv", stem);
     for (int k = 0; k < GROUND_TRUTH_IMAGES && s->renderer.ground_truth && !fail; k++)

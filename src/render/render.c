@@ -221,6 +221,9 @@ static int film_resume(film *f, const film *from, dp_error *err)
         from->window.orders != f->window.orders)
         return dp_fail(err, "the film to resume is %dx%d with %d frames, the render %dx%d with %d", from->width,
                        from->height, from->window.frame_count, f->width, f->height, f->window.frame_count);
+    if (from->deriv_count != f->deriv_count)
+        return dp_fail(err, "the film to resume has %d derivative films, the render %d (--derivative)",
+                       from->deriv_count, f->deriv_count);
     film_copy_sums(f, from);
     return 0;
 }

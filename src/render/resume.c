@@ -19,8 +19,11 @@
  *   resumable 1|0                       (0: several ranks, one dropped a pass: not iterations 0..N−1)
  *   weight_sum %a   last_weight %a       (hexadecimal doubles: exact)
  *   nonfinite K
+ *   derivatives D                       (the derivative films, include/dartspp/derivative.h; 0 without)
+ *   derivative L POINTER                D lines, in the film's order: the pointer's length, then its bytes
  *   plan_bytes L     then the plan's JSON (L bytes) and a newline
- *   data_bytes D     then D bytes: W·H·3 doubles (gate sums), layers·W·H·3 floats (frame and order sums)
+ *   data_bytes B     then B bytes: W·H·3 doubles (gate sums), layers·W·H·3 floats (frame and order sums),
+ *                    then the same two blocks for each derivative film in order
  *   checksum X       FNV-1a 64 of every byte before this line, in hex: an edited header field (a weight sum,
  *                    a pass count, a seed) is as damaged as an edited sum, and is refused the same way
  */
@@ -33,7 +36,8 @@
 
 #include "run_internal.h"
 
-#define STATE_VERSION 3 /* 3: the scene's digest, and the checksum over the whole file at its end */
+#define STATE_VERSION 4 /* 3: the scene's digest, and the checksum over the whole file at its end; 4: the
+                          * derivative films */
 #define FNV_OFFSET 0xcbf29ce484222325ULL
 #define TRAILER_BYTES 28 /* "checksum 0x" + 16 hex digits + "\n" */
 
@@ -82,6 +86,11 @@ static char *header_text(const film *f, const char *plan_json, uint64_t seed, co
     for (int i = 0; i < SCENE_DIGEST_PARTS; i++) fprintf(m, " %s 0x%016" PRIx64, SCENE_DIGEST_NAMES[i], digest[i]);
     fprintf(m, "\npasses %ld\nresumable %d\nweight_sum %a\nlast_weight %a\nnonfinite %ld\n", f->passes,
             resumable ? 1 : 0, f->weight_sum, f->last_weight, f->nonfinite);
+    fprintf(m, "derivatives %d\n", f->deriv_count);
+    for (int k = 0; k < f->deriv_count; k++) {
+        const char *label = f->deriv[k].label ? f->deriv[k].label : "";
+        fprintf(m, "derivative %zu %s\n", strlen(label), label);
+    }
     fprintf(m, "plan_bytes %zu\n%s\ndata_bytes %zu\n", strlen(plan_json), plan_json, data);
     if (fclose(m)) {
         free(text);
@@ -90,11 +99,20 @@ static char *header_text(const film *f, const char *plan_json, uint64_t seed, co
     return text;
 }
 
+/* The sums of f, then of each derivative film, into the running checksum; 1 when a write failed. */
+static int put_sums(FILE *o, uint64_t *h, const film *f, size_t n, size_t nf)
+{
+    if (put(o, h, f->sum, n * sizeof(double)) || (nf && put(o, h, f->frame_sum, nf * sizeof(float)))) return 1;
+    for (int k = 0; k < f->deriv_count; k++)
+        if (put_sums(o, h, &f->deriv[k], n, nf)) return 1;
+    return 0;
+}
+
 int resume_state_write(const char *path, const film *f, const char *plan_json, uint64_t seed, const uint64_t *digest,
                        int resumable, dp_error *err)
 {
     size_t n = gate_count(f->width, f->height), nf = n * (size_t)time_window_layers(&f->window), len = 0;
-    size_t data = n * sizeof(double) + nf * sizeof(float);
+    size_t data = (1 + (size_t)f->deriv_count) * (n * sizeof(double) + nf * sizeof(float));
     char *head = header_text(f, plan_json, seed, digest, resumable, data, &len);
     if (!head) return dp_fail_kind(err, DP_ERROR_MEMORY, "%s: out of memory for the checkpoint state", path);
     atomic_file af;
@@ -104,8 +122,7 @@ int resume_state_write(const char *path, const film *f, const char *plan_json, u
         return -1;
     }
     uint64_t h = FNV_OFFSET;
-    int failed = put(o, &h, head, len) || put(o, &h, f->sum, n * sizeof(double)) ||
-                 (nf && put(o, &h, f->frame_sum, nf * sizeof(float)));
+    int failed = put(o, &h, head, len) || put_sums(o, &h, f, n, nf);
     free(head);
     if (!failed) failed = fprintf(o, "checksum 0x%016" PRIx64 "\n", h) != TRAILER_BYTES;
     return atomic_fclose(&af, failed, err);
@@ -114,6 +131,7 @@ int resume_state_write(const char *path, const film *f, const char *plan_json, u
 void resume_state_free(resume_state *s)
 {
     free(s->plan);
+    for (int k = 0; k < s->deriv_count; k++) free(s->deriv[k]);
     free(s->sum);
     free(s->frame_sum);
     memset(s, 0, sizeof *s);
@@ -145,6 +163,23 @@ static int check_whole_file(FILE *in, long *body)
     rewind(in);
     *body = size - TRAILER_BYTES;
     return h == want ? 0 : 2;
+}
+
+/* The derivative films' pointers (header lines "derivatives D" and D lines "derivative L POINTER"). 1 when
+ * read. */
+static int read_derivs(FILE *in, resume_state *s)
+{
+    int d = -1;
+    if (fscanf(in, " derivatives %d", &d) != 1 || d < 0 || d > DIFF_PARAM_MAX) return 0;
+    for (int k = 0; k < d; k++) {
+        size_t len = 0;
+        if (fscanf(in, " derivative %zu", &len) != 1 || len >= 4096 || fgetc(in) != ' ') return 0;
+        if (!(s->deriv[k] = malloc(len + 1))) return 0;
+        s->deriv_count = k + 1;
+        if (fread(s->deriv[k], 1, len, in) != len) return 0;
+        s->deriv[k][len] = '\0';
+    }
+    return 1;
 }
 
 static int read_digest(FILE *in, uint64_t *digest)
@@ -187,7 +222,7 @@ int resume_state_read(const char *path, int with_data, resume_state *s, dp_error
              fscanf(in, " resumable %d", &s->resumable) == 1 && (s->resumable == 0 || s->resumable == 1) &&
              fscanf(in, " weight_sum %la", &s->weight_sum) == 1 &&
              fscanf(in, " last_weight %la", &s->last_weight) == 1 &&
-             fscanf(in, " nonfinite %ld", &s->nonfinite) == 1 &&
+             fscanf(in, " nonfinite %ld", &s->nonfinite) == 1 && read_derivs(in, s) &&
              fscanf(in, " plan_bytes %zu", &plan_bytes) == 1 && plan_bytes < (1u << 24) && fgetc(in) == '\n';
     if (ok && (s->plan = malloc(plan_bytes + 1)) != NULL) {
         ok = fread(s->plan, 1, plan_bytes, in) == plan_bytes && fgetc(in) == '\n';
@@ -195,17 +230,20 @@ int resume_state_read(const char *path, int with_data, resume_state *s, dp_error
     } else ok = 0;
     time_window layers = {.frame_count = s->frames, .orders = s->orders};
     size_t n = ok ? gate_count(s->width, s->height) : 0, nf = n * (size_t)time_window_layers(&layers);
+    size_t films = 1 + (size_t)s->deriv_count;
     ok = ok && fscanf(in, "data_bytes %zu", &data_bytes) == 1 && fgetc(in) == '\n' &&
-         data_bytes == n * sizeof(double) + nf * sizeof(float) && ftell(in) + (long)data_bytes == body;
+         data_bytes == films * (n * sizeof(double) + nf * sizeof(float)) && ftell(in) + (long)data_bytes == body;
     if (ok && with_data) {
-        s->sum = malloc(n * sizeof(double));
-        s->frame_sum = nf ? malloc(nf * sizeof(float)) : NULL;
+        s->sum = malloc(films * n * sizeof(double));
+        s->frame_sum = nf ? malloc(films * nf * sizeof(float)) : NULL;
         if (!s->sum || (nf && !s->frame_sum)) {
             fclose(in);
             resume_state_free(s);
             return dp_fail_kind(err, DP_ERROR_MEMORY, "%s: out of memory for the checkpoint state", path);
         }
-        ok = fread(s->sum, sizeof(double), n, in) == n && (!nf || fread(s->frame_sum, sizeof(float), nf, in) == nf);
+        for (size_t k = 0; ok && k < films; k++)
+            ok = fread(s->sum + k * n, sizeof(double), n, in) == n &&
+                 (!nf || fread(s->frame_sum + k * nf, sizeof(float), nf, in) == nf);
     }
     fclose(in);
     if (!ok) {
@@ -223,6 +261,33 @@ static void plan_difference(const char *a, const char *b, char *out, size_t n)
     while (a[i] && a[i] == b[i]) i++;
     size_t from = i > 40 ? i - 40 : 0;
     snprintf(out, n, "checkpoint \"...%.80s...\", this run \"...%.80s...\"", a + from, b + from);
+}
+
+/* "(k pointer, ...)" of n pointers, or "(none)". */
+static void deriv_list(char *out, size_t size, const char *const *ptr, int n)
+{
+    snprintf(out, size, "%s", n ? "(" : "(none)");
+    for (int k = 0; k < n; k++)
+        snprintf(out + strlen(out), size - strlen(out), "%sd%d %s%s", k ? ", " : "", k, ptr[k], k == n - 1 ? ")" : "");
+}
+
+/* The derivative films of the state against the run's --derivative list: the same pointers in the same order
+ * (film k of the one is film k of the other), else a refusal naming both lists. */
+static int resume_check_derivs(const resume_state *s, const char *path, const scene *sc, dp_error *err)
+{
+    const char *mine[DIFF_PARAM_MAX];
+    int same = s->deriv_count == sc->diff_count;
+    for (int k = 0; k < sc->diff_count; k++) {
+        mine[k] = sc->diffs[k].pointer;
+        same = same && k < s->deriv_count && !strcmp(s->deriv[k], mine[k]);
+    }
+    if (same) return 0;
+    char held[1200], asked[1200];
+    deriv_list(held, sizeof held, (const char *const *)s->deriv, s->deriv_count);
+    deriv_list(asked, sizeof asked, mine, sc->diff_count);
+    return dp_fail(err, "%s: the checkpoint holds the derivatives %s, this run asks for %s (--derivative, in that "
+                   "order): their sums would be mixed with other images: cannot resume (the same --derivative list "
+                   "resumes; --overwrite renders anew)", path, held, asked);
 }
 
 int resume_check(const resume_state *s, const char *path, const render_run_job *j, long spp, dp_error *err)
@@ -251,6 +316,7 @@ int resume_check(const resume_state *s, const char *path, const render_run_job *
     if (parts[0])
         return dp_fail(err, "%s: the checkpoint was rendered from another scene (this run's scene differs in: %s): "
                        "its sums would be blended into this scene's image: cannot resume", path, parts);
+    if (resume_check_derivs(s, path, &j->s, err)) return -1;
     if (strcmp(s->plan, j->plan_json)) {
         char diff[256];
         plan_difference(s->plan, j->plan_json, diff, sizeof diff);

@@ -121,7 +121,7 @@ static void set_up_render(render_run_job *j)
     if (j->rank != 0) return;
     double pixels = (double)j->s.cam.width * j->s.cam.height;
     survivors_init(&j->keep, ro->stop, j->out, j->p.type_name, j->plan_json, j->state, j->rq->skip,
-                   pixels * 3 * (sizeof(double) + time_window_layers(&j->p.window) * sizeof(float)));
+                   (1 + j->s.diff_count) * pixels * 3 * (sizeof(double) + time_window_layers(&j->p.window) * sizeof(float)));
     j->cp.keep = &j->keep;
     j->cp.state_every = reduce_every;
     ro->exchanges = &j->keep.exchanges;

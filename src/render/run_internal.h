@@ -84,8 +84,12 @@ typedef struct {
     double weight_sum, last_weight;
     uint64_t digest[SCENE_DIGEST_PARTS]; /* scene_digest of the scene it was rendered from */
     char *plan;          /* the plan's JSON */
-    double *sum;         /* width·height·3 (read with data only) */
-    float *frame_sum;    /* layers·width·height·3, layers as time_window_layers (read with data only) */
+    int deriv_count;     /* the derivative films (film.h: deriv), their pointers in order */
+    char *deriv[DIFF_PARAM_MAX];
+    double *sum;         /* (1 + deriv_count)·width·height·3: the image's, then each derivative film's (read with
+                          * data only) */
+    float *frame_sum;    /* (1 + deriv_count)·layers·width·height·3, layers as time_window_layers (read with data
+                          * only) */
 } resume_state;
 
 /* "<stem>.state" of the output path <stem>.exr|.pfm. */
@@ -99,8 +103,8 @@ int resume_state_write(const char *path, const film *f, const char *plan_json, u
  * err (input). */
 int resume_state_read(const char *path, int with_data, resume_state *s, dp_error *err);
 void resume_state_free(resume_state *s);
-/* Whether the state fits this run (seed, resolution, frames, the scene's digest, plan; not more passes than
- * spp > 0). */
+/* Whether the state fits this run (seed, resolution, frames, the scene's digest, its derivative films' pointers
+ * in order against --derivative, plan; not more passes than spp > 0). */
 int resume_check(const resume_state *s, const char *path, const render_run_job *j, long spp, dp_error *err);
 /* Without --resume: refuses (-1 with err) when the state at path holds more passes than spp (or any, when
  * spp <= 0: the run's pass count is unknown), or is damaged or of an older version (its passes unknown). */

@@ -58,7 +58,8 @@ static int check_outputs(render_run_job *j, dp_error *err)
 {
     if (j->rank != 0) return 0;
     if (render_outputs_refuse_inputs(j->out, &j->s, &j->p, j->rq, err)) return -1;
-    return render_outputs_check(j->out, j->s.cam.width, j->s.cam.height, j->p.window.frame_count, j->rq->skip, err);
+    return render_outputs_check(j->out, j->s.cam.width, j->s.cam.height, j->p.window.frame_count, j->s.diff_count,
+                                j->rq->skip, err);
 }
 
 /* The memory guard; every rank on this machine needs as much. */
@@ -107,6 +108,34 @@ static int images_not_newer(const render_run_job *j, long state_passes, dp_error
     return 0;
 }
 
+/* Film k's sums (k 0: the image's, then each derivative film's) of a state read with its data into f. */
+static void state_sums_into(film *f, const resume_state *st, size_t k)
+{
+    size_t n = (size_t)st->width * st->height * 3, nf = n * (size_t)time_window_layers(&f->window);
+    memcpy(f->sum, st->sum + k * n, n * sizeof(double));
+    if (nf > 0) memcpy(f->frame_sum, st->frame_sum + k * nf, nf * sizeof(float));
+    f->passes = st->passes;
+    f->weight_sum = st->weight_sum;
+    f->last_weight = st->last_weight;
+}
+
+/* The state (resume_check passed: its derivative films are this run's, in order) as j->resumed, the
+ * derivative films labelled with the scene's pointers. 0, or -1 with err. */
+static int resumed_film(render_run_job *j, const resume_state *st, dp_error *err)
+{
+    const char *labels[DIFF_PARAM_MAX];
+    for (int k = 0; k < j->s.diff_count; k++) labels[k] = j->s.diffs[k].pointer;
+    if (film_init(&j->resumed, st->width, st->height, &j->p.window, err)) return -1;
+    if (film_init_derivs(&j->resumed, j->s.diff_count, labels, err)) {
+        film_free(&j->resumed);
+        return -1;
+    }
+    state_sums_into(&j->resumed, st, 0);
+    for (int k = 0; k < j->resumed.deriv_count; k++) state_sums_into(&j->resumed.deriv[k], st, 1 + (size_t)k);
+    j->resumed.nonfinite = st->nonfinite;
+    return 0;
+}
+
 /* The checkpoint state beside the outputs (resume.c), rank 0's: with --resume it is loaded into j->resumed and
  * must fit this run; without, a state holding more passes than this run renders is not overwritten unless
  * --overwrite. This process alone writes it at checkpoints and, with checkpoints or --resume, at the end;
@@ -141,18 +170,10 @@ static int set_up_state(render_run_job *j, dp_error *err)
     if (rc || resume_state_read(j->state, 1, &st, err)) return -1;
     rc = resume_check(&st, j->state, j, spp, err); /* the same file, unless replaced in between */
     if (!rc) rc = images_not_newer(j, st.passes, err);
-    if (!rc) rc = film_init(&j->resumed, st.width, st.height, &j->p.window, err);
-    if (!rc) {
-        size_t n = (size_t)st.width * st.height * 3;
-        memcpy(j->resumed.sum, st.sum, n * sizeof(double));
-        size_t layers = (size_t)time_window_layers(&j->p.window);
-        if (layers > 0) memcpy(j->resumed.frame_sum, st.frame_sum, n * layers * sizeof(float));
-        j->resumed.passes = st.passes;
-        j->resumed.weight_sum = st.weight_sum;
-        j->resumed.last_weight = st.last_weight;
-        j->resumed.nonfinite = st.nonfinite;
-        if (!j->quiet) fprintf(stderr, "resuming %s: %ld passes\n", j->state, st.passes);
-    }
+    if (!rc) rc = resumed_film(j, &st, err);
+    if (!rc && !j->quiet)
+        fprintf(stderr, "resuming %s: %ld passes%s\n", j->state, st.passes,
+                st.deriv_count ? " (and their derivative images)" : "");
     resume_state_free(&st);
     return rc;
 }

@@ -1,6 +1,7 @@
 /* The run summary on stdout: the scene and its gate, passes and ray rates, which photon-pass samplers ran,
  * the photon statistics, the cluster's overhead, the memory and the error log's. */
 #include <stdio.h>
+#include <string.h>
 #include <sys/resource.h>
 
 #include "dartspp/sliced_primitives.h"
@@ -194,8 +195,8 @@ static void print_cluster(const scene *s, const render_plan *p, const render_sta
 {
     double px = (double)s->cam.width * s->cam.height;
     char each[32];
-    memory_format_bytes(px * 3 * sizeof(double) + px * 3 * sizeof(float) * p->window.frame_count + 12 * sizeof(double),
-                        each, sizeof each);
+    double film = px * 3 * sizeof(double) + px * 3 * sizeof(float) * time_window_layers(&p->window);
+    memory_format_bytes((1 + s->diff_count) * film + 12 * sizeof(double), each, sizeof each);
     printf("cluster: %ld film reductions of %s from each rank; rank 0 spent %.3f s in the rounds' agreement and "
            "the reductions (%.2f%% of the render); photon-pass and sensor-pass times above are summed over the ranks\n",
            st->reductions, each, st->t_cluster, st->seconds > 0 ? 100.0 * st->t_cluster / st->seconds : 0.0);
@@ -222,19 +223,42 @@ static void print_summary(const scene *s, const render_plan *p, const render_sta
     if (st->reductions > 0) print_cluster(s, p, st);
 }
 
-static void print_memory(const memory_estimate *m)
+/* The estimate's item named `what` (0 bytes when absent). */
+static double item_bytes(const memory_estimate *m, const char *what)
+{
+    for (int i = 0; i < m->count; i++)
+        if (!strcmp(m->item[i].what, what)) return m->item[i].bytes;
+    return 0.0;
+}
+
+static void print_memory(const memory_estimate *m, int derivs)
 {
     struct rusage ru;
-    char est[32], peak[32] = "unknown";
+    char est[32], peak[32] = "unknown", deriv[32];
     memory_format_bytes(m->total, est, sizeof est);
     if (getrusage(RUSAGE_SELF, &ru) == 0) memory_format_bytes(ru.ru_maxrss * 1024.0, peak, sizeof peak);
-    printf("memory: estimated %s before the render, peak resident %s\n", est, peak);
+    printf("memory: estimated %s before the render", est);
+    if (derivs > 0) {
+        memory_format_bytes(item_bytes(m, MEMORY_DERIV_FILMS), deriv, sizeof deriv);
+        printf(" (of which %s for the %d derivative film%s)", deriv, derivs, derivs > 1 ? "s" : "");
+    }
+    printf(", peak resident %s\n", peak);
+}
+
+/* The derivative images and their parameters (docs/derivatives.md §5): <stem>_d<k> is ∂I/∂θ_k. */
+static void print_derivatives(const scene *s)
+{
+    if (s->diff_count <= 0) return;
+    printf("derivatives (%d):", s->diff_count);
+    for (int k = 0; k < s->diff_count; k++) printf("%s d%d = dI/d %s", k ? ";" : "", k, s->diffs[k].pointer);
+    printf("\n");
 }
 
 void run_print_summary(const render_run_job *j, const render_stats *st)
 {
     print_summary(&j->s, &j->p, st, j->load_seconds);
-    print_memory(&j->mem);
+    print_derivatives(&j->s);
+    print_memory(&j->mem, j->s.diff_count);
     const error_log *log = j->cp.log;
     if (log)
         printf("error log: %s (%.3f s spent logging, %.2f%% of the render)\n", j->rq->log, error_log_overhead(log),

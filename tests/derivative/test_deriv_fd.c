@@ -19,6 +19,8 @@ static int walls = 1;
 /* steady: no gate (the coefficients' finite differences in a gate are dominated by contributions whose sampled
  * emission time carries them across the gate's edges: a step that common random numbers cannot make smooth) */
 static int steady = 0;
+/* area_light: a quad emitter instead of the collimated beam */
+static int area_light = 0;
 
 static void scene_text(char *text, size_t n, const double *v, const char *integrator)
 {
@@ -30,21 +32,32 @@ static void scene_text(char *text, size_t n, const double *v, const char *integr
                  "      \"rotation\": [-90, 0, 0] } },"
                  "    { \"type\": \"quad\", \"bsdf\": \"red\", \"transform\": { \"position\": [1, 1, 0], \"scale\": [2, 1, 2],"
                  "      \"rotation\": [0, 0, 90] } },");
+    char light[1024];
+    if (area_light) /* a panel facing down into the fog: the DARTS path tracer aims at it */
+        snprintf(light, sizeof light,
+                 "{ \"type\": \"quad\", \"bsdf\": \"white\", \"emission\": %.17g, \"pulse_start\": %.17g,"
+                 "  \"pulse_width\": %.17g, \"int_medium\": \"fog\", \"ext_medium\": \"fog\","
+                 "  \"transform\": { \"position\": [0.3, 1.9, 0.1], \"scale\": [0.8, 1, 0.8], \"rotation\": [180, 0, 0] } }",
+                 v[P_POWER], v[P_PULSE_START], v[P_PULSE_WIDTH]);
+    else /* a collimated beam: no 1/r² singularity (docs/derivatives.md §7) */
+        snprintf(light, sizeof light,
+                 "{ \"type\": \"collimated\", \"radius\": 0.3, \"emission\": %.17g, \"pulse_start\": %.17g,"
+                 "  \"pulse_width\": %.17g, \"ext_medium\": \"fog\","
+                 "  \"transform\": { \"position\": [-1.2, 1.6, 0.2], \"look_at\": [1, 0.6, 0.4], \"up\": [0, 1, 0] } }",
+                 v[P_POWER], v[P_PULSE_START], v[P_PULSE_WIDTH]);
     snprintf(text, n,
-             "{ \"media\": [ { \"name\": \"fog\", \"type\": \"homogeneous\", \"sigma_s\": %.17g, \"sigma_a\": %.17g,"
+             "{ \"media\": [ { \"name\": \"fog\", \"type\": \"guided_homo\", \"sigma_s\": %.17g, \"sigma_a\": %.17g,"
              "    \"speed_of_light\": %.17g, \"phase_function\": { \"type\": \"henyey_greenstein\", \"g\": %.17g } } ],"
              "  \"bsdfs\": [ { \"name\": \"white\", \"type\": \"lambert\", \"albedo\": %.17g },"
              "               { \"name\": \"red\", \"type\": \"lambert\", \"albedo\": [0.7, 0.15, 0.1] } ],"
              "  \"primitives\": [ %s"
-             "    { \"type\": \"collimated\", \"radius\": 0.3, \"emission\": %.17g, \"pulse_start\": %.17g,"
-             "      \"pulse_width\": %.17g, \"ext_medium\": \"fog\","
-             "      \"transform\": { \"position\": [-1.2, 1.6, 0.2], \"look_at\": [1, 0.6, 0.4], \"up\": [0, 1, 0] } } ],"
+             "    %s ],"
              "  \"camera\": { \"type\": \"pinhole\", \"resolution\": [8, 8], \"fov\": 50, \"medium\": \"fog\","
              "    \"transform\": { \"position\": [0, 1, -2.5], \"look_at\": [0, 1, 0], \"up\": [0, 1, 0] } },"
              "  \"integrator\": { \"type\": \"path_tracer\", \"max_bounces\": 4, \"transient_time_center\": %.17g,"
              "    \"transient_time_width\": %.17g %s },"
              "  \"renderer\": { \"spp\": 1 } }",
-             v[P_SIGMA_S], v[P_SIGMA_A], v[P_SPEED], v[P_G], v[P_ALBEDO], prims, v[P_POWER], v[P_PULSE_START], v[P_PULSE_WIDTH],
+             v[P_SIGMA_S], v[P_SIGMA_A], v[P_SPEED], v[P_G], v[P_ALBEDO], prims, light,
              v[P_CENTER], steady ? 0.0 : v[P_WIDTH], integrator);
 }
 
@@ -85,21 +98,18 @@ static int fd_after(void *ctx, const film *f, const render_stats *st, dp_error *
     return 0;
 }
 
-static void render_probe_fd(const char *text, const diff_param *dp, long passes, fd_probe *t)
+static void render_probe_fd(const char *text, const char *pointer, long passes, fd_probe *t)
 {
     tmp_scene ts;
     tmp_scene_write(&ts, text);
     scene s;
-    load_scene(ts.path, NULL, 0, &s);
-    if (dp) {
-        s.diffs[0] = *dp;
-        s.diff_count = 1;
-    }
+    scene_load_options lo = {.derivatives = &pointer, .derivative_count = pointer ? 1 : 0};
+    dp_error err;
+    if (scene_load(ts.path, &lo, &s, &err)) fail_msg("%s", err.msg);
     memset(t, 0, sizeof *t);
     render_options ro = {.threads = 2, .seed = 11, .spp = passes, .after_pass = fd_after, .after_pass_ctx = t};
     film f;
     render_stats st;
-    dp_error err;
     if (render_scene(&s, &ro, &f, &st, &err)) fail_msg("%s", err.msg);
     assert_int_equal(st.nonfinite, 0);
     assert_int_equal(t->n, passes);
@@ -109,7 +119,7 @@ static void render_probe_fd(const char *text, const diff_param *dp, long passes,
 }
 
 /* The finite difference against the derivative, per tile and on the total: returns the largest |z|. */
-static double fd_compare(const char *label, int p, const diff_param *dp, const char *integrator, long passes)
+static double fd_compare(const char *label, int p, const char *pointer, const char *integrator, long passes)
 {
     /* ε: 5 % of a coefficient; 0.05 of the time unit for the pulse and the gate (their curvature is on the scale
      * of the pulse's width) */
@@ -125,7 +135,7 @@ static double fd_compare(const char *label, int p, const diff_param *dp, const c
     scene_text(text, sizeof text, hi, integrator);
     render_probe_fd(text, NULL, passes, &b);
     scene_text(text, sizeof text, BASE, integrator);
-    render_probe_fd(text, dp, passes, &d);
+    render_probe_fd(text, pointer, passes, &d);
     double zmax = 0.0, tot_fd = 0.0, tot_d = 0.0, s_e = 0.0, s_e2 = 0.0;
     for (long i = 0; i < passes; i++) {
         double e_tot = 0.0;
@@ -153,43 +163,68 @@ static double fd_compare(const char *label, int p, const diff_param *dp, const c
     return fmax(zmax, zt);
 }
 
-static diff_param medium_param(vec3 ds, vec3 da, double deta)
+/* The pointer of parameter p in scene_text's file (the light is the last primitive). */
+static void pointer_of(int p, char *out, size_t n)
 {
-    return (diff_param){.kind = DIFF_MEDIUM, .index = 0, .dsigma_s = ds, .dsigma_a = da, .deta = deta};
+    int light = walls ? 3 : 0;
+    switch (p) {
+    case P_SIGMA_S: snprintf(out, n, "/media/0/sigma_s"); break;
+    case P_SIGMA_A: snprintf(out, n, "/media/0/sigma_a"); break;
+    case P_G: snprintf(out, n, "/media/0/phase_function/g"); break;
+    case P_POWER: snprintf(out, n, "/primitives/%d/emission", light); break;
+    case P_PULSE_START: snprintf(out, n, "/primitives/%d/pulse_start", light); break;
+    case P_PULSE_WIDTH: snprintf(out, n, "/primitives/%d/pulse_width", light); break;
+    case P_CENTER: snprintf(out, n, "/integrator/transient_time_center"); break;
+    case P_WIDTH: snprintf(out, n, "/integrator/transient_time_width"); break;
+    case P_ALBEDO: snprintf(out, n, "/bsdfs/0/albedo"); break;
+    default: snprintf(out, n, "/media/0/speed_of_light"); break;
+    }
 }
 
+static const char *const NAMES[P_COUNT] = {"sigma_s", "sigma_a", "g", "emission", "pulse_start", "pulse_width",
+                                           "transient_time_center", "transient_time_width", "albedo", "speed_of_light"};
+
+/* Every kind with one integrator: the coefficients in steady state, the rest in the gate; the albedo with the
+ * walls, the rest in the unbounded fog. */
 static void run_kinds(const char *integrator, long passes)
 {
-    diff_param q[P_COUNT] = {
-        [P_SIGMA_S] = medium_param(v3s(1), v3s(0), 0),
-        [P_SIGMA_A] = medium_param(v3s(0), v3s(1), 0),
-        [P_G] = {.kind = DIFF_PHASE_G, .index = 0},
-        [P_POWER] = {.kind = DIFF_EMISSION, .index = 0, .dlog = v3s(1.0 / BASE[P_POWER])},
-        [P_PULSE_START] = {.kind = DIFF_PULSE_START, .index = 0},
-        [P_PULSE_WIDTH] = {.kind = DIFF_PULSE_WIDTH, .index = 0},
-        [P_CENTER] = {.kind = DIFF_WINDOW, .index = -1, .d_start = 1.0},
-        [P_WIDTH] = {.kind = DIFF_WINDOW, .index = -1, .d_start = -0.5, .d_width = 1.0},
-        [P_ALBEDO] = {.kind = DIFF_ALBEDO, .index = 0, .dlog = v3s(1.0 / BASE[P_ALBEDO])},
-        [P_SPEED] = medium_param(v3s(0), v3s(0), -1.0 / (BASE[P_SPEED] * BASE[P_SPEED])),
-    };
-    static const char *names[P_COUNT] = {"sigma_s", "sigma_a", "g", "power", "pulse_start", "pulse_width",
-                                         "transient_time_center", "transient_time_width", "albedo", "speed_of_light"};
     for (int p = 0; p < P_COUNT; p++) {
-        walls = p == P_ALBEDO || getenv("FD_WALLS");
+        walls = p == P_ALBEDO || getenv("FD_WALLS") || area_light;
         steady = (p == P_SIGMA_S || p == P_SIGMA_A || p == P_G) && !getenv("FD_GATED");
-        double z = fd_compare(names[p], p, &q[p], integrator, passes);
+        char pointer[64], label[96];
+        pointer_of(p, pointer, sizeof pointer);
+        snprintf(label, sizeof label, "%s%s", NAMES[p], steady ? " (steady)" : "");
+        double z = fd_compare(label, p, pointer, integrator, passes);
         assert_true(z < 4.0);
     }
 }
 
+static long fd_passes(long def) { return getenv("FD_PASSES") ? atol(getenv("FD_PASSES")) : def; }
+
 static void test_plain(void **state)
 {
     (void)state;
-    run_kinds("", getenv("FD_PASSES") ? atol(getenv("FD_PASSES")) : 3000);
+    area_light = 0;
+    run_kinds("", fd_passes(3000));
+}
+
+static void test_darts(void **state)
+{
+    (void)state;
+    area_light = 1;
+    run_kinds(", " DARTS_KEYS_TEXT, fd_passes(3000));
+}
+
+static void test_uniform_time(void **state)
+{
+    (void)state;
+    area_light = 1;
+    run_kinds(", \"time_sampling\": \"uniform\"", fd_passes(3000));
 }
 
 int main(void)
 {
-    const struct CMUnitTest tests[] = {cmocka_unit_test(test_plain)};
+    const struct CMUnitTest tests[] = {cmocka_unit_test(test_plain), cmocka_unit_test(test_darts),
+                                       cmocka_unit_test(test_uniform_time)};
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
