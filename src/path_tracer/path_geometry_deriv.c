@@ -30,15 +30,26 @@ int pt_leg_value(const scene *s, int i, vec3 x, vec3 shift, int med, const phase
     if (!emitter_sample_direct(s, L, v3_sub(x, shift), none, &ed)) return 0;
     vec3 f = ss ? surface_eval_cos(ss, ed.wi, BSDF_LOBES_ALL) : v3s(phase_eval(pf, w_in, ed.wi));
     if (v3_max(f) <= 0.0) return 0;
-    vec3 o = x;
+    vec3 o = x, tr_near = v3s(1.0);
     int region = med;
+    *time = 0.0;
     if (ss) {
-        o = scene_offset_ray_origin(s, x, v3_dot(ed.wi, ss->ng_hit) > 0.0 ? ss->ng_hit : v3_neg(ss->ng_hit));
+        vec3 n = v3_dot(ed.wi, ss->ng_hit) > 0.0 ? ss->ng_hit : v3_neg(ss->ng_hit);
         region = surface_medium_toward(ss, med, ed.wi);
+        /* x is the site moved with its surface (docs/derivatives.md §6.1): the leg starts where it crosses the
+         * site's plane at rest, c along it (c > 0: x behind that plane), and the first c lies in the region
+         * the leg leaves into, as it does in the moved scene; without this the static surface occludes the
+         * leg of every site moving along its normal */
+        double c = -v3_dot(n, v3_sub(x, ss->p)) / v3_dot(n, ed.wi);
+        o = scene_offset_ray_origin(s, v3_add(x, v3_scale(ed.wi, c)), n);
+        *time = medium_eta(s, region) * c;
+        if (region != MEDIUM_VACUUM) tr_near = v3_exp_neg(v3_scale(s->media[region].sigma_t, c));
     }
     vec3 tr;
-    *time = 0.0;
-    if (!scene_transmittance(s, o, region, v3_add(ed.y, shift), &tr, time)) return 0;
+    double t_far = 0.0;
+    if (!scene_transmittance(s, o, region, v3_add(ed.y, shift), &tr, &t_far)) return 0;
+    tr = v3_mul(tr, tr_near);
+    *time += t_far;
     *value = v3_scale(v3_mul(v3_mul(tr, ed.value), f), 1.0 / ed.denom);
     return 1;
 }
