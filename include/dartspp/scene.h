@@ -68,6 +68,7 @@ typedef struct {
     int int_medium, ext_medium;   /* medium index or MEDIUM_VACUUM, used when overrides_media */
     uint32_t first_tri, tri_count;
     int emitter;                  /* index into scene.lights of the area light it is, or -1 */
+    int smooth;                   /* `smooth` (and spheres): interpolated vertex normals shade it */
 } surface;
 
 /* medium on the far side of `s` for a ray leaving the hit point in direction d (Tungsten selectMedium) */

@@ -285,6 +285,12 @@ static int check_scene(const scene *s, const diff_param *q, dp_error *err)
         const bsdf *b = &s->bsdfs[s->surfaces[i].bsdf];
         if (is_opaque(s, i)) {
             opaque = 1;
+            if (s->surfaces[i].smooth) {
+                snprintf(why, sizeof why, "surface '%s' is smooth (interpolated vertex normals, as spheres are): the "
+                                          "shading normal's change as a hit slides over it is not differentiated; use a "
+                                          "flat mesh (docs/derivatives.md §6.4)", s->surfaces[i].name);
+                return gfail(s, q, err, why);
+            }
             if (b->texture >= 0) {
                 snprintf(why, sizeof why, "surface '%s' has a textured albedo: its derivative as a hit slides over it is "
                                           "not implemented", s->surfaces[i].name);

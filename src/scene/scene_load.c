@@ -148,6 +148,7 @@ static int append_surface_mesh(json_ctx *c, scene *s, const tri_mesh *m, const x
     if (scene_rt_add_mesh(s, s->surface_count, s->tri_count, m, T, flags)) return jfail(c, where, NULL, "out of memory");
     sf->first_tri = s->tri_count;
     sf->tri_count = m->nt;
+    sf->smooth = (flags & SURF_SMOOTH) != 0;
     s->vert_count += m->nv;
     s->tri_count += m->nt;
     return 0;
