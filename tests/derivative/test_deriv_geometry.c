@@ -6,7 +6,7 @@
  * the broken variant, without them (DARTSPP_DERIV_NO_BOUNDARY); and linearity ∂I/∂θ_x + ∂I/∂θ_y = ∂I/∂θ_(x+y)
  * (Yi et al. 2021 Fig. 7) for the occluder. The finite difference is Richardson-extrapolated with a truncation
  * budget (fd_compare). Default tier: the refusals, linearity, the camera along z and the occluder along y
- * (plain path tracer, 150 and 400 passes); test_deriv_geometry_stress.c: everything, every integrator. */
+ * (plain path tracer, 100 and 300 passes); test_deriv_geometry_stress.c: everything, every integrator. */
 #include "render_fixtures.h"
 
 #ifndef GEO_FULL
@@ -254,7 +254,7 @@ static void test_camera(void **state)
             assert_true(fd_compare("camera x, fog", &g, T_CAMERA, v3(1, 0, 0), eps_or(0.1), passes_or(1000)) < 4.0);
         }
         g.wall = 1, g.max_bounces = 2; /* hits sliding over the wall */
-        assert_true(fd_compare("camera z, fog and wall", &g, T_CAMERA, v3(0, 0, 1), eps_or(0.1), passes_or(GEO_FULL ? 1000 : 150)) < 4.0);
+        assert_true(fd_compare("camera z, fog and wall", &g, T_CAMERA, v3(0, 0, 1), eps_or(0.1), passes_or(GEO_FULL ? 1000 : 100)) < 4.0);
     }
 }
 
@@ -288,7 +288,7 @@ static void test_occluder(void **state)
     for (int i = 0; i < integrator_count(); i++) {
         geo_scene g = scene_for(i);
         g.occluder = 1;
-        double z = fd_compare("occluder y", &g, T_OCCLUDER, v3(0, 1, 0), eps_or(0.04), passes_or(GEO_FULL ? 4000 : 400));
+        double z = fd_compare("occluder y", &g, T_OCCLUDER, v3(0, 1, 0), eps_or(0.04), passes_or(GEO_FULL ? 4000 : 300));
         if (GEO_FULL) z = fmax(z, fd_compare("occluder x", &g, T_OCCLUDER, v3(1, 0, 0), eps_or(0.02), passes_or(800)));
         if (getenv("DARTSPP_DERIV_NO_BOUNDARY")) print_message("  (boundary terms off: the broken variant)\n");
         assert_true(z < 4.0);
