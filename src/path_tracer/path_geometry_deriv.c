@@ -1,6 +1,6 @@
 /* Translations in the path tracers (docs/derivatives.md §6): the interior term in ray space — the camera
  * path's vertices slide along their fixed rays (deriv_slide), each light leg's ends move — and the boundary
- * term of the shadows that the camera path's medium segments cross (Yi et al. 2021 §4.1, eq. 16: the jump of
+ * term of the shadows that the camera path's medium segments cross (Yi et al. 2021 eq. 16: the jump of
  * the integrand times the normal velocity of the discontinuity, here per ray in closed form). */
 #include "path_tracer_internal.h"
 
