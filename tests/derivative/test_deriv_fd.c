@@ -1,4 +1,5 @@
-/* Derivative images against central finite differences with common random numbers (docs/derivatives.md §6):
+/* tier: stress */
+/* Derivative images against central finite differences with common random numbers (docs/derivatives.md §7):
  * per pass and per image tile, (I(θ + ε) − I(θ − ε))/(2ε) from two renders of the same seed against the
  * derivative image of a third render of that seed at θ; the paired per-pass differences give a z-test per tile
  * and on the image total. Every parameter kind the path tracers differentiate, on the fog box with a point light

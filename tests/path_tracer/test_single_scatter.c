@@ -30,6 +30,7 @@ typedef struct {
     int unwarp;        /* the camera leg takes no time */
     double p0, pw;     /* pulse: emission at p0 (pw = 0) or uniformly over [p0, p0 + pw) */
     double rs, rt;     /* the sensor's response: Gaussian σ and exponential tail mean (0, 0: none) */
+    int gauss;         /* the pulse is a Gaussian of FWHM pw peaked at p0 + pw/2 (docs/time.md §5), not a box */
 } analytic_case;
 
 static double hg(double g, double mu)
@@ -91,6 +92,10 @@ static double emg_cdf(double x, double s, double t)
 
 static double pulse_weight(const analytic_case *a, double T)
 {
+    if (a->gauss) { /* P(T + τ0 in the gate) for τ0 ~ N(p0 + pw/2, (pw / 2·sqrt(2 ln 2))²) */
+        double m = a->p0 + 0.5 * a->pw, sd = a->pw / 2.3548200450309493;
+        return 0.5 * erfc(-(a->g1 - T - m) / (sd * sqrt(2.0))) - 0.5 * erfc(-(a->g0 - T - m) / (sd * sqrt(2.0)));
+    }
     if (a->rs > 0) /* a delta pulse through the response: P(T + p0 + offset in the gate) */
         return emg_cdf(a->g1 - T - a->p0, a->rs, a->rt) - emg_cdf(a->g0 - T - a->p0, a->rs, a->rt);
     if (a->pw == 0) return T + a->p0 >= a->g0 && T + a->p0 < a->g1;
@@ -125,6 +130,10 @@ static int cmp_double(const void *x, const void *y)
 static double ray_radiance_pulse(const analytic_case *a, vec3 psi, int ch)
 {
     double cs[4] = {a->g0 - a->p0 - a->pw, a->g0 - a->p0, a->g1 - a->p0 - a->pw, a->g1 - a->p0};
+    if (a->gauss) { /* a Gaussian pulse's weight is below 1e-15 beyond 8 σ of its peak */
+        double m = a->p0 + 0.5 * a->pw, sd = a->pw / 2.3548200450309493;
+        cs[0] = a->g0 - m - 8 * sd, cs[1] = a->g0 - m, cs[2] = a->g1 - m, cs[3] = a->g1 - m + 8 * sd;
+    }
     if (a->rs > 0) { /* the response's weight is below 1e-12 beyond these path times */
         cs[0] = a->g0 - a->p0 - 30 * a->rt - 8 * a->rs;
         cs[3] = a->g1 - a->p0 + 8 * a->rs;
@@ -149,7 +158,7 @@ static double ray_radiance_pulse(const analytic_case *a, vec3 psi, int ch)
 
 static double ray_radiance(const analytic_case *a, vec3 psi, int ch)
 {
-    if (a->unwarp || a->p0 != 0 || a->pw != 0 || a->rs > 0) return ray_radiance_pulse(a, psi, ch);
+    if (a->unwarp || a->p0 != 0 || a->pw != 0 || a->rs > 0 || a->gauss) return ray_radiance_pulse(a, psi, ch);
     double s0 = 0, s1;
     if (a->gated) {
         s0 = solve_time(a, psi, a->g0);
@@ -432,7 +441,10 @@ static void test_sensor_response(void **state)
  * case and one gate case of the DARTS and of the uniform-time path tracer; test_single_scatter_modes
  * (tests/path_tracer/test_single_scatter_modes.c, `make test`) includes this file with SINGLE_SCATTER_MODES for
  * the other cases: the plain path tracer's refractive (HG, η = 4/3) and steady cases, both methods under HG with
- * η = 4/3, box pulses, unwarped time, the sensor response and the order-1 layer. */
+ * η = 4/3, box pulses, unwarped time, the sensor response and the order-1 layer. The derivatives' test
+ * (tests/derivative/test_deriv_single_scatter.c) includes it with SINGLE_SCATTER_QUADRATURE_ONLY for the
+ * quadratures alone. */
+#ifndef SINGLE_SCATTER_QUADRATURE_ONLY
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -460,3 +472,4 @@ int main(void)
     return cmocka_run_group_tests(tests, NULL, NULL);
 #endif
 }
+#endif
