@@ -96,3 +96,21 @@ def test_fog_inverse_example_runs(tmp_path):
     assert "recovered (mean of iterates 1..2): sigma_s" in run.stdout
     svg, png = tmp_path / "fog_inverse.svg", tmp_path / "fog_inverse.png"
     assert png.exists() or ET.parse(svg).getroot().tag.endswith("svg")
+
+
+def test_hidden_wall_example_recovers_the_distance(tmp_path):
+    """python/examples/hidden_wall.py end to end at 16 x 12: from 1.5 too far, the wall's distance is recovered within
+    3 % (the iterates settle within about ±0.02 of the truth 6 in the runs of 2026-11-28; 3 % = 0.18 leaves room for
+    other seeds' noise but not for a search that stalls at the start (+25 %) or moves the wrong way)."""
+    import csv
+    import sys
+    from conftest import ROOT
+    example = os.path.join(ROOT, "python", "examples", "hidden_wall.py")
+    env = dict(os.environ, PYTHONPATH=os.path.join(ROOT, "build", "python"))
+    run = subprocess.run([sys.executable, example, str(tmp_path), "--iterations", "8", "--threads", "2"], env=env,
+                         capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr[-3000:]
+    rows = list(csv.DictReader(open(tmp_path / "hidden_wall.csv")))
+    assert float(rows[0]["distance"]) == pytest.approx(7.5, rel=1e-12)
+    last = [float(r["distance"]) for r in rows[len(rows) // 2:]]
+    assert abs(np.mean(last) - 6.0) < 0.03 * 6.0
