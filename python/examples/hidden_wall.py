@@ -16,7 +16,8 @@ search starts at --start. Each iteration renders twice with new seeds and steps 
 Gauss-Newton step (J_A r_B + J_B r_A) / (J_A J_A + J_B J_B) in the distance, at most --max-step.
 
 The loss compares the cumulative transients (the frames' running sums: the 1-D Wasserstein distance between the
-echoes), so that an echo far from the target's still feels it. Writes OUT_FOLDER/hidden_wall.csv (per iteration: loss, distance, its error, seconds) and prints the result.
+echoes), so that an echo far from the target's still feels it. Writes OUT_FOLDER/hidden_wall.csv (per iteration: loss, distance, its error, seconds) and hidden_wall.svg (the
+loss, the distance's error and the transients of the target, the start and the end), and prints the result.
 """
 import argparse
 import copy
@@ -27,6 +28,7 @@ import time
 import numpy as np
 
 import dartspp
+from fog_inverse import svg_panel  # the other example's hand-drawn SVG panel (no matplotlib on Debian's base)
 
 POINTER = "/primitives/0/transform/position/2"
 
@@ -89,6 +91,23 @@ def residual_and_jacobian(a, distance, seed, target):
     return res, jac
 
 
+def plot_svg(path, rows, profiles):
+    it = [r[0] for r in rows]
+    colours = ["#1f77b4", "#d62728", "#2ca02c"]
+    body = svg_panel(0, "loss (cumulative transient)", [("loss", it, [r[1] for r in rows], colours[0])])
+    body += svg_panel(310, "|distance error|", [("|d - truth|", it, [max(abs(r[3]), 1e-6) for r in rows], colours[0])])
+    body += svg_panel(620, "transient (mean of each frame)", [(n, list(range(len(p))), list(p), c)
+                                                              for (n, p), c in zip(profiles, colours)], log=False)
+    with open(path, "w") as f:
+        f.write('<svg xmlns="http://www.w3.org/2000/svg" width="930" height="220" font-family="sans-serif">\n'
+                '<rect width="930" height="220" fill="white"/>\n%s\n</svg>\n' % "\n".join(body))
+
+
+def transient(a, distance, seed, spp):
+    r = dartspp.render(scene(distance, a), spp=spp, seed=seed, threads=a.threads)
+    return r.frames.astype(np.float64).mean(axis=(1, 2, 3))
+
+
 def main():
     a = parse_args()
     os.makedirs(a.out, exist_ok=True)
@@ -111,6 +130,9 @@ def main():
         w.writerow(["iteration", "loss", "distance", "error", "seconds"])
         w.writerows(rows)
     last = np.mean([r[2] for r in rows[len(rows) // 2:]])
+    profiles = [("target", transient(a, a.distance, 1000, a.target_spp)), ("start", transient(a, a.start, 7, a.spp)),
+                ("end", transient(a, d, 9, a.spp))]
+    plot_svg(os.path.join(a.out, "hidden_wall.svg"), rows, profiles)
     print("recovered distance %.4f (truth %.4f, error %+.4f = %+.2f %%; mean of the second half's iterates) in %d "
           "iterations, %.1f s" % (last, a.distance, last - a.distance, 100 * (last - a.distance) / a.distance,
                                   a.iterations, time.monotonic() - t0))
