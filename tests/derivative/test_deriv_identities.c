@@ -106,6 +106,68 @@ static void check_integrator(const char *label, const char *integrator)
     film_free(&f);
 }
 
+/* Every emitter type at once (area, spot, collimated, point; box pulses over the same [S_PULSE, S_PULSE + W_PULSE)):
+ * the gate's centre moves every light's contributions and a pulse only its own, so
+ * ∂I/∂gate_centre = −Σ_i ∂I/∂pulse_start_i; the σa bounds hold for every light; σs written as one number. */
+static void emitters_scene(char *text, size_t n, const char *integrator)
+{
+    char pulse[96];
+    snprintf(pulse, sizeof pulse, "\"pulse_start\": %g, \"pulse_width\": %g, \"ext_medium\": \"fog\"", S_PULSE, W_PULSE);
+    snprintf(text, n,
+             "{ \"media\": [ { \"name\": \"fog\", \"type\": \"guided_homo\", \"sigma_s\": 0.5, \"sigma_a\": 0.1,"
+             "    \"density\": %g, \"phase_function\": { \"type\": \"henyey_greenstein\", \"g\": 0.4 } } ],"
+             "  \"bsdfs\": [ { \"name\": \"white\", \"type\": \"lambert\", \"albedo\": 0.6 } ],"
+             "  \"primitives\": ["
+             "    { \"type\": \"quad\", \"bsdf\": \"white\", \"transform\": { \"position\": [0, 0, 0], \"scale\": [3, 1, 3] } },"
+             "    { \"type\": \"quad\", \"bsdf\": \"white\", \"emission\": 4, \"int_medium\": \"fog\", %s,"
+             "      \"transform\": { \"position\": [0.2, 1.6, 0.3], \"scale\": [0.6, 1, 0.6], \"rotation\": [180, 0, 0] } },"
+             "    { \"type\": \"spot\", \"emission\": 6, \"coneangle\": 30, \"conedeltaangle\": 10, %s,"
+             "      \"transform\": { \"position\": [-0.6, 1.2, -1.2], \"look_at\": [0, 0.4, 0.5], \"up\": [0, 1, 0] } },"
+             "    { \"type\": \"collimated\", \"radius\": 0.15, \"emission\": 5, %s,"
+             "      \"transform\": { \"position\": [-1.2, 0.9, 0.2], \"look_at\": [1, 0.5, 0.4], \"up\": [0, 1, 0] } },"
+             "    { \"type\": \"point\", \"emission\": 0.5, %s, \"transform\": { \"position\": [0.5, 0.9, -0.3] } } ],"
+             "  \"camera\": { \"type\": \"pinhole\", \"resolution\": [8, 8], \"fov\": 60, \"medium\": \"fog\","
+             "    \"transform\": { \"position\": [0, 1, -1.5], \"look_at\": [0, 0.8, 0], \"up\": [0, 1, 0] } },"
+             "  \"integrator\": { \"type\": \"path_tracer\", \"max_bounces\": 6, \"transient_time_center\": %g,"
+             "    \"transient_time_width\": %g %s },"
+             "  \"renderer\": { \"spp\": 1 } }",
+             DENSITY, pulse, pulse, pulse, pulse, C_GATE, W_GATE, integrator);
+}
+
+static void check_emitters(const char *label, const char *integrator)
+{
+    static char text[8192];
+    emitters_scene(text, sizeof text, integrator);
+    const char *ptr[8] = {"/primitives/1/pulse_start", "/primitives/2/pulse_start", "/primitives/3/pulse_start",
+                          "/primitives/4/pulse_start", "/integrator/transient_time_center", "/media/0/sigma_a",
+                          "/media/0/sigma_s", "/media/0/density"};
+    film f;
+    render_derivs(text, ptr, 8, 40, &f);
+    double I = total(&f);
+    assert_true(I > 0.0);
+    for (int i = 0; i < 4; i++) assert_true(fabs(total(&f.deriv[i])) > 0.0); /* every light reaches the gate */
+    const film *pulses[4] = {&f.deriv[0], &f.deriv[1], &f.deriv[2], &f.deriv[3]};
+    double e_shift = combo_error(&f.deriv[4], pulses, (double[]){-1.0, -1.0, -1.0, -1.0}, 4);
+    double ratio = total(&f.deriv[5]) / I / DENSITY;
+    double lo = -(C_GATE + 0.5 * W_GATE - S_PULSE), hi = -(C_GATE - 0.5 * W_GATE - S_PULSE - W_PULSE);
+    const film *parts[2] = {&f.deriv[6], &f.deriv[5]};
+    double e_density = combo_error(&f.deriv[7], parts, (double[]){0.5 / DENSITY, 0.1 / DENSITY}, 2);
+    print_message("  %-14s 4 emitters: I %.4g; centre vs −Σ pulses %.2g; dI/dσa / I = %.4f in [%.3f, %.3f]; density %.2g\n",
+                  label, I, e_shift, ratio, lo, hi, e_density);
+    assert_true(e_shift <= 1e-12);
+    assert_true(ratio >= lo && ratio <= hi);
+    assert_true(e_density <= 1e-6);
+    film_free(&f);
+}
+
+static void test_every_emitter(void **state)
+{
+    (void)state;
+    check_emitters("plain", "");
+    check_emitters("DARTS", ", " DARTS_KEYS_TEXT);
+    check_emitters("uniform time", ", \"time_sampling\": \"uniform\"");
+}
+
 static void test_identities(void **state)
 {
     (void)state;
@@ -116,6 +178,6 @@ static void test_identities(void **state)
 
 int main(void)
 {
-    const struct CMUnitTest tests[] = {cmocka_unit_test(test_identities)};
+    const struct CMUnitTest tests[] = {cmocka_unit_test(test_identities), cmocka_unit_test(test_every_emitter)};
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
