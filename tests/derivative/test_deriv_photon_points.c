@@ -5,6 +5,7 @@
  * pass, on the fog box of test_deriv_fd.c (a collimated beam of radius 0.3, no point-light singularity, floor,
  * back and red wall for the albedo), gated, 8 × 8 pixels. Also the identity ∂I/∂(pulse start) = −∂I/∂(gate
  * centre), exact pixel by pixel, and the refusal of the other volume photon types. */
+#include "fixtures.h"
 #include "render_fixtures.h"
 
 #include "dartspp/derivative.h"
@@ -281,5 +282,11 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {cmocka_unit_test(test_refusals), cmocka_unit_test(test_start_identity),
                                        cmocka_unit_test(test_baseline), cmocka_unit_test(test_darts)};
+#ifdef PP_STRESS_BUILD
+    /* the stress program's passes under DARTSPP_STRESS=full only (`make stress`); in `make test` the default
+     * program runs the same cases with fewer passes, so this one runs the refusals */
+    const struct CMUnitTest refusals[] = {cmocka_unit_test(test_refusals)};
+    if (!stress_full()) return cmocka_run_group_tests(refusals, NULL, NULL);
+#endif
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
