@@ -82,8 +82,19 @@ build/obj/%.o: src/%.c build/obj/%.d | $(DEPS_STAMP)
 	$(CC) $(CFLAGS) $(DEPFLAGS) $(LTO) -c $< -o $@
 	@touch $@
 
-build/libdartspp.a: $(OBJ)
-	$(if $(LTO),gcc-ar,$(AR)) rcs $@ $^
+# The archives are rebuilt from scratch whenever their object list changes (a source added or removed): `ar rcs`
+# alone keeps the members of deleted sources, whose symbols then shadow their replacements (2026-11-28: a removed
+# stub of src/derivative/time_kernel.c kept every pulse a box). build/<dir>/objects.txt holds the list.
+build/%/objects.txt: FORCE
+	@mkdir -p $(dir $@)
+	@echo '$(LIB_SRC)' | cmp -s - $@ || echo '$(LIB_SRC)' > $@
+
+.PHONY: FORCE
+FORCE:
+
+build/libdartspp.a: $(OBJ) build/obj/objects.txt
+	rm -f $@
+	$(if $(LTO),gcc-ar,$(AR)) rcs $@ $(OBJ)
 
 build/dartspp: $(CLI_SRC) build/libdartspp.a
 	$(CC) $(CFLAGS) $(VERSION_FLAGS) $(DEPFLAGS) $(LTO) $< build/libdartspp.a $(LDLIBS) -o $@
@@ -99,8 +110,9 @@ build/san/obj/%.o: src/%.c build/san/obj/%.d | $(DEPS_STAMP)
 	$(CC) $(CFLAGS) $(SAN_FLAGS) $(DEPFLAGS) -c $< -o $@
 	@touch $@
 
-build/san/libdartspp.a: $(SAN_OBJ)
-	$(AR) rcs $@ $^
+build/san/libdartspp.a: $(SAN_OBJ) build/san/objects.txt
+	rm -f $@
+	$(AR) rcs $@ $(SAN_OBJ)
 
 build/san/dartspp: $(CLI_SRC) build/san/libdartspp.a
 	$(CC) $(CFLAGS) $(VERSION_FLAGS) $(SAN_FLAGS) $(DEPFLAGS) $< build/san/libdartspp.a $(LDLIBS) -o $@
@@ -134,8 +146,9 @@ build/pic/obj/%.o: src/%.c build/pic/obj/%.d | $(DEPS_STAMP)
 	$(CC) $(CFLAGS) $(PIC_FLAGS) $(DEPFLAGS) $(LTO) -c $< -o $@
 	@touch $@
 
-build/pic/libdartspp.a: $(PIC_OBJ)
-	$(if $(LTO),gcc-ar,$(AR)) rcs $@ $^
+build/pic/libdartspp.a: $(PIC_OBJ) build/pic/objects.txt
+	rm -f $@
+	$(if $(LTO),gcc-ar,$(AR)) rcs $@ $(PIC_OBJ)
 
 build/python/dartspp/_dartspp.so: python/dartspp/_dartspp.c build/pic/libdartspp.a
 	@mkdir -p $(dir $@)
