@@ -115,12 +115,11 @@ static void box_at(const time_window *tw, long k, const time_kernel *K, double t
 }
 
 /* ∂ ln S/∂θ_k for the box (0 where S vanishes: the contribution cannot have landed there but for rounding). */
-static double box_dlog(const box_importance *bx, const diff_param *q, int light, int qlight_match, double dtof,
+static double box_dlog(const box_importance *bx, const diff_param *q, int qlight_match, double dtof,
                        const time_kernel *K, double tau)
 {
     if (!(bx->S > 0.0)) return 0.0;
     double dS_dtau = (bx->fa - bx->fb) / bx->W, dS = dS_dtau * dtof;
-    (void)light;
     switch (q->kind) {
     case DIFF_PULSE_START:
         if (qlight_match) dS += dS_dtau; /* F(x − start): S depends on τ + start */
@@ -189,8 +188,8 @@ void deriv_splat(const deriv_plan *d, film_pixel *pix, const deriv_path *p, int 
                 boxes = 1;
             }
             int match = q->index == light;
-            sg = box_dlog(&gate, q, light, match, p->dtof[k], K, tau);
-            sf = s.k >= 0 ? box_dlog(&fr, q, light, match, p->dtof[k], K, tau) : sg;
+            sg = box_dlog(&gate, q, match, p->dtof[k], K, tau);
+            sf = s.k >= 0 ? box_dlog(&fr, q, match, p->dtof[k], K, tau) : sg;
         }
         vec3 vg = v3_mul(c, v3_add(dl, v3s(sg))), vf = v3_mul(c, v3_add(dl, v3s(sf)));
         if (!add_layers(&f->deriv[k], pix->px, &s, vg, vf)) pix->nonfinite++;
