@@ -176,7 +176,7 @@ test: build/dartspp build/dartspp-mpi build/san/dartspp $(TEST_BIN) $(PY_BUILD)
 
 # The quick tier (QUICK_TESTS above, and the Python package's tests), with the same closing line as `make test`.
 check: build/dartspp build/san/dartspp $(QUICK_BIN) $(PY_BUILD)
-	@PYTHON=$(PYTHON) DARTSPP_TEST_ALONE="$(ALONE_BIN)" tests/run_tests.sh $(QUICK_BIN) tests/python
+	@DARTSPP_QUICK=1 PYTHON=$(PYTHON) DARTSPP_TEST_ALONE="$(ALONE_BIN)" tests/run_tests.sh $(QUICK_BIN) tests/python
 
 # The whole stress matrix (extreme media, anisotropy, gates, scales, geometry) and the long statistical cases
 # that `make test` leaves out: every program tagged `/* tier: stress */` (tests/darts/test_darts.c,
