@@ -11,6 +11,15 @@
 
 #define NPAR 8
 
+/* With the sensor's response (a delta pulse through a Gaussian jitter of σ RS and an exponential tail of mean RT,
+ * docs/sensor.md §2), the pulse has no width to differentiate: the gate's centre instead. */
+#define RS 0.15
+#define RT 0.1
+static const char *const POINTERS_RESPONSE[NPAR] = {
+    "/media/0/sigma_s/1",         "/media/0/sigma_a/0",         "/media/0/phase_function/g",
+    "/media/0/speed_of_light",    "/primitives/0/emission",     "/primitives/0/pulse_start",
+    "/integrator/transient_time_center", "/integrator/transient_time_width",
+};
 static const char *const POINTERS[NPAR] = {
     "/media/0/sigma_s/1",         "/media/0/sigma_a/0",         "/media/0/phase_function/g",
     "/media/0/speed_of_light",    "/primitives/0/emission",     "/primitives/0/pulse_start",
@@ -28,9 +37,13 @@ typedef struct {
 } gate_case;
 static const gate_case WARPED = {0, 4.0, 4.6}, UNWARPED = {1, 1.2, 2.4};
 
-static void deriv_scene(const char *path, const char *integrator, int gauss, gate_case gc)
+/* pulse: 0 box, 1 Gaussian, 2 a delta pulse through the sensor's response */
+static void deriv_scene(const char *path, const char *integrator, int pulse, gate_case gc)
 {
-    char text[4096];
+    char text[4096], response[160] = "";
+    if (pulse == 2)
+        snprintf(response, sizeof response, ", \"sensor_jitter_fwhm\": %.17g, \"sensor_jitter_tail\": %.17g",
+                 RS * 2.3548200450309493, RT);
     snprintf(text, sizeof text,
              "{ \"media\": [ { \"name\": \"fog\", \"type\": \"guided_homo\", \"sigma_s\": [0.5, 0.35, 0.6],"
              "  \"sigma_a\": [0.1, 0.2, 0.05], \"speed_of_light\": %.17g,"
@@ -40,10 +53,10 @@ static void deriv_scene(const char *path, const char *integrator, int gauss, gat
              "  \"camera\": { \"type\": \"pinhole\", \"resolution\": [6, 4], \"fov\": 50, \"medium\": \"fog\","
              "    \"transform\": { \"position\": [0, 0, 0], \"look_at\": [0, 0, 1], \"up\": [0, 1, 0] } },"
              "  \"integrator\": { \"type\": \"path_tracer\", \"max_bounces\": 2, \"transient_time_center\": %.17g,"
-             "    \"transient_time_width\": %.17g, \"camera_unwarp\": %s %s },"
+             "    \"transient_time_width\": %.17g, \"camera_unwarp\": %s %s %s },"
              "  \"renderer\": { \"spp\": 1 } }",
-             SPEED, G_HG, P0, PW, gauss ? "gaussian" : "box", 0.5 * (gc.g0 + gc.g1), gc.g1 - gc.g0,
-             gc.unwarp ? "true" : "false", integrator);
+             SPEED, G_HG, P0, pulse == 2 ? 0.0 : PW, pulse == 1 ? "gaussian" : "box", 0.5 * (gc.g0 + gc.g1),
+             gc.g1 - gc.g0, gc.unwarp ? "true" : "false", response, integrator);
     test_write_file(path, text);
 }
 
@@ -51,6 +64,10 @@ static void deriv_scene(const char *path, const char *integrator, int gauss, gat
 static analytic_case moved(const analytic_case *a0, int k, double d)
 {
     analytic_case a = *a0;
+    if (k == 6 && a.rs > 0) { /* the response's list: the gate's centre */
+        a.g0 += d, a.g1 += d;
+        return a;
+    }
     switch (k) {
     case 0: a.ss.y += d, a.st.y += d; break;
     case 1: a.st.x += d; break;
@@ -77,19 +94,21 @@ static double quadrature_derivative(const analytic_case *a0, const camera *cam, 
     return (4 * d[1] - d[0]) / 3;
 }
 
-static void check_derivatives(const char *label, const char *integrator, int gauss, gate_case gc, long passes,
+static void check_derivatives(const char *label, const char *integrator, int pulse, gate_case gc, long passes,
                               int seeds)
 {
+    const char *const *pointers = pulse == 2 ? POINTERS_RESPONSE : POINTERS;
     char *dir = test_tmpdir(), path[512];
     snprintf(path, sizeof path, "%s/single.json", dir);
-    deriv_scene(path, integrator, gauss, gc);
+    deriv_scene(path, integrator, pulse, gc);
     scene s;
     dp_error err;
-    scene_load_options lo = {.derivatives = POINTERS, .derivative_count = NPAR};
+    scene_load_options lo = {.derivatives = pointers, .derivative_count = NPAR};
     if (scene_load(path, &lo, &s, &err)) fail_msg("%s", err.msg);
     analytic_case a = {.cam = s.cam.pos, .light = s.lights[0].pos, .I = s.lights[0].value, .ss = s.media[0].sigma_s,
                        .st = s.media[0].sigma_t, .g = G_HG, .eta = 1.0 / SPEED, .gated = 1, .g0 = gc.g0, .g1 = gc.g1, .unwarp = gc.unwarp,
-                       .p0 = P0, .pw = PW, .gauss = gauss};
+                       .p0 = P0, .pw = pulse == 2 ? 0.0 : PW, .gauss = pulse == 1, .rs = pulse == 2 ? RS : 0.0,
+                       .rt = pulse == 2 ? RT : 0.0};
     int n = s.cam.width * s.cam.height * 3;
     double *sum = calloc((size_t)n * NPAR, sizeof(double)), *sq = calloc((size_t)n * NPAR, sizeof(double));
     for (int r = 0; r < seeds; r++) {
@@ -106,11 +125,11 @@ static void check_derivatives(const char *label, const char *integrator, int gau
             }
         film_free(&f);
     }
-    /* the reference, once per gate (the integrators render the same scene) */
-    static double *refs[2];
-    double *ref = refs[gc.unwarp];
+    /* the reference, once per gate and pulse (the integrators render the same scene) */
+    static double *refs[2][3];
+    double *ref = refs[gc.unwarp][pulse];
     if (!ref) {
-        ref = refs[gc.unwarp] = calloc((size_t)n * NPAR, sizeof(double));
+        ref = refs[gc.unwarp][pulse] = calloc((size_t)n * NPAR, sizeof(double));
         for (int k = 0; k < NPAR; k++)
             for (int y = 0; y < s.cam.height; y++)
                 for (int x = 0; x < s.cam.width; x++)
@@ -138,7 +157,7 @@ static void check_derivatives(const char *label, const char *integrator, int gau
                 }
         double zt = (tot - tot_q) / sqrt(tot_var);
         print_message("  %-13s %-34s total %+.5g vs quadrature %+.5g (%+.2f %%, z %.2f), mean z^2 %.2f, max |z| %.2f\n",
-                      label, POINTERS[k], tot, tot_q, 100 * (tot - tot_q) / fabs(tot_q), zt, z2 / n, zmax);
+                      label, pointers[k], tot, tot_q, 100 * (tot - tot_q) / fabs(tot_q), zt, z2 / n, zmax);
         /* z ~ Student's t with 15 dof: E z² = 15/13, sd(z²) = sqrt(3·15²/(13·11) − (15/13)²) = 1.84; the three
          * channels of a pixel are nearly one value, so the mean over 24 pixels has sd 1.84/√24 = 0.38: the bound is
          * E + 3 sd = 2.3 */
@@ -173,9 +192,17 @@ static void test_unwarped(void **state)
     check_derivatives("plain unwarped", "", 1, UNWARPED, 1500, 16);
 }
 
+/* The sensor's response (Gaussian jitter with an exponential tail) behind a delta pulse: S of the exponentially
+ * modified Gaussian (docs/derivatives.md §2) */
+static void test_response_derivatives(void **state)
+{
+    (void)state;
+    check_derivatives("plain response", "", 2, WARPED, 3000, 16);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {cmocka_unit_test(test_plain), cmocka_unit_test(test_darts_and_uniform),
-                                       cmocka_unit_test(test_unwarped)};
+                                       cmocka_unit_test(test_unwarped), cmocka_unit_test(test_response_derivatives)};
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
