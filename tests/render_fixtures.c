@@ -376,3 +376,35 @@ void cell_render(const char *text, long passes, uint64_t seed, int frames, cell_
     scene_free(&s);
     tmp_scene_remove(&ts);
 }
+
+/* The tile totals of one image (its sums). */
+static void deriv_tiles_of(const film *f, double *v)
+{
+    for (int y = 0; y < f->height; y++)
+        for (int x = 0; x < f->width; x++)
+            for (int c = 0; c < 3; c++)
+                v[(y * TILES / f->height) * TILES + x * TILES / f->width] += f->sum[3 * ((size_t)y * f->width + x) + c];
+}
+
+int deriv_tiles_probe(void *ctx, const film *f, const render_stats *st, dp_error *err)
+{
+    (void)err;
+    deriv_tiles *t = ctx;
+    assert_true(t->k >= 0 && t->k <= DIFF_PARAM_MAX);
+    int m = (1 + t->k) * NT;
+    if (st->passes == 1) memset(t->last, 0, sizeof t->last);
+    if (t->n == t->cap) {
+        t->cap = t->cap ? 2 * t->cap : 1024;
+        t->x = realloc(t->x, (size_t)t->cap * m * sizeof(double));
+        assert_non_null(t->x);
+    }
+    double v[(1 + DIFF_PARAM_MAX) * NT] = {0};
+    deriv_tiles_of(f, v);
+    for (int k = 0; k < t->k && k < f->deriv_count; k++) deriv_tiles_of(&f->deriv[k], v + (1 + k) * NT);
+    for (int i = 0; i < m; i++) {
+        t->x[(size_t)t->n * m + i] = (v[i] - t->last[i]) / f->last_weight; /* this pass's estimate */
+        t->last[i] = v[i];
+    }
+    t->n++;
+    return 0;
+}

@@ -105,6 +105,18 @@ double cells_z(const char *label, const cell_totals *ref, const cell_totals *m, 
  * an error, a suppressed non-finite sample or a missing pass. */
 void cell_render(const char *text, long passes, uint64_t seed, int frames, cell_totals *t, double *seconds);
 
+/* ---- per-tile totals of the gate image and its derivative images (tests/derivative/) ----
+ * Per pass: the TILES × TILES tile totals (all channels) of the gate image, then of each of its first k derivative
+ * images ((1 + k)·NT values per pass, image-major), as this pass's estimate. */
+typedef struct {
+    int k;        /* the derivative images recorded */
+    long n, cap;  /* passes recorded */
+    double *x;    /* x[((pass · (1 + k)) + image) · NT + tile]: image 0 the gate image, 1 + j derivative j */
+    double last[(1 + DIFF_PARAM_MAX) * NT];
+} deriv_tiles;
+/* render_options.after_pass for a deriv_tiles (ctx; k set, the rest zero). */
+int deriv_tiles_probe(void *ctx, const film *f, const render_stats *st, dp_error *err);
+
 #define BOX_WALLS                                                                                                  \
     "  \"bsdfs\": [ { \"name\": \"white\", \"type\": \"lambert\", \"albedo\": 0.7 },"                                  \
     "               { \"name\": \"red\", \"type\": \"lambert\", \"albedo\": [0.7, 0.15, 0.1] },"                       \

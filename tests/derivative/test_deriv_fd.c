@@ -63,42 +63,7 @@ static void scene_text(char *text, size_t n, const double *v, const char *integr
              v[P_CENTER], steady ? 0.0 : v[P_WIDTH], integrator);
 }
 
-/* Per pass: the gate image's tile totals and the derivative image's (when there is one). */
-typedef struct {
-    long n, cap;
-    double *x; /* per pass: NT primal tiles, then NT derivative tiles */
-    double last[2 * NT];
-} fd_probe;
-
-static void tiles_of(const film *f, double *v)
-{
-    for (int i = 0; i < NT; i++) v[i] = 0.0;
-    for (int y = 0; y < f->height; y++)
-        for (int x = 0; x < f->width; x++)
-            for (int c = 0; c < 3; c++)
-                v[(y * TILES / f->height) * TILES + x * TILES / f->width] += f->sum[3 * ((size_t)y * f->width + x) + c];
-}
-
-static int fd_after(void *ctx, const film *f, const render_stats *st, dp_error *err)
-{
-    (void)err;
-    fd_probe *t = ctx;
-    if (st->passes == 1) memset(t->last, 0, sizeof t->last);
-    if (t->n == t->cap) {
-        t->cap = t->cap ? 2 * t->cap : 1024;
-        t->x = realloc(t->x, (size_t)t->cap * 2 * NT * sizeof(double));
-        assert_non_null(t->x);
-    }
-    double v[2 * NT] = {0};
-    tiles_of(f, v);
-    if (f->deriv_count > 0) tiles_of(&f->deriv[0], v + NT);
-    for (int i = 0; i < 2 * NT; i++) {
-        t->x[(size_t)t->n * 2 * NT + i] = (v[i] - t->last[i]) / f->last_weight;
-        t->last[i] = v[i];
-    }
-    t->n++;
-    return 0;
-}
+typedef deriv_tiles fd_probe; /* render_fixtures.h: per pass the gate image's tiles, then the derivative's */
 
 static void render_probe_fd(const char *text, const char *pointer, long passes, fd_probe *t)
 {
@@ -109,7 +74,8 @@ static void render_probe_fd(const char *text, const char *pointer, long passes, 
     dp_error err;
     if (scene_load(ts.path, &lo, &s, &err)) fail_msg("%s", err.msg);
     memset(t, 0, sizeof *t);
-    render_options ro = {.threads = 2, .seed = 11, .spp = passes, .after_pass = fd_after, .after_pass_ctx = t};
+    t->k = 1; /* the same layout with and without the derivative (its tiles 0 without) */
+    render_options ro = {.threads = 2, .seed = 11, .spp = passes, .after_pass = deriv_tiles_probe, .after_pass_ctx = t};
     film f;
     render_stats st;
     if (render_scene(&s, &ro, &f, &st, &err)) fail_msg("%s", err.msg);

@@ -73,43 +73,7 @@ static geo_scene base_scene(void)
                        .occ = {0, 2.3, 0.37}, .wall_z = 1.0, .integrator = integrator_keys[integrator_index()]};
 }
 
-typedef struct {
-    long n, cap;
-    double *x; /* per pass: NT primal tiles, then NT tiles of each derivative */
-    int nd;
-    double last[4 * NT];
-} fd_probe;
-
-static void tiles_of(const film *f, double *v)
-{
-    for (int i = 0; i < NT; i++) v[i] = 0.0;
-    for (int y = 0; y < f->height; y++)
-        for (int x = 0; x < f->width; x++)
-            for (int c = 0; c < 3; c++)
-                v[(y * TILES / f->height) * TILES + x * TILES / f->width] += f->sum[3 * ((size_t)y * f->width + x) + c];
-}
-
-static int fd_after(void *ctx, const film *f, const render_stats *st, dp_error *err)
-{
-    (void)err;
-    fd_probe *t = ctx;
-    int w = (1 + t->nd) * NT;
-    if (st->passes == 1) memset(t->last, 0, sizeof t->last);
-    if (t->n == t->cap) {
-        t->cap = t->cap ? 2 * t->cap : 1024;
-        t->x = realloc(t->x, (size_t)t->cap * w * sizeof(double));
-        assert_non_null(t->x);
-    }
-    double v[4 * NT] = {0};
-    tiles_of(f, v);
-    for (int k = 0; k < t->nd && k < f->deriv_count; k++) tiles_of(&f->deriv[k], v + (1 + k) * NT);
-    for (int i = 0; i < w; i++) {
-        t->x[(size_t)t->n * w + i] = (v[i] - t->last[i]) / f->last_weight;
-        t->last[i] = v[i];
-    }
-    t->n++;
-    return 0;
-}
+typedef deriv_tiles fd_probe; /* render_fixtures.h: per pass the gate image's tiles, then each derivative's */
 
 static void geo_probe(const geo_scene *g, const diff_param *dp, int nd, long passes, fd_probe *t)
 {
@@ -125,8 +89,8 @@ static void geo_probe(const geo_scene *g, const diff_param *dp, int nd, long pas
     }
     s.diff_count = nd;
     memset(t, 0, sizeof *t);
-    t->nd = nd;
-    render_options ro = {.threads = 2, .seed = 11, .spp = passes, .after_pass = fd_after, .after_pass_ctx = t};
+    t->k = nd;
+    render_options ro = {.threads = 2, .seed = 11, .spp = passes, .after_pass = deriv_tiles_probe, .after_pass_ctx = t};
     film f;
     render_stats st;
     dp_error err;

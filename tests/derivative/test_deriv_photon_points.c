@@ -57,44 +57,8 @@ static diff_param param(int p)
     }
 }
 
-/* Per pass: the tiles of the gate image and of every derivative image. */
 #define MAXK DIFF_PARAM_MAX
-typedef struct {
-    int k;
-    long n, cap;
-    double *x; /* per pass: (1 + k) × NT tile totals */
-    double last[(1 + MAXK) * NT];
-} probe;
-
-static void tiles_of(const film *f, double *v)
-{
-    for (int y = 0; y < f->height; y++)
-        for (int x = 0; x < f->width; x++)
-            for (int c = 0; c < 3; c++)
-                v[(y * TILES / f->height) * TILES + x * TILES / f->width] += f->sum[3 * ((size_t)y * f->width + x) + c];
-}
-
-static int probe_after(void *ctx, const film *f, const render_stats *st, dp_error *err)
-{
-    (void)err;
-    probe *t = ctx;
-    int m = (1 + t->k) * NT;
-    if (st->passes == 1) memset(t->last, 0, sizeof t->last);
-    if (t->n == t->cap) {
-        t->cap = t->cap ? 2 * t->cap : 1024;
-        t->x = realloc(t->x, (size_t)t->cap * m * sizeof(double));
-        assert_non_null(t->x);
-    }
-    double v[(1 + MAXK) * NT] = {0};
-    tiles_of(f, v);
-    for (int k = 0; k < t->k && k < f->deriv_count; k++) tiles_of(&f->deriv[k], v + (1 + k) * NT);
-    for (int i = 0; i < m; i++) {
-        t->x[(size_t)t->n * m + i] = (v[i] - t->last[i]) / f->last_weight;
-        t->last[i] = v[i];
-    }
-    t->n++;
-    return 0;
-}
+typedef deriv_tiles probe; /* render_fixtures.h */
 
 /* Renders the scene with derivatives ps[0..k) into t; *out (may be NULL) keeps the final film. */
 static void render_derivs(const char *integrator, const int *ps, int k, long passes, uint64_t seed, probe *t, film *out)
@@ -109,7 +73,7 @@ static void render_derivs(const char *integrator, const int *ps, int k, long pas
     s.diff_count = k;
     memset(t, 0, sizeof *t);
     t->k = k;
-    render_options ro = {.threads = 2, .seed = seed, .spp = passes, .after_pass = probe_after, .after_pass_ctx = t};
+    render_options ro = {.threads = 2, .seed = seed, .spp = passes, .after_pass = deriv_tiles_probe, .after_pass_ctx = t};
     film f;
     render_stats st;
     dp_error err;
