@@ -408,3 +408,18 @@ int deriv_tiles_probe(void *ctx, const film *f, const render_stats *st, dp_error
     t->n++;
     return 0;
 }
+
+void deriv_tiles_render(const scene *s, int k, long passes, uint64_t seed, deriv_tiles *t, film *out)
+{
+    memset(t, 0, sizeof *t);
+    t->k = k;
+    render_options ro = {.threads = 2, .seed = seed, .spp = passes, .after_pass = deriv_tiles_probe, .after_pass_ctx = t};
+    film f;
+    render_stats st;
+    dp_error err;
+    if (render_scene(s, &ro, &f, &st, &err)) fail_msg("%s", err.msg);
+    assert_int_equal(st.nonfinite, 0);
+    assert_int_equal(t->n, passes);
+    if (out) *out = f;
+    else film_free(&f);
+}

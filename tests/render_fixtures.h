@@ -116,6 +116,9 @@ typedef struct {
 } deriv_tiles;
 /* render_options.after_pass for a deriv_tiles (ctx; k set, the rest zero). */
 int deriv_tiles_probe(void *ctx, const film *f, const render_stats *st, dp_error *err);
+/* Renders s for `passes` passes with 2 threads and `seed` into t (cleared here, recording k derivative images);
+ * fails the test on an error, a suppressed non-finite sample or a missing pass. *out (may be NULL) keeps the film. */
+void deriv_tiles_render(const scene *s, int k, long passes, uint64_t seed, deriv_tiles *t, film *out);
 
 #define BOX_WALLS                                                                                                  \
     "  \"bsdfs\": [ { \"name\": \"white\", \"type\": \"lambert\", \"albedo\": 0.7 },"                                  \

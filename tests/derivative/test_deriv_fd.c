@@ -73,15 +73,7 @@ static void render_probe_fd(const char *text, const char *pointer, long passes, 
     scene_load_options lo = {.derivatives = &pointer, .derivative_count = pointer ? 1 : 0};
     dp_error err;
     if (scene_load(ts.path, &lo, &s, &err)) fail_msg("%s", err.msg);
-    memset(t, 0, sizeof *t);
-    t->k = 1; /* the same layout with and without the derivative (its tiles 0 without) */
-    render_options ro = {.threads = 2, .seed = 11, .spp = passes, .after_pass = deriv_tiles_probe, .after_pass_ctx = t};
-    film f;
-    render_stats st;
-    if (render_scene(&s, &ro, &f, &st, &err)) fail_msg("%s", err.msg);
-    assert_int_equal(st.nonfinite, 0);
-    assert_int_equal(t->n, passes);
-    film_free(&f);
+    deriv_tiles_render(&s, 1, passes, 11, t, NULL); /* one layout with and without the derivative (0 without) */
     scene_free(&s);
     tmp_scene_remove(&ts);
 }

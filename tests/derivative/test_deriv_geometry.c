@@ -88,16 +88,7 @@ static void geo_probe(const geo_scene *g, const diff_param *dp, int nd, long pas
         snprintf(s.diffs[k].pointer, sizeof s.diffs[k].pointer, "/test/%d", k);
     }
     s.diff_count = nd;
-    memset(t, 0, sizeof *t);
-    t->k = nd;
-    render_options ro = {.threads = 2, .seed = 11, .spp = passes, .after_pass = deriv_tiles_probe, .after_pass_ctx = t};
-    film f;
-    render_stats st;
-    dp_error err;
-    if (render_scene(&s, &ro, &f, &st, &err)) fail_msg("%s", err.msg);
-    assert_int_equal(st.nonfinite, 0);
-    assert_int_equal(t->n, passes);
-    film_free(&f);
+    deriv_tiles_render(&s, nd, passes, 11, t, NULL);
     scene_free(&s);
     tmp_scene_remove(&ts);
 }

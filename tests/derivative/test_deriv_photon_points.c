@@ -71,17 +71,7 @@ static void render_derivs(const char *integrator, const int *ps, int k, long pas
     load_scene(ts.path, NULL, 0, &s);
     for (int i = 0; i < k; i++) s.diffs[i] = param(ps[i]);
     s.diff_count = k;
-    memset(t, 0, sizeof *t);
-    t->k = k;
-    render_options ro = {.threads = 2, .seed = seed, .spp = passes, .after_pass = deriv_tiles_probe, .after_pass_ctx = t};
-    film f;
-    render_stats st;
-    dp_error err;
-    if (render_scene(&s, &ro, &f, &st, &err)) fail_msg("%s", err.msg);
-    assert_int_equal(st.nonfinite, 0);
-    assert_int_equal(t->n, passes);
-    if (out) *out = f;
-    else film_free(&f);
+    deriv_tiles_render(&s, k, passes, seed, t, out);
     scene_free(&s);
     tmp_scene_remove(&ts);
 }
