@@ -30,13 +30,16 @@ struct film {
                         * (include/dartspp/derivative.h), committed, dropped and copied with this one */
     int deriv_count;
     const char *label; /* a derivative film's parameter (its JSON Pointer, owned by the scene); NULL otherwise */
+    const camera *lidar; /* a lidar's film, whose pixels are its beams and frames its range bins: the files stage
+                          * writes its waveforms, echoes and points (docs/lidar.md §4); NULL otherwise. The
+                          * scene's camera, which outlives the film */
 };
 
 int film_init(film *f, int width, int height, const time_window *tw, dp_error *err);
 /* Adds k derivative films (f->deriv) to an initialised film without any, labelled labels[i] (may be NULL).
  * 0, or -1 with err. */
 int film_init_derivs(film *f, int k, const char *const *labels, dp_error *err);
-/* film_init with the size, window and derivative films (their labels) of `like`. */
+/* film_init with the size, window, lidar and derivative films (their labels) of `like`. */
 int film_init_like(film *f, const film *like, dp_error *err);
 /* Frees the film and its derivative films. */
 void film_free(film *f);

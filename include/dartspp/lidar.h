@@ -49,6 +49,15 @@ vec3 lidar_beam_dir(const lidar_params *l, vec3 forward, vec3 left, vec3 up, int
 vec3 lidar_receiver_dir(const lidar_params *l, vec3 b, double u1, double u2);
 /* π sin²(receiver_fov/2). */
 double lidar_receiver_etendue(const lidar_params *l);
+/* Points a beam emitter along the unit axis (its frame across the axis too). */
+void lidar_beam_set(emitter *e, vec3 axis);
+
+/* ---- each beam's scene (src/lidar/lidar_beam.c) ---- */
+struct scene;
+/* The scene as the beam of pixel index px sees it: *view a shallow copy of s whose one light is *beam, the
+ * lidar's beam template (s->lights[0]) aimed along that pixel's beam. The view shares everything else with s
+ * and lives as long as s and beam do. */
+void lidar_beam_view(const struct scene *s, size_t px, struct scene *view, emitter *beam);
 
 /* ---- waveforms, echoes and points (src/lidar/lidar_echoes.c, lidar_points.c) ---- */
 
@@ -86,5 +95,17 @@ void lidar_points_free(lidar_points *pts);
 /* The point cloud as binary little-endian PLY (x y z intensity as float, return as uchar, ring and azimuth as
  * ushort, range as float), written atomically. */
 int lidar_points_write_ply(const char *path, const lidar_points *pts, dp_error *err);
+
+/* ---- the files of a lidar render (src/lidar/lidar_outputs.c) ---- */
+struct film;
+/* The waveforms (channels × azimuth_steps × bins, channel 0 the lowest) of a lidar's film (film.lidar set): the
+ * energy per unit aperture area in each bin (docs/lidar.md §3), of all paths (order −1) or of one order layer
+ * (integrator.bounce_orders). *out is malloc'd. 0, or -1 with err. */
+int lidar_waveforms(const struct film *f, int order, float **out, dp_error *err);
+/* <stem>_waveforms.npy and its sidecar <stem>_waveforms.json, <stem>_waveforms_orders.npy (with bounce_orders),
+ * <stem>_points.npy and <stem>_points.ply, each written atomically; wrote (may be NULL) is told each path. */
+int lidar_write_outputs(const struct film *f, const char *stem, void (*wrote)(const char *path), dp_error *err);
+/* The sidecar of a waveforms file (docs/lidar.md §5), written atomically. */
+int lidar_waveforms_sidecar_write(const char *path, const lidar_params *l, dp_error *err);
 
 #endif

@@ -7,6 +7,7 @@
 #include "dartspp/bsdf.h"
 #include "dartspp/core.h"
 #include "dartspp/emitter.h"
+#include "dartspp/lidar.h"
 #include "dartspp/sensor.h"
 
 /* ---- materials: include/dartspp/bsdf.h; albedo textures ---- */
@@ -78,7 +79,7 @@ static inline int surface_next_medium(const surface *s, int current, vec3 d, vec
     return v3_dot(d, ng) < 0.0 ? s->int_medium : s->ext_medium;
 }
 
-typedef enum { CAMERA_PINHOLE, CAMERA_ORTHOGRAPHIC } camera_type;
+typedef enum { CAMERA_PINHOLE, CAMERA_ORTHOGRAPHIC, CAMERA_LIDAR } camera_type;
 
 typedef struct {
     int width, height;
@@ -92,6 +93,8 @@ typedef struct {
                              * through pos perpendicular to forward (the camera's plane) */
     int medium;
     sensor_response response; /* its time response, from the integrator's sensor_* keys (sensor.h) */
+    lidar_params lidar;     /* lidar (include/dartspp/lidar.h): width = azimuth_steps, height = channels; the
+                             * receiver at pos, the transmitter at pos + offset; lights[0] is its beam's template */
 } camera;
 
 /* The camera ray through the image-plane point (px, py) in pixel units: pixel (x, y) covers [x, x+1) × [y, y+1),
@@ -100,6 +103,8 @@ typedef struct {
  * OrthographicCamera): the rays are parallel to forward and start on the camera's plane, at the film point of
  * (px, py). Sets *o and returns the unit direction. */
 vec3 camera_ray(const camera *c, double px, double py, vec3 *o);
+/* The axis of a lidar's beam at pixel (x, y) (docs/lidar.md §1). */
+vec3 camera_lidar_beam(const camera *c, int x, int y);
 /* Its direction alone (the same for every pixel of an orthographic camera). */
 vec3 camera_ray_dir(const camera *c, double px, double py);
 /* The least distance light at p travels to reach the sensor: to pos (pinhole), to the camera's plane

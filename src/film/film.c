@@ -43,6 +43,7 @@ int film_init_derivs(film *f, int k, const char *const *labels, dp_error *err)
 int film_init_like(film *f, const film *like, dp_error *err)
 {
     if (film_init(f, like->width, like->height, &like->window, err)) return -1;
+    f->lidar = like->lidar;
     const char *labels[64] = {0};
     for (int i = 0; i < like->deriv_count && i < 64; i++) labels[i] = like->deriv[i].label;
     if (film_init_derivs(f, like->deriv_count, labels, err)) {

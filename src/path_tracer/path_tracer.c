@@ -280,9 +280,26 @@ static void trace_camera_path(pixel_ctx *c, vec3 o, vec3 d)
     }
 }
 
+/* A lidar's beam (docs/lidar.md §1): the pass over the scene as this pixel's beam lights it. */
+static void sample_lidar_beam(const pt_pass *pass, film_pixel *pix, vec3 o, vec3 dir, dp_rng *rng)
+{
+    scene view;
+    emitter beam;
+    lidar_beam_view(pass->s, pix->px, &view, &beam);
+    pt_pass beam_pass = *pass;
+    beam_pass.s = &view;
+    pixel_ctx c = {.pass = &beam_pass, .pix = pix, .rng = rng};
+    trace_camera_path(&c, o, dir);
+}
+
 static void sample_pixel(void *ctx, film_pixel *pix, vec3 o, vec3 dir, dp_rng *rng)
 {
-    pixel_ctx c = {.pass = ctx, .pix = pix, .rng = rng};
+    const pt_pass *pass = ctx;
+    if (pass->s->cam.type == CAMERA_LIDAR) {
+        sample_lidar_beam(pass, pix, o, dir, rng);
+        return;
+    }
+    pixel_ctx c = {.pass = pass, .pix = pix, .rng = rng};
     trace_camera_path(&c, o, dir);
 }
 

@@ -230,6 +230,7 @@ static int write_all(const film *f, const char *stem, const char *dot, const cha
     if (!rc) rc = png_write_preview(png, &img, err);
     if (!rc && wrote) wrote(png);
     image_free(&img);
+    if (f->lidar) return rc ? rc : lidar_write_outputs(f, stem, wrote, err); /* its frames are range bins: waveforms */
     if (!rc && tw->frame_count > 0) rc = write_frames(f, stem, dot, meta, skip, wrote, err);
     if (!rc && tw->orders > 0) rc = write_orders(f, stem, wrote, err);
     if (!rc && f->deriv_count > 0) rc = write_derivatives(f, stem, dot, meta, skip, wrote, err);

@@ -236,6 +236,13 @@ static int render_film_derivs(const scene *s, film *f, dp_error *err)
     return film_init_derivs(f, s->diff_count, labels, err);
 }
 
+/* A lidar's film knows its camera: the files stage writes waveforms and points from it (docs/lidar.md §4). */
+static int render_film_lidar(const scene *s, film *f)
+{
+    f->lidar = s->cam.type == CAMERA_LIDAR ? &s->cam : NULL;
+    return 0;
+}
+
 /* The passes, with the plan resolved and the film initialised. */
 static int render_passes(const scene *s, const render_plan *p, const render_options *opt, film *f, render_stats *st,
                          dp_error *err)
@@ -243,6 +250,7 @@ static int render_passes(const scene *s, const render_plan *p, const render_opti
     eda_set eda = {0};
     int ready = !eda_set_prepare(s, &p->darts, &p->window, &eda, opt->messages, err) &&
                 !film_init(f, s->cam.width, s->cam.height, &p->window, err) && !render_film_derivs(s, f, err) &&
+                !render_film_lidar(s, f) &&
                 !(opt->resume && film_resume(f, opt->resume, err));
     const render_cluster *c = opt->cluster && opt->cluster->size > 1 ? opt->cluster : NULL;
     /* a rank without its EDA tables or film: none starts, and every rank exits with the largest status (2 when

@@ -1,10 +1,28 @@
-/* Camera rays: Tungsten's PinholeCamera (horizontal fov, image plane x in [-1, 1]) and OrthographicCamera
- * (parallel rays from a film of 2·orthographic_size in height, in the plane through the camera's position). */
+/* Camera rays: Tungsten's PinholeCamera (horizontal fov, image plane x in [-1, 1]), OrthographicCamera
+ * (parallel rays from a film of 2·orthographic_size in height, in the plane through the camera's position) and
+ * the lidar's receiver (a cone about each beam, docs/lidar.md §3). */
+#include <math.h>
+
 #include "dartspp/scene.h"
+
+/* Pixel (x, y) of a lidar is beam (channel height − 1 − y, azimuth step x); the fraction of (px, py) inside the
+ * pixel draws the receiver's direction in its cone (docs/lidar.md §1). */
+static vec3 lidar_ray_dir(const camera *c, double px, double py)
+{
+    double fx = floor(px), fy = floor(py);
+    int x = (int)fmin(fmax(fx, 0.0), c->width - 1), y = (int)fmin(fmax(fy, 0.0), c->height - 1);
+    return lidar_receiver_dir(&c->lidar, camera_lidar_beam(c, x, y), px - fx, py - fy);
+}
+
+vec3 camera_lidar_beam(const camera *c, int x, int y)
+{
+    return lidar_beam_dir(&c->lidar, c->forward, v3_neg(c->right), c->up, c->height - 1 - y, x);
+}
 
 vec3 camera_ray_dir(const camera *c, double px, double py)
 {
     if (c->type == CAMERA_ORTHOGRAPHIC) return c->forward;
+    if (c->type == CAMERA_LIDAR) return lidar_ray_dir(c, px, py);
     double sx = 2.0 / c->width;
     double x = -1.0 + px * sx;
     double y = (double)c->height / c->width - py * sx;

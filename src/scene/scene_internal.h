@@ -89,6 +89,11 @@ int medium_ref(json_ctx *c, scene *s, const cJSON *v, const char *where, const c
 /* A clear region (σs = σa = 0) where light travels at `speed`: found among the media or appended (Liu et al.'s
  * int_speed_of_light / ext_speed_of_light on a side of a surface that has no medium). */
 int clear_region(json_ctx *c, scene *s, double speed, const char *where, const char *key, int *out);
+/* lidar_load.c: a lidar camera's keys into cam (docs/lidar.md §2), then, once the integrator keys are read, its
+ * beam as the scene's one light and its range bins as the time window (docs/lidar.md §1). */
+int lidar_parse_camera(json_ctx *c, const cJSON *v, camera *cam);
+int lidar_finish_scene(json_ctx *c, const cJSON *root, scene *s, int derivatives);
+
 /* A primitive of an emitter type (emitter_ops_find: point, spot, collimated, directional_point), appended to
  * s->lights. */
 int light_parse(json_ctx *c, scene *s, const cJSON *v, const char *where, const char *type, const xform *T);

@@ -394,7 +394,8 @@ static int parse_camera(json_ctx *c, const cJSON *root, scene *s)
     camera *cam = &s->cam;
     if (!strcmp(type, "pinhole")) cam->type = CAMERA_PINHOLE;
     else if (!strcmp(type, "orthographic")) cam->type = CAMERA_ORTHOGRAPHIC;
-    else return jfail(c, "camera", "type", "unsupported camera '%s' (supported: pinhole, orthographic)", type);
+    else if (!strcmp(type, "lidar")) cam->type = CAMERA_LIDAR;
+    else return jfail(c, "camera", "type", "unsupported camera '%s' (supported: pinhole, orthographic, lidar)", type);
     cam->width = 512;
     cam->height = 512;
     const cJSON *res = jget_item(c, v, "resolution");
@@ -414,7 +415,8 @@ static int parse_camera(json_ctx *c, const cJSON *root, scene *s)
         cam->width = (int)w;
         cam->height = (int)h;
     }
-    if (cam->type == CAMERA_ORTHOGRAPHIC ? parse_orthographic(c, v, cam) : parse_pinhole(c, v, cam)) return -1;
+    if (cam->type == CAMERA_LIDAR ? lidar_parse_camera(c, v, cam)
+        : cam->type == CAMERA_ORTHOGRAPHIC ? parse_orthographic(c, v, cam) : parse_pinhole(c, v, cam)) return -1;
     xform T;
     if (xform_parse(c, jget_item(c, v, "transform"), "camera", &T)) return -1;
     cam->pos = T.pos;
@@ -568,6 +570,7 @@ static int parse_all(json_ctx *c, cJSON *root, scene *s, const scene_load_option
     if (!rc) rc = parse_primitives(c, root, s, names, slots);
     if (!rc) rc = parse_camera(c, root, s);
     if (!rc) rc = settings_parse(c, root, s);
+    if (!rc) rc = lidar_finish_scene(c, root, s, derivs);
     if (!rc) rc = load_sensor_response(c, s);
     if (!rc) jnote_unread_keys(c, root, "", 0);
     if (!rc) warn_dark_scene(c, s);
