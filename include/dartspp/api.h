@@ -74,6 +74,13 @@ typedef struct {
     int deriv_count;              /* the request's derivative_count */
     float *derivs;                /* deriv_count × height × width × 3: ∂(gate image)/∂θ_k, in the request's order */
     float *deriv_frames;          /* deriv_count × frame_count × height × width × 3, NULL without frames */
+    /* A lidar camera (docs/lidar.md): its waveforms and point cloud, as the files <stem>_waveforms.npy and
+     * <stem>_points.npy hold them; 0 and NULL for another camera. */
+    int lidar_channels, lidar_azimuth_steps, lidar_bins;
+    double lidar_range_bin;
+    float *waveforms;             /* lidar_channels × lidar_azimuth_steps × lidar_bins */
+    float *points;                /* point_count × 8: x, y, z, intensity, return, channel, azimuth index, range */
+    long point_count;
 } dp_render_result;
 
 /* Loads, checks and renders. Returns 0 with res filled (res->passes may be 0 when stopped before the first

@@ -61,6 +61,12 @@ class Result:
                  render(derivatives=...), in its order; None when none were asked for
     derivative_frames  (K, frames, height, width, 3) float32: the frames' derivatives, or None
     derivative_pointers  the pointers asked for (list of str, [] when none)
+    waveforms    a lidar camera's (docs/lidar.md): (channels, azimuth_steps, bins) float32, the received energy
+                 per unit aperture area in each range bin (bin b spans ranges [b, b + 1)·range_bin), channel 0
+                 the lowest; None for another camera
+    points       a lidar's echoes, (N, 8) float32: x, y, z, intensity, return number, channel, azimuth index,
+                 range (the rows of <stem>_points.npy); None for another camera
+    range_bin    a lidar's bin width in range (scene units); None for another camera
     """
 
     def __init__(self, d):
@@ -80,6 +86,9 @@ class Result:
         self.derivatives = d["derivatives"]
         self.derivative_frames = d["derivative_frames"]
         self.derivative_pointers = list(d["derivative_pointers"])
+        self.waveforms = d["waveforms"]
+        self.points = d["points"]
+        self.range_bin = d["range_bin"]
 
     def __repr__(self):
         h, w, _ = self.image.shape

@@ -62,7 +62,7 @@ static int call_progress(void *ctx, long passes, double seconds, double r_vol, d
 static PyObject *float_array(const float *v, int nd, npy_intp *dims)
 {
     PyObject *a = PyArray_SimpleNew(nd, dims, NPY_FLOAT32);
-    if (a) memcpy(PyArray_DATA((PyArrayObject *)a), v, (size_t)PyArray_NBYTES((PyArrayObject *)a));
+    if (a && PyArray_NBYTES((PyArrayObject *)a) > 0) memcpy(PyArray_DATA((PyArrayObject *)a), v, (size_t)PyArray_NBYTES((PyArrayObject *)a));
     return a;
 }
 
@@ -107,6 +107,17 @@ static int put_derivs(PyObject *d, const dp_render_result *r)
                                                                 : Py_NewRef(Py_None));
 }
 
+/* d["waveforms"]: (channels, azimuth_steps, bins), d["points"]: (N, 8), d["range_bin"]; None for a camera
+ * that is not a lidar. */
+static int put_lidar(PyObject *d, const dp_render_result *r)
+{
+    npy_intp wave[3] = {r->lidar_channels, r->lidar_azimuth_steps, r->lidar_bins}, pts[2] = {r->point_count, 8};
+    int have = r->waveforms != NULL;
+    return put(d, "waveforms", have ? float_array(r->waveforms, 3, wave) : Py_NewRef(Py_None)) ||
+           put(d, "points", have ? float_array(r->points, 2, pts) : Py_NewRef(Py_None)) ||
+           put(d, "range_bin", have ? PyFloat_FromDouble(r->lidar_range_bin) : Py_NewRef(Py_None));
+}
+
 static PyObject *result_dict(const dp_render_result *r)
 {
     PyObject *d = PyDict_New();
@@ -126,7 +137,7 @@ static PyObject *result_dict(const dp_render_result *r)
              put(d, "gate_end", PyFloat_FromDouble(r->gate_end)) || put(d, "passes", PyLong_FromLong(r->passes)) ||
              put(d, "interrupted", PyBool_FromLong(r->interrupted)) ||
              put(d, "seconds", PyFloat_FromDouble(r->seconds)) || put(d, "stats", stats_dict(r)) ||
-             put(d, "log", double_array(r->log, 2, log)) || put_derivs(d, r);
+             put(d, "log", double_array(r->log, 2, log)) || put_derivs(d, r) || put_lidar(d, r);
     if (rc) Py_CLEAR(d);
     return d;
 }

@@ -159,6 +159,25 @@ static int fill_derivs(const film *f, int frame_count, dp_render_result *res, dp
     return 0;
 }
 
+/* A lidar's waveforms and points (docs/lidar.md §4), the arrays its files hold. */
+static int fill_lidar(const film *f, dp_render_result *res, dp_error *err)
+{
+    if (!f->lidar) return 0;
+    const camera *cam = f->lidar;
+    const lidar_params *l = &cam->lidar;
+    res->lidar_channels = l->channels;
+    res->lidar_azimuth_steps = l->azimuth_steps;
+    res->lidar_bins = l->bins;
+    res->lidar_range_bin = l->range_bin;
+    if (lidar_waveforms(f, -1, &res->waveforms, err)) return -1;
+    lidar_points pts = {0};
+    if (lidar_points_from_waveforms(l, cam->pos, cam->forward, v3_neg(cam->right), cam->up, res->waveforms, &pts, err))
+        return -1;
+    res->points = pts.rows;
+    res->point_count = (long)pts.count;
+    return 0;
+}
+
 /* The film's images, the time window and the figures of the run into res. */
 static int fill_result(const film *f, const render_stats *st, const render_plan *p, dp_render_result *res,
                        dp_error *err)
@@ -181,7 +200,7 @@ static int fill_result(const film *f, const render_stats *st, const render_plan 
         res->frame_times[2 * k] = tw->start + k * tw->width;
         res->frame_times[2 * k + 1] = tw->start + (k + 1) * tw->width;
     }
-    if (fill_derivs(f, tw->frame_count, res, err)) return -1;
+    if (fill_derivs(f, tw->frame_count, res, err) || fill_lidar(f, res, err)) return -1;
     res->passes = st->passes;
     res->interrupted = st->interrupted;
     res->seconds = st->seconds;
@@ -300,5 +319,7 @@ void dp_render_result_free(dp_render_result *res)
     free(res->log);
     free(res->derivs);
     free(res->deriv_frames);
+    free(res->waveforms);
+    free(res->points);
     memset(res, 0, sizeof *res);
 }

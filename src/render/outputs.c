@@ -421,6 +421,12 @@ static int list_outputs(file_list *l, const char *path, const scene *s, const re
                (!(rq->skip & RENDER_SKIP_CUBE) && list_add(l, "the transient cube", "%s_cube.npy", stem)) ||
                (!(rq->skip & RENDER_SKIP_VIEWER) && list_add(l, "the viewer", "%s_viewer.html", stem));
     if (tw->orders > 0 && !fail) fail = list_add(l, "the scattering orders", "%s_orders.npy", stem);
+    if (s->cam.type == CAMERA_LIDAR && !fail) /* lidar_write_outputs */
+        fail = list_add(l, "the lidar's waveforms", "%s_waveforms.npy", stem) ||
+               list_add(l, "the waveforms' sidecar", "%s_waveforms.json", stem) ||
+               (tw->orders > 0 && list_add(l, "the waveforms of each order", "%s_waveforms_orders.npy", stem)) ||
+               list_add(l, "the lidar's points", "%s_points.npy", stem) ||
+               list_add(l, "the lidar's points (PLY)", "%s_points.ply", stem);
     for (int k = 0; k < s->diff_count && !fail; k++) {
         fail = list_add(l, "a derivative image", "%s_d%d%s", stem, k, ext);
         for (int j = 0; j < tw->frame_count && !fail; j++) {
