@@ -97,6 +97,13 @@ static uint64_t camera_part(const scene *s)
     h_d(&h, c->fov_deg), h_v3(&h, c->pos), h_v3(&h, c->right), h_v3(&h, c->up), h_v3(&h, c->forward);
     h_d(&h, c->plane_dist), h_i(&h, c->medium);
     if (c->type == CAMERA_ORTHOGRAPHIC) h_i(&h, c->type), h_d(&h, c->ortho_size); /* pinhole digests as before */
+    if (c->type == CAMERA_LIDAR) { /* its beams, receiver, bins and echo keys (the light part holds its pulse) */
+        const lidar_params *l = &c->lidar;
+        h_i(&h, c->type), h_i(&h, l->channels), h_i(&h, l->azimuth_steps), h_d(&h, l->elevation[0]);
+        h_d(&h, l->elevation[1]), h_d(&h, l->azimuth[0]), h_d(&h, l->azimuth[1]), h_d(&h, l->beam_divergence);
+        h_d(&h, l->receiver_fov), h_d(&h, l->power), h_d(&h, l->max_range), h_d(&h, l->range_bin);
+        h_v3(&h, l->offset), h_i(&h, l->echoes), h_d(&h, l->echo_threshold), h_i(&h, l->max_echoes);
+    }
     const sensor_response *r = &c->response;
     h_i(&h, r->on), h_d(&h, r->sigma), h_d(&h, r->tail), h_i(&h, r->n);
     for (int i = 0; i < r->n && r->t && r->p; i++) h_d(&h, r->t[i]), h_d(&h, r->p[i]);
