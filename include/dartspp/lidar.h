@@ -87,4 +87,9 @@ void lidar_points_free(lidar_points *pts);
  * ushort, range as float), written atomically. */
 int lidar_points_write_ply(const char *path, const lidar_points *pts, dp_error *err);
 
+/* The JSON sidecar of a waveforms file, <stem>_waveforms.json beside <stem>_waveforms.npy (docs/lidar.md §5):
+ * its shape and axes, range_bin, max_range, bins, the unit of its values and the lidar's keys; what
+ * `dartspp counts` reads to take the waveforms. Written atomically (src/lidar/lidar_points.c). */
+int lidar_waveforms_sidecar_write(const char *path, const lidar_params *l, dp_error *err);
+
 #endif
