@@ -105,7 +105,9 @@ int lidar_waveforms(const struct film *f, int order, float **out, dp_error *err)
 /* <stem>_waveforms.npy and its sidecar <stem>_waveforms.json, <stem>_waveforms_orders.npy (with bounce_orders),
  * <stem>_points.npy and <stem>_points.ply, each written atomically; wrote (may be NULL) is told each path. */
 int lidar_write_outputs(const struct film *f, const char *stem, void (*wrote)(const char *path), dp_error *err);
-/* The sidecar of a waveforms file (docs/lidar.md §5), written atomically. */
+/* The JSON sidecar of a waveforms file, <stem>_waveforms.json beside <stem>_waveforms.npy (docs/lidar.md §5):
+ * its shape and axes, range_bin, max_range, bins, the unit of its values and the lidar's keys; what
+ * `dartspp counts` reads to take the waveforms. Written atomically (src/lidar/lidar_points.c). */
 int lidar_waveforms_sidecar_write(const char *path, const lidar_params *l, dp_error *err);
 
 #endif
