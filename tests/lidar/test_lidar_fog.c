@@ -140,7 +140,7 @@ static void test_order1_matches_soft_target(void **state)
     assert_int_equal(s.cam.lidar.bins, BINS);
     wave_probe p = {.x = calloc((size_t)PASSES * 3 * BINS, sizeof(double))};
     assert_non_null(p.x);
-    render_options ro = {.threads = 2, .seed = 11, .spp = PASSES, .after_pass = probe_after, .after_pass_ctx = &p};
+    render_options ro = {.threads = 1, .seed = 11, .spp = PASSES, .after_pass = probe_after, .after_pass_ctx = &p};
     film f;
     render_stats st;
     dp_error err;
