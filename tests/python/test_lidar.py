@@ -5,6 +5,7 @@ import json
 import subprocess
 
 import numpy as np
+import pytest
 
 import dartspp
 from conftest import small_fogbox
@@ -49,6 +50,7 @@ def test_lidar_arrays_equal_the_cli_files(cli, tmp_path):
     assert len(body) == len(points) * (4 * 4 + 1 + 2 + 2 + 4)
 
 
+@pytest.mark.filterwarnings("ignore:.*does not read this key")
 def test_other_cameras_have_no_waveforms():
     r = dartspp.render(small_fogbox(type="path_tracer"), spp=1, seed=1, threads=1)
     assert r.waveforms is None and r.points is None and r.range_bin is None
