@@ -34,20 +34,64 @@ static void coaxial_scene(const char *path, const char *integrator)
     test_write_file(path, text);
 }
 
-static void check_coaxial(const char *integrator)
+#define PASSES 40
+#define COAXIAL_SEEDS 32
+
+/* The quadrature of every pixel and channel (pixel_value), once for the three cases: the scene differs only in
+ * its integrator keys. Checks first that the light and the camera are the same point to the last bit. */
+static double *coaxial_quadrature(void)
 {
     char *dir = test_tmpdir(), path[512];
+    if (!dir) {
+        fail_msg("no temporary folder");
+        return NULL;
+    }
     snprintf(path, sizeof path, "%s/coaxial.json", dir);
-    coaxial_scene(path, integrator);
+    coaxial_scene(path, "\"enable_guiding\": false");
     scene s;
     dp_error err;
     scene_load_options lo = {0};
     if (scene_load(path, &lo, &s, &err)) fail_msg("%s", err.msg);
-    /* the degenerate case itself: the same point to the last bit */
     assert_true(s.lights[0].pos.x == s.cam.pos.x && s.lights[0].pos.y == s.cam.pos.y && s.lights[0].pos.z == s.cam.pos.z);
+    analytic_case a = {.cam = s.cam.pos, .light = s.lights[0].pos, .I = s.lights[0].value, .ss = s.media[0].sigma_s,
+                       .st = s.media[0].sigma_t, .g = G_HG, .eta = 1.0 / SPEED, .gated = 1, .g0 = 4.0, .g1 = 4.6};
+    double *q = calloc((size_t)3 * s.cam.width * s.cam.height, sizeof(double));
+    assert_non_null(q);
+    for (int y = 0; y < s.cam.height; y++)
+        for (int x = 0; x < s.cam.width; x++)
+            for (int ch = 0; ch < 3; ch++) q[3 * (y * s.cam.width + x) + ch] = pixel_value(&a, &s.cam, x, y, ch);
     scene_free(&s);
+    test_rmtree(dir);
+    return q;
+}
+
+static double *quadrature;
+
+static int setup(void **state)
+{
+    (void)state;
+    quadrature = coaxial_quadrature();
+    return 0;
+}
+
+static int teardown(void **state)
+{
+    (void)state;
+    free(quadrature);
+    return 0;
+}
+
+static void check_coaxial(const char *integrator)
+{
+    char *dir = test_tmpdir(), path[512];
+    if (!dir) {
+        fail_msg("no temporary folder");
+        return;
+    }
+    snprintf(path, sizeof path, "%s/coaxial.json", dir);
+    coaxial_scene(path, integrator);
     analytic_case a = {.g = G_HG, .eta = 1.0 / SPEED, .gated = 1, .g0 = 4.0, .g1 = 4.6};
-    check_scene_against_quadrature(path, a, integrator, 0, 300, 32);
+    check_scene_against_quadrature(path, a, integrator, 0, PASSES, COAXIAL_SEEDS, quadrature);
     test_rmtree(dir);
 }
 
@@ -78,5 +122,5 @@ int main(void)
         cmocka_unit_test(test_darts_pt_coaxial_no_mis),
         cmocka_unit_test(test_uniform_time_coaxial),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return cmocka_run_group_tests(tests, setup, teardown);
 }
