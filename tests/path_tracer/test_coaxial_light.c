@@ -1,8 +1,7 @@
-/* tier: quick */
 /* A point light exactly at the pinhole (a coaxial lidar, a flash at the camera) in an infinite HG fog, single
  * scattering (max_bounces 2), gate [4, 4.6) of η = 4/3: the DARTS path tracer (DA + elliptical control vertices,
  * with and without the exponential MIS) and the uniform-time path tracer against the quadrature of
- * tests/path_tracer/test_single_scatter.c (included here), every pixel and channel, z from 32 seeds of 300 passes.
+ * tests/path_tracer/test_single_scatter.c (included here), every pixel and channel, z from 32 seeds of 40 passes.
  * Along every camera ray the light lies behind the ray's origin: the equal-time ellipsoid of the camera vertex has
  * coincident foci (C = 0, a sphere of diameter T: docs/darts.md §3), and every light leg is exactly −ω, so the
  * phase function is evaluated at cos = −1 (HG g 0.4 makes that 13 times weaker than forward: a connection taken
