@@ -166,7 +166,8 @@ int darts_sample_bin(const darts_guide *g, vec3 x_light, double tau0, double u, 
 /* ---- ellipse record (docs/darts.md §3) ----
  * At a vertex x with elapsed time τ: the admissible residual geometric length S ∈ [S_lo, S_hi] with
  * S_hi = (bin end − τ)/η and S_lo = max((bin start − τ)/η, C), C = |cam − x|, and one sampled residual T
- * shared by the samplers of the vertex. `valid` iff S_hi > C (up to a relative 1e-9). */
+ * shared by the samplers of the vertex. `valid` iff S_hi > C (up to a relative 1e-9), C = 0 included (x at the
+ * target: the ellipsoid is a sphere, docs/darts.md §3). */
 /* residual_sampling (above): RESIDUAL_UNIFORM or RESIDUAL_EXPONENTIAL. */
 
 typedef struct {

@@ -36,7 +36,10 @@ void ellipse_record_init(ellipse_record *r, const darts_guide *g, const darts_bi
     r->S_hi = (b->end - tau) / eta;
     r->S_reach = (b->end - tau) / g->eta_lb;
     double lo = (b->start - tau) / eta;
-    if (!(r->S_hi > r->C * (1.0 + REL_EPS)) || !(r->C > 0.0)) return;
+    /* C = 0 (the vertex at the target: a light at the camera) is a valid record: the ellipsoid is the sphere
+     * of diameter T about x, paper eq. 19 gives t = T/2 along every direction, and e never counts (it is
+     * always multiplied by C) (docs/darts.md §3) */
+    if (!(r->S_hi > r->C * (1.0 + REL_EPS))) return;
     r->S_lo = dp_fmax(lo, r->C);
     r->T = sample_residual(r->S_lo, r->S_hi, mode, sigma_t_avg, u, &r->inv_pdf_T);
     r->valid = r->T > r->C && r->inv_pdf_T > 0.0 && isfinite(r->inv_pdf_T);

@@ -208,28 +208,22 @@ typedef struct {
     int orders;    /* > 0: max_bounces 8 and bounce_orders 2; the order-1 layer (one scattering event) is checked */
 } time_mode;
 
-static void check_against_quadrature_seeds(const char *phase, double g, double speed, const char *window, int gated,
-                                           double g0, double g1, long passes, time_mode tm, int seeds)
+/* Renders the single-scattering scene at `path` (one medium, one point light, max_bounces 2, or the order-1 layer
+ * when `orders`) with `seeds` seeds of `passes` passes and checks every pixel and channel against the quadrature
+ * of a, whose camera, light and coefficients are taken from the loaded scene here (the rest: the caller's);
+ * q_given: that quadrature already worked out, in the film's order (pixel_value), or NULL. */
+static void check_scene_against_quadrature(const char *path, analytic_case a, const char *label, int orders, long passes,
+                                           int seeds, const double *q_given)
 {
-    char *dir = test_tmpdir(), path[512], win[512];
-    snprintf(path, sizeof path, "%s/single.json", dir);
-    snprintf(win, sizeof win, "%s%s", window, tm.unwarp ? ", \"camera_unwarp\": true" : "");
-    if (tm.rs > 0)
-        snprintf(win + strlen(win), sizeof win - strlen(win), ", \"sensor_jitter_fwhm\": %.17g, \"sensor_jitter_tail\": %.17g",
-                 tm.rs * 2.3548200450309493, tm.rt);
-    if (tm.orders) snprintf(win + strlen(win), sizeof win - strlen(win), ", \"bounce_orders\": 2");
-    write_scene(path, phase, speed, win, tm.p0, tm.pw, tm.orders ? 8 : 2);
     scene s;
     dp_error err;
     scene_load_options lo = {0};
     if (scene_load(path, &lo, &s, &err)) fail_msg("%s", err.msg);
-    analytic_case a = {.cam = s.cam.pos, .light = s.lights[0].pos, .I = s.lights[0].value,
-                       .ss = s.media[0].sigma_s, .st = s.media[0].sigma_t, .g = g, .eta = 1.0 / speed,
-                       .gated = gated, .g0 = g0, .g1 = g1, .unwarp = tm.unwarp, .p0 = tm.p0, .pw = tm.pw,
-                       .rs = tm.rs, .rt = tm.rt};
-    assert_int_equal(s.cam.response.on, tm.rs > 0);
-    assert_int_equal(s.integrator.window.camera_unwarp, tm.unwarp);
-    assert_true(s.lights[0].pulse.start == tm.p0 && s.lights[0].pulse.width == tm.pw);
+    a.cam = s.cam.pos, a.light = s.lights[0].pos, a.I = s.lights[0].value;
+    a.ss = s.media[0].sigma_s, a.st = s.media[0].sigma_t;
+    assert_int_equal(s.cam.response.on, a.rs > 0);
+    assert_int_equal(s.integrator.window.camera_unwarp, a.unwarp);
+    assert_true(s.lights[0].pulse.start == a.p0 && s.lights[0].pulse.width == a.pw);
     int n = s.cam.width * s.cam.height * 3;
     double *sum = calloc(n, sizeof(double)), *sq = calloc(n, sizeof(double));
     for (int k = 0; k < seeds; k++) {
@@ -238,7 +232,7 @@ static void check_against_quadrature_seeds(const char *phase, double g, double s
         render_stats st;
         assert_int_equal(render_scene(&s, &ro, &f, &st, &err), 0);
         assert_int_equal(st.nonfinite, 0);
-        const float *layer = tm.orders ? &f.frame_sum[(size_t)n * film_order_layer(&f.window, 1, -1)] : NULL;
+        const float *layer = orders ? &f.frame_sum[(size_t)n * film_order_layer(&f.window, 1, -1)] : NULL;
         for (int i = 0; i < n; i++) {
             double v = (layer ? (double)layer[i] : f.sum[i]) / f.weight_sum;
             sum[i] += v;
@@ -252,7 +246,7 @@ static void check_against_quadrature_seeds(const char *phase, double g, double s
             for (int ch = 0; ch < 3; ch++) {
                 int i = 3 * (y * s.cam.width + x) + ch;
                 double mean = sum[i] / seeds, var = (sq[i] - seeds * mean * mean) / (seeds - 1);
-                double q = pixel_value(&a, &s.cam, x, y, ch), se = sqrt(var / seeds);
+                double q = q_given ? q_given[i] : pixel_value(&a, &s.cam, x, y, ch), se = sqrt(var / seeds);
                 assert_true(q > 0);
                 assert_true(se > 0);
                 double z = (mean - q) / se;
@@ -263,8 +257,8 @@ static void check_against_quadrature_seeds(const char *phase, double g, double s
                 tot_var += var / seeds;
             }
     double zglob = (tot - tot_q) / sqrt(tot_var);
-    print_message("  %s speed %g %s: mean z^2 %.3f, max |z| %.2f, total %.6g vs quadrature %.6g (z %.2f, rel se %.2g)\n",
-                  phase, speed, gated ? "gated" : "steady", z2 / n, zmax, tot, tot_q, zglob, sqrt(tot_var) / tot_q);
+    print_message("  %s: mean z^2 %.3f, max |z| %.2f, total %.6g vs quadrature %.6g (z %.2f, rel se %.2g)\n", label,
+                  z2 / n, zmax, tot, tot_q, zglob, sqrt(tot_var) / tot_q);
     /* z follows Student's t with seeds − 1 dof: E[z^2] = 15/13 for 16 seeds (1.07 for 32); the three channels
      * of a pixel are nearly one value, so the mean over 96 pixels has sd ~0.19 (16 seeds), ~0.13 (32) */
     assert_true(z2 / n < 1.6);
@@ -273,6 +267,23 @@ static void check_against_quadrature_seeds(const char *phase, double g, double s
     free(sum);
     free(sq);
     scene_free(&s);
+}
+
+static void check_against_quadrature_seeds(const char *phase, double g, double speed, const char *window, int gated,
+                                           double g0, double g1, long passes, time_mode tm, int seeds)
+{
+    char *dir = test_tmpdir(), path[512], win[512], label[256];
+    snprintf(path, sizeof path, "%s/single.json", dir);
+    snprintf(win, sizeof win, "%s%s", window, tm.unwarp ? ", \"camera_unwarp\": true" : "");
+    if (tm.rs > 0)
+        snprintf(win + strlen(win), sizeof win - strlen(win), ", \"sensor_jitter_fwhm\": %.17g, \"sensor_jitter_tail\": %.17g",
+                 tm.rs * 2.3548200450309493, tm.rt);
+    if (tm.orders) snprintf(win + strlen(win), sizeof win - strlen(win), ", \"bounce_orders\": 2");
+    write_scene(path, phase, speed, win, tm.p0, tm.pw, tm.orders ? 8 : 2);
+    analytic_case a = {.g = g, .eta = 1.0 / speed, .gated = gated, .g0 = g0, .g1 = g1, .unwarp = tm.unwarp,
+                       .p0 = tm.p0, .pw = tm.pw, .rs = tm.rs, .rt = tm.rt};
+    snprintf(label, sizeof label, "%s speed %g %s", phase, speed, gated ? "gated" : "steady");
+    check_scene_against_quadrature(path, a, label, tm.orders, passes, seeds, NULL);
     test_rmtree(dir);
 }
 
