@@ -10,6 +10,7 @@
  * The noise comes from the spread of per-pass estimates (thousands of passes). The full waveform's excess over
  * layer 1, the multiple scattering, is printed, and the layer of two or more events must be positive in the fog. */
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 
 #include "render_fixtures.h"
@@ -29,7 +30,7 @@
 #define NEAR 4     /* bins before r = 2 are left out: the 1/r² near field */
 #define PASSES 12000
 
-static const char *const SCENE =
+static const char *const SCENE_FMT =
     "{ \"media\": [ { \"name\": \"fog\", \"type\": \"homogeneous\", \"sigma_s\": 0.04, \"sigma_a\": 0.004,"
     "    \"phase_function\": { \"type\": \"henyey_greenstein\", \"g\": 0.8 } } ],"
     "  \"bsdfs\": [], \"primitives\": [],"
@@ -37,7 +38,7 @@ static const char *const SCENE =
     "    \"azimuth\": [-8, 8], \"azimuth_steps\": 16, \"beam_divergence\": 0.01, \"receiver_fov\": 0.01,"
     "    \"power\": 1, \"pulse_shape\": \"box\", \"pulse_width\": 1.0, \"max_range\": 20, \"range_bin\": 0.5,"
     "    \"transform\": { \"position\": [0, 0, 0], \"look_at\": [0, 0, 1], \"up\": [0, 1, 0] } },"
-    "  \"integrator\": { \"type\": \"path_tracer\", \"max_bounces\": 24, \"bounce_orders\": 2 },"
+    "  \"integrator\": { \"type\": \"path_tracer\", \"max_bounces\": 24, \"bounce_orders\": 2 %s },"
     "  \"renderer\": { \"spp\": 1 } }";
 
 /* ---- the analytic soft target ---- */
@@ -130,11 +131,14 @@ static void mean_se(const wave_probe *p, int i, double *mean, double *se)
     *se = sqrt(s2 / (p->n - 1) / p->n);
 }
 
-static void test_order1_matches_soft_target(void **state)
+/* The path tracer named by `keys` (integrator keys after the common ones) against the soft target. */
+static void check_soft_target(const char *label, const char *keys)
 {
-    (void)state;
+    char text[4096];
+    snprintf(text, sizeof text, SCENE_FMT, keys);
+    printf("  %s\n", label);
     tmp_scene ts;
-    tmp_scene_write(&ts, SCENE);
+    tmp_scene_write(&ts, text);
     scene s;
     load_scene(ts.path, NULL, 0, &s);
     assert_int_equal(s.cam.lidar.bins, BINS);
@@ -180,10 +184,31 @@ static void test_order1_matches_soft_target(void **state)
     tmp_scene_remove(&ts);
 }
 
+static void test_plain_path_tracer(void **state)
+{
+    (void)state;
+    check_soft_target("plain path tracer", "");
+}
+
+/* the DARTS path tracer: camera paths aimed at the beam (whose point is the receiver's: docs/darts.md §3) */
+static void test_darts_path_tracer(void **state)
+{
+    (void)state;
+    check_soft_target("DARTS path tracer", ", \"enable_guiding\": true, \"enable_elliptical\": true");
+}
+
+static void test_uniform_time_path_tracer(void **state)
+{
+    (void)state;
+    check_soft_target("uniform-time path tracer", ", \"time_sampling\": \"uniform\"");
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_order1_matches_soft_target),
+        cmocka_unit_test(test_plain_path_tracer),
+        cmocka_unit_test(test_darts_path_tracer),
+        cmocka_unit_test(test_uniform_time_path_tracer),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
