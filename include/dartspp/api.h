@@ -74,6 +74,10 @@ typedef struct {
     int deriv_count;              /* the request's derivative_count */
     float *derivs;                /* deriv_count × height × width × 3: ∂(gate image)/∂θ_k, in the request's order */
     float *deriv_frames;          /* deriv_count × frame_count × height × width × 3, NULL without frames */
+    int amcw_count;               /* renderer.amcw_frequencies (docs/amcw.md): 0 without */
+    double amcw_mhz[4];           /* those frequencies, MHz */
+    float *amcw;                  /* amcw_count × height × width × 3 complex values, (re, im) interleaved; NULL without */
+    float *amcw_depth;            /* height × width: the AMCW depth (0 where no signal); NULL without */
 } dp_render_result;
 
 /* Loads, checks and renders. Returns 0 with res filled (res->passes may be 0 when stopped before the first
