@@ -81,6 +81,10 @@ typedef struct {
     float *waveforms;             /* lidar_channels × lidar_azimuth_steps × lidar_bins */
     float *points;                /* point_count × 8: x, y, z, intensity, return, channel, azimuth index, range */
     long point_count;
+    int amcw_count;               /* renderer.amcw_frequencies (docs/amcw.md): 0 without */
+    double amcw_mhz[4];           /* those frequencies, MHz */
+    float *amcw;                  /* amcw_count × height × width × 3 complex values, (re, im) interleaved; NULL without */
+    float *amcw_depth;            /* height × width: the AMCW depth (0 where no signal); NULL without */
 } dp_render_result;
 
 /* Loads, checks and renders. Returns 0 with res filled (res->passes may be 0 when stopped before the first

@@ -33,6 +33,12 @@ struct film {
     const camera *lidar; /* a lidar's film, whose pixels are its beams and frames its range bins: the files stage
                           * writes its waveforms, echoes and points (docs/lidar.md §4); NULL otherwise. The
                           * scene's camera, which outlives the film */
+    /* AMCW (docs/amcw.md), with window.amcw_count > 0 (never on a derivative film): per pixel, per frequency j,
+     * per channel c, the real and imaginary sums of contribution · e^{−i·amcw_k[j]·t}, weight 1 (not the gate's
+     * 1/width): amcw_sum[((px · amcw_count + j) · 3 + c) · 2 + {0 re, 1 im}], completed passes; amcw_pass the pass
+     * in progress, same layout. NULL without AMCW. */
+    double amcw_k[AMCW_FREQ_MAX]; /* 2π f / c₀ in radians per scene unit (the unit a metre): φ = amcw_k · t */
+    double *amcw_sum, *amcw_pass;
 };
 
 int film_init(film *f, int width, int height, const time_window *tw, dp_error *err);
@@ -72,6 +78,7 @@ typedef struct {
     double wf;         /* frame weight 1/width */
     long k;            /* frame index, or -1 without frames */
     long order_layer;  /* with window.orders: the layer of its scattering order (and frame); else -1 */
+    double t;          /* the path time (the AMCW phase's) */
 } film_slot;
 
 /* The layer of scattering order o (the last one: o and more) for frame k (-1: the gate image, without
@@ -87,7 +94,7 @@ static inline long film_order_layer(const time_window *tw, int o, long k)
 static inline film_slot film_time_slot(const film *f, double t, int frame, int order)
 {
     const time_window *tw = &f->window;
-    film_slot s = {.counts = 1, .gated = tw->gated, .k = -1, .order_layer = -1};
+    film_slot s = {.counts = 1, .gated = tw->gated, .k = -1, .order_layer = -1, .t = t};
     if (!tw->gated) {
         if (tw->orders > 0) s.order_layer = film_order_layer(tw, order, -1);
         return s;
@@ -120,9 +127,14 @@ static inline int film_slot_fits(const film_slot *s, vec3 c)
     return m * w <= FILM_VALUE_MAX;
 }
 
+/* The AMCW sums of a contribution c at path time t (docs/amcw.md §2): c·cos φ to the real, −c·sin φ to the
+ * imaginary sum of each frequency, φ = amcw_k·t, weight 1. */
+void film_amcw_add(film *f, size_t px, double t, vec3 c);
+
 /* Adds a finite c to pixel px in a slot that counts (not thread-safe for one pixel). */
 static inline void film_slot_add(film *f, size_t px, const film_slot *s, vec3 c)
 {
+    if (f->amcw_pass) film_amcw_add(f, px, s->t, c);
     double *p = &f->pass[3 * px];
     if (s->order_layer >= 0) { /* weighted as its frame, or as the gate image without frames */
         double w = !s->gated ? 1.0 : s->k >= 0 ? s->wf : s->wg;
@@ -163,6 +175,28 @@ int film_layer_image(const film *f, long layer, image_rgb *img, dp_error *err);
 int film_image(const film *f, int k, image_rgb *img, dp_error *err);
 /* The pixels film_image writes as 0 for not being finite, over the gate image and every frame. */
 long film_nonfinite_pixels(const film *f);
+
+/* ---- AMCW (docs/amcw.md) ---- */
+#define AMCW_C0 299792458.0 /* m/s: the modulation wavelength of f MHz is AMCW_C0 / (f·1e6) scene units */
+/* 2π f / c₀ for f in MHz: the phase per unit of path time (radians per scene unit, the unit a metre). */
+static inline double amcw_wavenumber(double mhz) { return 2.0 * M_PI * mhz * 1e6 / AMCW_C0; }
+/* The AMCW values as the weighted mean over passes, complex64 interleaved (re, im) in the order (frequency,
+ * row, column, channel): 2 · amcw_count · height · width · 3 floats into out (NULL: only counted). A value of
+ * which a part is not finite in float32 is written as 0 (its three channels). Returns those (frequency, pixel)
+ * values. */
+long film_amcw_values(const film *f, float *out);
+/* The AMCW depth per pixel (height · width floats, docs/amcw.md §4) from the channel-mean phasor of the first one
+ * or two frequencies: d = c₀φ/(4πf) wrapped at c₀/(2f); with two, unwrapped by the two-frequency search
+ * (amcw_unwrap). A pixel whose phasor is zero or not finite (no signal) is written as 0 and counted in *dark.
+ * out may be NULL (only counted). */
+void film_amcw_depth(const film *f, float *out, long *dark);
+/* Two wrapped depths d1 ∈ [0, c₀/(2f1)) and d2 ∈ [0, c₀/(2f2)) (f in MHz) to one depth: the wrap counts n1, n2
+ * over [0, amcw_unwrap_range(f1, f2)) whose depths d1 + n1·c₀/(2f1) and d2 + n2·c₀/(2f2) differ least; their mean. */
+double amcw_unwrap(double d1, double f1, double d2, double f2);
+/* The pair's unambiguous range c₀/(2·gcd(f1, f2)), the gcd over whole Hz, at most AMCW_UNWRAP_WRAPS wraps of the
+ * longer wrap depth. */
+#define AMCW_UNWRAP_WRAPS 1000
+double amcw_unwrap_range(double f1, double f2);
 
 /* ---- the pixels of one pass ----
  * Every integrator takes one camera sample per pixel per pass the same way: rows in parallel (dynamic

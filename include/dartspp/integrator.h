@@ -29,6 +29,8 @@
     X(double, t_gather, RENDER_SUM, 1, "seconds spent in the sensor pass")                                             \
     X(long, nonfinite_pixels, RENDER_KEPT, 1, "pixels of the images not finite at the end, written as 0 "              \
       "(film_nonfinite_pixels)")                                                                                       \
+    X(long, amcw_dark_pixels, RENDER_KEPT, 1, "AMCW: pixels without signal at the depth's frequencies, their "          \
+      "amcw_depth written as 0 (film_amcw_depth)")                                                                     \
     X(long, passes, RENDER_KEPT, 0, "passes completed (the film's count)")                                             \
     X(long, resumed_passes, RENDER_KEPT, 0, "of them, held by the film resumed (render_options.resume)")               \
     X(double, seconds, RENDER_KEPT, 0, "render time")                                                                  \

@@ -154,6 +154,9 @@ int npy_close(npy_file *w, dp_error *err);
 void npy_abort(npy_file *w);
 /* All of an array at once. */
 int npy_write_f32(const char *path, const size_t *shape, int ndim, const float *data, dp_error *err);
+/* A complex64 array at once ('<c8': the AMCW values, docs/amcw.md §3): data holds 2 floats per value, the real
+ * then the imaginary part, in C order; atomic like the rest. */
+int npy_write_c64(const char *path, const size_t *shape, int ndim, const float *data, dp_error *err);
 /* An int32 array at once ('<i4': photon-count histograms), atomic like the rest. */
 int npy_write_i32(const char *path, const size_t *shape, int ndim, const int32_t *data, dp_error *err);
 /* Reads a whole float32 array ('<f4', C order, .npy format 1.0 to 3.0): its shape (1 to NPY_MAX_DIMS axes) and

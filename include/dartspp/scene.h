@@ -114,6 +114,7 @@ double camera_distance(const camera *c, vec3 p);
 static inline double camera_ortho_pixel(const camera *c) { return 2.0 * c->ortho_size / c->height; }
 
 /* ---- time ---- */
+#define AMCW_FREQ_MAX 4 /* modulation frequencies of the AMCW output (docs/amcw.md) */
 typedef struct {
     int gated;        /* 0: steady state, no time weighting (transient_time_width == 0, no frames) */
     int frame_count;  /* 0: one gate image; N >= 1: frames [start + k w, start + (k+1) w) */
@@ -127,6 +128,9 @@ typedef struct {
                         * hold the box of the first iteration, [center − w₀/2, center + w₀/2), and a film holds the box
                         * of its pass in progress (film_set_pass_gate); never with frames */
     double center;     /* the delta gate's instant (transient_time_center); 0 without a delta gate */
+    int amcw_count;    /* renderer key amcw_frequencies: 0 (none), or 1 to AMCW_FREQ_MAX modulation frequencies whose
+                        * correlation the film accumulates per contribution (docs/amcw.md) */
+    double amcw_mhz[AMCW_FREQ_MAX]; /* those frequencies in MHz, the scene unit taken as the metre */
 } time_window;
 
 /* The film's float layers: the frames, then per order the frames (the gate image when there are none). */
@@ -224,6 +228,13 @@ typedef struct {
     double glossy_regularization;
 } integrator_settings;
 
+/* A key's list of 0 to KEY_LIST_MAX numbers (KEY_NUMBER_LIST). */
+#define KEY_LIST_MAX AMCW_FREQ_MAX
+typedef struct {
+    int count;
+    double v[KEY_LIST_MAX];
+} key_number_list;
+
 typedef struct {
     long spp;                /* progressive passes; 0 = no limit */
     double timeout;  /* seconds; 0 = no limit */
@@ -232,6 +243,7 @@ typedef struct {
     char output_file[1024];  /* LDR preview as written in the scene (not written by dartspp) */
     char hdr_output_file[1024];
     int ground_truth;        /* also write depth, first arrival, normal and albedo images (docs/sensor.md §3) */
+    key_number_list amcw_frequencies; /* MHz; count 0: no AMCW output (docs/amcw.md) */
 } renderer_settings;
 
 /* One key of the table. */
@@ -244,6 +256,8 @@ typedef enum {
     KEY_STRING,   /* char[size] */
     KEY_DURATION, /* double seconds; a bare number means minutes, suffixes ms, s, m, h, d; negative: no limit (0) */
     KEY_SHAPE3,   /* int[3], integers in [lo, hi] (the last at least lo + 1) */
+    KEY_NUMBER_LIST, /* key_number_list: [] or 1 to KEY_LIST_MAX distinct numbers, each in the range (a bare number: a
+                      * list of one) */
     KEY_ANY       /* accepted as the format writes it and not read (no field) */
 } scene_key_type;
 

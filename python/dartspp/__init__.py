@@ -60,6 +60,10 @@ class Result:
     derivatives  (K, height, width, 3) float32: the gate image's derivative dI/dθ_k for each pointer of
                  render(derivatives=...), in its order; None when none were asked for
     derivative_frames  (K, frames, height, width, 3) float32: the frames' derivatives, or None
+    amcw         (F, height, width, 3) complex64: the AMCW correlation Σ contribution·e^{−i2πft/c₀} at each of the
+                 F frequencies of renderer.amcw_frequencies (docs/amcw.md); None without that key
+    amcw_depth   (height, width) float32: the depth from the first two frequencies (0 where no signal), or None
+    amcw_frequencies  the F frequencies in MHz, or None
     derivative_pointers  the pointers asked for (list of str, [] when none)
     waveforms    a lidar camera's (docs/lidar.md): (channels, azimuth_steps, bins) float32, the received energy
                  per unit aperture area in each range bin (bin b spans ranges [b, b + 1)·range_bin), channel 0
@@ -89,6 +93,9 @@ class Result:
         self.waveforms = d["waveforms"]
         self.points = d["points"]
         self.range_bin = d["range_bin"]
+        self.amcw = d["amcw"]
+        self.amcw_depth = d["amcw_depth"]
+        self.amcw_frequencies = None if d["amcw_mhz"] is None else d["amcw_mhz"].tolist()
 
     def __repr__(self):
         h, w, _ = self.image.shape

@@ -118,6 +118,20 @@ static int put_lidar(PyObject *d, const dp_render_result *r)
            put(d, "range_bin", have ? PyFloat_FromDouble(r->lidar_range_bin) : Py_NewRef(Py_None));
 }
 
+/* d["amcw"]: (F, height, width, 3) complex64, d["amcw_depth"]: (height, width) float32, d["amcw_mhz"]: the F
+ * frequencies; None without renderer.amcw_frequencies (docs/amcw.md). */
+static int put_amcw(PyObject *d, const dp_render_result *r)
+{
+    if (r->amcw_count <= 0 || !r->amcw)
+        return put(d, "amcw", Py_NewRef(Py_None)) || put(d, "amcw_depth", Py_NewRef(Py_None)) ||
+               put(d, "amcw_mhz", Py_NewRef(Py_None));
+    npy_intp dims[4] = {r->amcw_count, r->height, r->width, 3}, ddims[2] = {r->height, r->width}, fdims[1] = {r->amcw_count};
+    PyObject *a = PyArray_SimpleNew(4, dims, NPY_COMPLEX64);
+    if (a) memcpy(PyArray_DATA((PyArrayObject *)a), r->amcw, (size_t)PyArray_NBYTES((PyArrayObject *)a));
+    return put(d, "amcw", a) || put(d, "amcw_depth", float_array(r->amcw_depth, 2, ddims)) ||
+           put(d, "amcw_mhz", double_array(r->amcw_mhz, 1, fdims));
+}
+
 static PyObject *result_dict(const dp_render_result *r)
 {
     PyObject *d = PyDict_New();
@@ -137,7 +151,7 @@ static PyObject *result_dict(const dp_render_result *r)
              put(d, "gate_end", PyFloat_FromDouble(r->gate_end)) || put(d, "passes", PyLong_FromLong(r->passes)) ||
              put(d, "interrupted", PyBool_FromLong(r->interrupted)) ||
              put(d, "seconds", PyFloat_FromDouble(r->seconds)) || put(d, "stats", stats_dict(r)) ||
-             put(d, "log", double_array(r->log, 2, log)) || put_derivs(d, r) || put_lidar(d, r);
+             put(d, "log", double_array(r->log, 2, log)) || put_derivs(d, r) || put_lidar(d, r) || put_amcw(d, r);
     if (rc) Py_CLEAR(d);
     return d;
 }

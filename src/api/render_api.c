@@ -201,11 +201,22 @@ static int fill_result(const film *f, const render_stats *st, const render_plan 
         res->frame_times[2 * k + 1] = tw->start + (k + 1) * tw->width;
     }
     if (fill_derivs(f, tw->frame_count, res, err) || fill_lidar(f, res, err)) return -1;
+    if (tw->amcw_count > 0) { /* the AMCW values and depth, as <stem>_amcw.npy and _amcw_depth.npy */
+        res->amcw_count = tw->amcw_count;
+        for (int j = 0; j < tw->amcw_count; j++) res->amcw_mhz[j] = tw->amcw_mhz[j];
+        res->amcw = malloc(2 * px * (size_t)tw->amcw_count * sizeof(float));
+        res->amcw_depth = malloc((size_t)f->width * f->height * sizeof(float));
+        if (!res->amcw || !res->amcw_depth) return dp_fail_kind(err, DP_ERROR_MEMORY, "out of memory for the AMCW arrays");
+        long dark;
+        film_amcw_values(f, res->amcw);
+        film_amcw_depth(f, res->amcw_depth, &dark);
+    }
     res->passes = st->passes;
     res->interrupted = st->interrupted;
     res->seconds = st->seconds;
     render_stats figures = *st;
     figures.nonfinite_pixels = film_nonfinite_pixels(f);
+    film_amcw_depth(f, NULL, &figures.amcw_dark_pixels);
     fill_stats(&figures, res);
     return 0;
 }
@@ -321,5 +332,7 @@ void dp_render_result_free(dp_render_result *res)
     free(res->deriv_frames);
     free(res->waveforms);
     free(res->points);
+    free(res->amcw);
+    free(res->amcw_depth);
     memset(res, 0, sizeof *res);
 }

@@ -40,6 +40,8 @@ static int reduce_film_sums(const film *mine, film *total, int rank)
     if (reduce_chunks(mine->sum, total->sum, n, MPI_DOUBLE, sizeof(double), rank) ||
         (nf > 0 && reduce_chunks(mine->frame_sum, total->frame_sum, nf, MPI_FLOAT, sizeof(float), rank)))
         return -1;
+    size_t na = n * 2 * (size_t)mine->window.amcw_count; /* the AMCW sums (docs/amcw.md), the image's only */
+    if (na > 0 && reduce_chunks(mine->amcw_sum, total->amcw_sum, na, MPI_DOUBLE, sizeof(double), rank)) return -1;
     for (int k = 0; k < mine->deriv_count; k++)
         if (reduce_film_sums(&mine->deriv[k], &total->deriv[k], rank)) return -1;
     return 0;

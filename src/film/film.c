@@ -6,6 +6,12 @@
 #include <stdlib.h>
 #include <string.h>
 
+/* The AMCW sums' doubles: 2 (re, im) per channel, frequency and pixel; 0 without AMCW. */
+static size_t film_amcw_count(const film *f)
+{
+    return (size_t)f->width * f->height * 6 * (size_t)f->window.amcw_count;
+}
+
 int film_init(film *f, int width, int height, const time_window *tw, dp_error *err)
 {
     memset(f, 0, sizeof *f);
@@ -19,7 +25,13 @@ int film_init(film *f, int width, int height, const time_window *tw, dp_error *e
         f->frame_sum = calloc(nf, sizeof(float));
         f->frame_pass = dp_calloc_cache_aligned(nf, sizeof(float));
     }
-    if (!f->sum || !f->pass || (nf > 0 && (!f->frame_sum || !f->frame_pass))) {
+    size_t na = film_amcw_count(f);
+    for (int j = 0; j < tw->amcw_count; j++) f->amcw_k[j] = amcw_wavenumber(tw->amcw_mhz[j]);
+    if (na > 0) {
+        f->amcw_sum = calloc(na, sizeof(double));
+        f->amcw_pass = dp_calloc_cache_aligned(na, sizeof(double));
+    }
+    if (!f->sum || !f->pass || (nf > 0 && (!f->frame_sum || !f->frame_pass)) || (na > 0 && (!f->amcw_sum || !f->amcw_pass))) {
         film_free(f);
         return dp_fail_kind(err, DP_ERROR_MEMORY,
                             "out of memory for a %dx%d film with %d frames", width, height, tw->frame_count);
@@ -32,8 +44,10 @@ int film_init_derivs(film *f, int k, const char *const *labels, dp_error *err)
     if (k <= 0) return 0;
     f->deriv = calloc((size_t)k, sizeof *f->deriv);
     if (!f->deriv) return dp_fail_kind(err, DP_ERROR_MEMORY, "out of memory for %d derivative films", k);
+    time_window tw = f->window;
+    tw.amcw_count = 0; /* AMCW is the image's alone */
     for (int i = 0; i < k; i++) {
-        if (film_init(&f->deriv[i], f->width, f->height, &f->window, err)) return -1; /* film_free frees the rest */
+        if (film_init(&f->deriv[i], f->width, f->height, &tw, err)) return -1; /* film_free frees the rest */
         f->deriv[i].label = labels ? labels[i] : NULL;
         f->deriv_count = i + 1;
     }
@@ -61,6 +75,8 @@ void film_free(film *f)
     free(f->pass);
     free(f->frame_sum);
     free(f->frame_pass);
+    free(f->amcw_sum);
+    free(f->amcw_pass);
     memset(f, 0, sizeof *f);
 }
 
@@ -69,6 +85,8 @@ void film_copy_sums(film *to, const film *from)
     size_t n = (size_t)from->width * from->height * 3, nf = n * (size_t)time_window_layers(&from->window);
     memcpy(to->sum, from->sum, n * sizeof(double));
     if (nf > 0) memcpy(to->frame_sum, from->frame_sum, nf * sizeof(float));
+    if (to->amcw_sum && from->amcw_sum && to->window.amcw_count == from->window.amcw_count)
+        memcpy(to->amcw_sum, from->amcw_sum, film_amcw_count(from) * sizeof(double));
     to->passes = from->passes;
     to->weight_sum = from->weight_sum;
     to->last_weight = from->last_weight;
@@ -108,6 +126,12 @@ void film_commit_pass(film *f, double w)
         f->frame_sum[i] += wf * f->frame_pass[i];
         f->frame_pass[i] = 0.0f;
     }
+    size_t na = film_amcw_count(f);
+#pragma omp parallel for schedule(static)
+    for (size_t i = 0; i < na; i++) {
+        f->amcw_sum[i] += w * f->amcw_pass[i];
+        f->amcw_pass[i] = 0.0;
+    }
     f->passes++;
     f->weight_sum += w;
     f->last_weight = w;
@@ -120,6 +144,7 @@ void film_drop_pass(film *f)
     size_t n = (size_t)f->width * f->height * 3, nf = n * (size_t)time_window_layers(&f->window);
     memset(f->pass, 0, n * sizeof(double));
     if (nf > 0) memset(f->frame_pass, 0, nf * sizeof(float));
+    if (f->amcw_pass) memset(f->amcw_pass, 0, film_amcw_count(f) * sizeof(double));
     for (int i = 0; i < f->deriv_count; i++) film_drop_pass(&f->deriv[i]);
 }
 
@@ -156,7 +181,7 @@ long film_nonfinite_pixels(const film *f)
 {
     long bad = 0;
     for (long k = -1; k < time_window_layers(&f->window); k++) bad += image_values_of(f, k, NULL);
-    return bad;
+    return bad + film_amcw_values(f, NULL); /* and each (frequency, pixel) of the AMCW values not finite */
 }
 
 double film_sample_pixels(film *f, const camera *cam, uint64_t seed, long pass, const dp_stop_flag *stop,

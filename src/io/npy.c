@@ -10,7 +10,8 @@
  *                (a 1-D shape is written "(d0,)"), padded with spaces and ended by '\n' so that the data
  *                starts at a multiple of 64 bytes: 10 + HEADER_LEN ≡ 0 (mod 64)
  *   then         the values, float32 little-endian, in C order (the last axis varies fastest).
- * Atomic: the file is written to a temporary name and renamed into place by npy_close. */
+ * Atomic: the file is written to a temporary name and renamed into place by npy_close. Also complex64 ('<c8':
+ * each value two float32, real then imaginary) and int32 ('<i4') arrays, written at once. */
 #include "dartspp/io.h"
 
 #include <errno.h>
@@ -108,6 +109,19 @@ int npy_write_f32(const char *path, const size_t *shape, int ndim, const float *
     npy_file w;
     if (npy_open(&w, path, shape, ndim, err)) return -1;
     if (npy_append(&w, data, w.left, err)) return -1;
+    return npy_close(&w, err);
+}
+
+int npy_write_c64(const char *path, const size_t *shape, int ndim, const float *data, dp_error *err)
+{
+    unsigned char header[NPY_HEADER_MAX];
+    size_t n = header_of(header, sizeof header, "<c8", shape, ndim), count = 2;
+    if (!n) return dp_fail_kind(err, DP_ERROR_INTERNAL, "%s: cannot describe an array of %d axes in a .npy header", path, ndim);
+    for (int i = 0; i < ndim; i++) count *= shape[i];
+    npy_file w = {.left = count};
+    if (!atomic_fopen(path, "wb", &w.af, err)) return -1;
+    if (fwrite(header, 1, n, w.af.f) != n) return atomic_fclose(&w.af, 1, err);
+    if (npy_append(&w, data, count, err)) return -1; /* little-endian float32 pairs: '<c8' */
     return npy_close(&w, err);
 }
 

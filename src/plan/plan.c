@@ -148,6 +148,7 @@ static cJSON *key_value_json(const scene_key *k, const integrator_settings *in)
     case KEY_CHOICE: return cJSON_CreateString(k->choices[*(const int *)f]);
     case KEY_STRING: return cJSON_CreateString((const char *)f);
     case KEY_SHAPE3: return cJSON_CreateIntArray((const int *)f, 3);
+    case KEY_NUMBER_LIST: return cJSON_CreateDoubleArray(((const key_number_list *)f)->v, ((const key_number_list *)f)->count);
     default: return cJSON_CreateNull();
     }
 }
@@ -212,6 +213,8 @@ int plan_json(const render_plan *p, const scene *s, char *out, size_t n)
         cJSON_AddItemToObject(root, "window", cJSON_CreateDoubleArray(w, 2));
         cJSON_AddNumberToObject(root, "frames", tw->frame_count);
     }
+    if (tw->amcw_count > 0) /* the film's AMCW sums: a checkpoint of other frequencies does not resume */
+        cJSON_AddItemToObject(root, "amcw_mhz", cJSON_CreateDoubleArray(tw->amcw_mhz, tw->amcw_count));
     add_keys(root, p, s);
     if (p->type == INTEGRATOR_PATH_TRACER)
         cJSON_AddStringToObject(root, "method", p->uniform_time ? "uniform-time path tracer (Jarabo et al. 2014)"

@@ -177,6 +177,36 @@ static int write_orders(const film *f, const char *stem, void (*wrote)(const cha
     return 0;
 }
 
+/* renderer.amcw_frequencies (docs/amcw.md §3): <stem>_amcw.npy, complex64 (frequencies, height, width, 3), the
+ * AMCW values; <stem>_amcw_depth.npy, float32 (height, width), the depth from the first two frequencies (0 where
+ * a pixel has no signal). */
+static int write_amcw(const film *f, const char *stem, void (*wrote)(const char *path), dp_error *err)
+{
+    const time_window *tw = &f->window;
+    size_t npx = (size_t)f->width * f->height;
+    float *v = malloc(npx * 6 * (size_t)tw->amcw_count * sizeof(float)), *depth = malloc(npx * sizeof(float));
+    if (!v || !depth) {
+        free(v);
+        free(depth);
+        return dp_fail_kind(err, DP_ERROR_MEMORY, "%s: out of memory for the AMCW arrays", stem);
+    }
+    long dark;
+    film_amcw_values(f, v);
+    film_amcw_depth(f, depth, &dark);
+    char path[STAGED_PATH_MAX], dpath[STAGED_PATH_MAX];
+    snprintf(path, sizeof path, "%s_amcw.npy", stem);
+    snprintf(dpath, sizeof dpath, "%s_amcw_depth.npy", stem);
+    size_t shape[4] = {(size_t)tw->amcw_count, (size_t)f->height, (size_t)f->width, 3};
+    size_t dshape[2] = {(size_t)f->height, (size_t)f->width};
+    int rc = npy_write_c64(path, shape, 4, v, err);
+    if (!rc && wrote) wrote(path);
+    if (!rc) rc = npy_write_f32(dpath, dshape, 2, depth, err);
+    if (!rc && wrote) wrote(dpath);
+    free(v);
+    free(depth);
+    return rc;
+}
+
 /* The derivative images (docs/derivatives.md §5): film k's gate image as <stem>_d<k><ext>, its frames,
  * cube and orders under the stem <stem>_d<k> as the image's (no PNG preview and no viewer: the values are
  * signed), and <stem>_derivatives.csv naming each k's parameter. */
@@ -233,6 +263,7 @@ static int write_all(const film *f, const char *stem, const char *dot, const cha
     if (f->lidar) return rc ? rc : lidar_write_outputs(f, stem, wrote, err); /* its frames are range bins: waveforms */
     if (!rc && tw->frame_count > 0) rc = write_frames(f, stem, dot, meta, skip, wrote, err);
     if (!rc && tw->orders > 0) rc = write_orders(f, stem, wrote, err);
+    if (!rc && tw->amcw_count > 0) rc = write_amcw(f, stem, wrote, err);
     if (!rc && f->deriv_count > 0) rc = write_derivatives(f, stem, dot, meta, skip, wrote, err);
     return rc;
 }
@@ -427,6 +458,9 @@ static int list_outputs(file_list *l, const char *path, const scene *s, const re
                (tw->orders > 0 && list_add(l, "the waveforms of each order", "%s_waveforms_orders.npy", stem)) ||
                list_add(l, "the lidar's points", "%s_points.npy", stem) ||
                list_add(l, "the lidar's points (PLY)", "%s_points.ply", stem);
+    if (tw->amcw_count > 0 && !fail)
+        fail = list_add(l, "the AMCW values", "%s_amcw.npy", stem) ||
+               list_add(l, "the AMCW depth", "%s_amcw_depth.npy", stem);
     for (int k = 0; k < s->diff_count && !fail; k++) {
         fail = list_add(l, "a derivative image", "%s_d%d%s", stem, k, ext);
         for (int j = 0; j < tw->frame_count && !fail; j++) {

@@ -218,7 +218,7 @@ static int render_rounds(const scene *s, const render_plan *p, const eda_set *ed
 static int film_resume(film *f, const film *from, dp_error *err)
 {
     if (from->width != f->width || from->height != f->height || from->window.frame_count != f->window.frame_count ||
-        from->window.orders != f->window.orders)
+        from->window.orders != f->window.orders || from->window.amcw_count != f->window.amcw_count)
         return dp_fail(err, "the film to resume is %dx%d with %d frames, the render %dx%d with %d", from->width,
                        from->height, from->window.frame_count, f->width, f->height, f->window.frame_count);
     if (from->deriv_count != f->deriv_count)

@@ -14,6 +14,7 @@
  *   resolution W H
  *   frames F
  *   orders K
+ *   amcw F                              (version 5: renderer.amcw_frequencies' count, docs/amcw.md; 0 without)
  *   scene geometry G materials M media E lights L camera C   (scene_digest.c, in hex)
  *   passes N
  *   resumable 1|0                       (0: several ranks, one dropped a pass: not iterations 0..N−1)
@@ -23,7 +24,8 @@
  *   derivative L POINTER                D lines, in the film's order: the pointer's length, then its bytes
  *   plan_bytes L     then the plan's JSON (L bytes) and a newline
  *   data_bytes B     then B bytes: W·H·3 doubles (gate sums), layers·W·H·3 floats (frame and order sums),
- *                    then the same two blocks for each derivative film in order
+ *                    then the same two blocks for each derivative film in order, then the image's AMCW sums
+ *                    (version 5: F·W·H·6 doubles, film.h's amcw_sum)
  *   checksum X       FNV-1a 64 of every byte before this line, in hex: an edited header field (a weight sum,
  *                    a pass count, a seed) is as damaged as an edited sum, and is refused the same way
  */
@@ -36,8 +38,9 @@
 
 #include "run_internal.h"
 
-#define STATE_VERSION 4 /* 3: the scene's digest, and the checksum over the whole file at its end; 4: the
-                          * derivative films */
+#define STATE_VERSION 5 /* 3: the scene's digest, and the checksum over the whole file at its end; 4: the
+                          * derivative films; 5: the AMCW sums (a state of version 4 is read as one without) */
+#define STATE_VERSION_OLDEST 4
 #define FNV_OFFSET 0xcbf29ce484222325ULL
 #define TRAILER_BYTES 28 /* "checksum 0x" + 16 hex digits + "\n" */
 
@@ -81,8 +84,8 @@ static char *header_text(const film *f, const char *plan_json, uint64_t seed, co
     FILE *m = open_memstream(&text, len);
     if (!m) return NULL;
     fprintf(m, "dartspp-state %d\nbyte-order 0x%016" PRIx64 "\nseed %" PRIu64 "\nresolution %d %d\nframes %d\n"
-            "orders %d\nscene", STATE_VERSION, byte_order_mark(), seed, f->width, f->height, f->window.frame_count,
-            f->window.orders);
+            "orders %d\namcw %d\nscene", STATE_VERSION, byte_order_mark(), seed, f->width, f->height,
+            f->window.frame_count, f->window.orders, f->window.amcw_count);
     for (int i = 0; i < SCENE_DIGEST_PARTS; i++) fprintf(m, " %s 0x%016" PRIx64, SCENE_DIGEST_NAMES[i], digest[i]);
     fprintf(m, "\npasses %ld\nresumable %d\nweight_sum %a\nlast_weight %a\nnonfinite %ld\n", f->passes,
             resumable ? 1 : 0, f->weight_sum, f->last_weight, f->nonfinite);
@@ -112,7 +115,8 @@ int resume_state_write(const char *path, const film *f, const char *plan_json, u
                        int resumable, dp_error *err)
 {
     size_t n = gate_count(f->width, f->height), nf = n * (size_t)time_window_layers(&f->window), len = 0;
-    size_t data = (1 + (size_t)f->deriv_count) * (n * sizeof(double) + nf * sizeof(float));
+    size_t na = n * 2 * (size_t)f->window.amcw_count;
+    size_t data = (1 + (size_t)f->deriv_count) * (n * sizeof(double) + nf * sizeof(float)) + na * sizeof(double);
     char *head = header_text(f, plan_json, seed, digest, resumable, data, &len);
     if (!head) return dp_fail_kind(err, DP_ERROR_MEMORY, "%s: out of memory for the checkpoint state", path);
     atomic_file af;
@@ -122,7 +126,7 @@ int resume_state_write(const char *path, const film *f, const char *plan_json, u
         return -1;
     }
     uint64_t h = FNV_OFFSET;
-    int failed = put(o, &h, head, len) || put_sums(o, &h, f, n, nf);
+    int failed = put(o, &h, head, len) || put_sums(o, &h, f, n, nf) || (na && put(o, &h, f->amcw_sum, na * sizeof(double)));
     free(head);
     if (!failed) failed = fprintf(o, "checksum 0x%016" PRIx64 "\n", h) != TRAILER_BYTES;
     return atomic_fclose(&af, failed, err);
@@ -134,6 +138,7 @@ void resume_state_free(resume_state *s)
     for (int k = 0; k < s->deriv_count; k++) free(s->deriv[k]);
     free(s->sum);
     free(s->frame_sum);
+    free(s->amcw_sum);
     memset(s, 0, sizeof *s);
 }
 
@@ -142,7 +147,8 @@ void resume_state_free(resume_state *s)
 static int check_whole_file(FILE *in, long *body)
 {
     int version = 0;
-    if (fscanf(in, "dartspp-state %d", &version) != 1 || version != STATE_VERSION) return 1;
+    if (fscanf(in, "dartspp-state %d", &version) != 1 || version < STATE_VERSION_OLDEST || version > STATE_VERSION)
+        return 1;
     if (fseek(in, 0, SEEK_END)) return 2;
     long size = ftell(in);
     char tail[TRAILER_BYTES + 1] = {0};
@@ -203,20 +209,21 @@ int resume_state_read(const char *path, int with_data, resume_state *s, dp_error
     if (whole) {
         fclose(in);
         if (whole == 1)
-            return dp_fail(err, "%s: not a dartspp checkpoint state of version %d (an older dartspp wrote it, or it "
-                           "is another file): cannot resume from it", path, STATE_VERSION);
+            return dp_fail(err, "%s: not a dartspp checkpoint state of version %d to %d (an older dartspp wrote it, "
+                           "or it is another file): cannot resume from it", path, STATE_VERSION_OLDEST, STATE_VERSION);
         return dp_fail(err, "%s: the checkpoint state is damaged: its checksum does not match its contents (a byte "
                        "was changed, or the file was cut short): cannot resume from it", path);
     }
     int version = 0;
     uint64_t bom = 0;
     size_t plan_bytes = 0, data_bytes = 0;
-    int ok = fscanf(in, "dartspp-state %d", &version) == 1 && version == STATE_VERSION &&
+    int ok = fscanf(in, "dartspp-state %d", &version) == 1 && version >= STATE_VERSION_OLDEST && version <= STATE_VERSION &&
              fscanf(in, " byte-order 0x%" SCNx64, &bom) == 1 && bom == byte_order_mark() &&
              fscanf(in, " seed %" SCNu64, &s->seed) == 1 &&
              fscanf(in, " resolution %d %d", &s->width, &s->height) == 2 && s->width > 0 && s->height > 0 &&
              fscanf(in, " frames %d", &s->frames) == 1 && s->frames >= 0 &&
              fscanf(in, " orders %d", &s->orders) == 1 && s->orders >= 0 && s->orders <= 64 &&
+             (version < 5 || (fscanf(in, " amcw %d", &s->amcw) == 1 && s->amcw >= 0 && s->amcw <= AMCW_FREQ_MAX)) &&
              read_digest(in, s->digest) &&
              fscanf(in, " passes %ld", &s->passes) == 1 && s->passes >= 0 &&
              fscanf(in, " resumable %d", &s->resumable) == 1 && (s->resumable == 0 || s->resumable == 1) &&
@@ -230,13 +237,15 @@ int resume_state_read(const char *path, int with_data, resume_state *s, dp_error
     } else ok = 0;
     time_window layers = {.frame_count = s->frames, .orders = s->orders};
     size_t n = ok ? gate_count(s->width, s->height) : 0, nf = n * (size_t)time_window_layers(&layers);
-    size_t films = 1 + (size_t)s->deriv_count;
+    size_t films = 1 + (size_t)s->deriv_count, na = n * 2 * (size_t)s->amcw;
     ok = ok && fscanf(in, "data_bytes %zu", &data_bytes) == 1 && fgetc(in) == '\n' &&
-         data_bytes == films * (n * sizeof(double) + nf * sizeof(float)) && ftell(in) + (long)data_bytes == body;
+         data_bytes == films * (n * sizeof(double) + nf * sizeof(float)) + na * sizeof(double) &&
+         ftell(in) + (long)data_bytes == body;
     if (ok && with_data) {
         s->sum = malloc(films * n * sizeof(double));
         s->frame_sum = nf ? malloc(films * nf * sizeof(float)) : NULL;
-        if (!s->sum || (nf && !s->frame_sum)) {
+        s->amcw_sum = na ? malloc(na * sizeof(double)) : NULL;
+        if (!s->sum || (nf && !s->frame_sum) || (na && !s->amcw_sum)) {
             fclose(in);
             resume_state_free(s);
             return dp_fail_kind(err, DP_ERROR_MEMORY, "%s: out of memory for the checkpoint state", path);
@@ -244,6 +253,7 @@ int resume_state_read(const char *path, int with_data, resume_state *s, dp_error
         for (size_t k = 0; ok && k < films; k++)
             ok = fread(s->sum + k * n, sizeof(double), n, in) == n &&
                  (!nf || fread(s->frame_sum + k * nf, sizeof(float), nf, in) == nf);
+        ok = ok && (!na || fread(s->amcw_sum, sizeof(double), na, in) == na);
     }
     fclose(in);
     if (!ok) {
@@ -308,6 +318,9 @@ int resume_check(const resume_state *s, const char *path, const render_run_job *
     if (s->orders != j->p.window.orders)
         return dp_fail(err, "%s: the checkpoint has %d scattering-order layers, this run %d (integrator.bounce_orders): "
                        "cannot resume", path, s->orders, j->p.window.orders);
+    if (s->amcw != j->p.window.amcw_count)
+        return dp_fail(err, "%s: the checkpoint has the AMCW sums of %d modulation frequencies, this run %d "
+                       "(renderer.amcw_frequencies): cannot resume", path, s->amcw, j->p.window.amcw_count);
     char parts[128] = "";
     for (int i = 0; i < SCENE_DIGEST_PARTS; i++)
         if (s->digest[i] != j->digest[i])

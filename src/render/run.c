@@ -247,6 +247,12 @@ static int render_and_write(render_run_job *j)
     if (j->rank == 0 && (st.nonfinite_pixels = film_nonfinite_pixels(&f)) > 0)
         fprintf(stderr, "warning: %s: %ld pixels of the images are NaN or beyond the float range; they are written "
                 "as 0, so the image is wrong there\n", j->s.path, st.nonfinite_pixels);
+    if (j->rank == 0 && f.passes > 0 && f.window.amcw_count > 0) {
+        film_amcw_depth(&f, NULL, &st.amcw_dark_pixels);
+        if (st.amcw_dark_pixels > 0)
+            fprintf(stderr, "warning: %s: %ld of %ld pixels have no AMCW signal (renderer.amcw_frequencies): the AMCW "
+                    "depth image holds 0 there\n", j->s.path, st.amcw_dark_pixels, (long)f.width * f.height);
+    }
     if (!failed && j->rank == 0) run_print_summary(j, &st);
     if (j->rank != 0) {
         /* nothing to write here: rank 0 holds the summed film */

@@ -79,6 +79,7 @@ void scene_digest(const scene *s, uint64_t part[SCENE_DIGEST_PARTS]);
 typedef struct {
     uint64_t seed;
     int width, height, frames, orders; /* orders: bounce_orders' layers (time_window.orders) */
+    int amcw;            /* the AMCW frequencies (time_window.amcw_count); 0 without, and in a state of version 4 */
     long passes, nonfinite;
     int resumable;       /* 0: not a prefix of iterations (resume_state_write) */
     double weight_sum, last_weight;
@@ -90,6 +91,7 @@ typedef struct {
                           * data only) */
     float *frame_sum;    /* (1 + deriv_count)·layers·width·height·3, layers as time_window_layers (read with data
                           * only) */
+    double *amcw_sum;    /* amcw·width·height·6: the image's AMCW sums (film.h), read with data only; NULL without */
 } resume_state;
 
 /* "<stem>.state" of the output path <stem>.exr|.pfm. */

@@ -131,6 +131,8 @@ static int resumed_film(render_run_job *j, const resume_state *st, dp_error *err
         return -1;
     }
     state_sums_into(&j->resumed, st, 0);
+    if (st->amcw_sum && j->resumed.amcw_sum && st->amcw == j->resumed.window.amcw_count)
+        memcpy(j->resumed.amcw_sum, st->amcw_sum, (size_t)st->width * st->height * 6 * st->amcw * sizeof(double));
     for (int k = 0; k < j->resumed.deriv_count; k++) state_sums_into(&j->resumed.deriv[k], st, 1 + (size_t)k);
     j->resumed.nonfinite = st->nonfinite;
     return 0;

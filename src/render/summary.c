@@ -167,6 +167,21 @@ static void print_scene(const scene *s, const render_plan *p, double load_second
                 tw->camera_unwarp ? "camera-unwarped" : "camera-warped");
 }
 
+/* renderer.amcw_frequencies: the frequencies, their wrap depths, the unwrapping range and the dark pixels. */
+static void print_amcw(const render_plan *p, const render_stats *st)
+{
+    const time_window *tw = &p->window;
+    if (tw->amcw_count <= 0) return;
+    printf("amcw: %d modulation frequenc%s (scene unit = 1 m, docs/amcw.md):", tw->amcw_count,
+           tw->amcw_count == 1 ? "y" : "ies");
+    for (int j = 0; j < tw->amcw_count; j++)
+        printf(" %g MHz (wraps at depth %.6g)%s", tw->amcw_mhz[j], AMCW_C0 / (2e6 * tw->amcw_mhz[j]),
+               j + 1 < tw->amcw_count ? "," : "");
+    if (tw->amcw_count >= 2)
+        printf("; depth unwrapped by the first two up to %.6g", amcw_unwrap_range(tw->amcw_mhz[0], tw->amcw_mhz[1]));
+    printf("; %ld pixel%s without signal (depth 0)\n", st->amcw_dark_pixels, st->amcw_dark_pixels == 1 ? "" : "s");
+}
+
 /* The light paths: early exits, the volume budget, surface chains, rates, times and radii. */
 static void print_photon_stats(const render_stats *st)
 {
@@ -217,6 +232,7 @@ static void print_summary(const scene *s, const render_plan *p, const render_sta
         printf(" (%ld of them whole pixels of the images, NaN or beyond the float range, written as 0)",
                st->nonfinite_pixels);
     printf("\n");
+    print_amcw(p, st);
     integrator_entry_of(p->type)->print_method(s, p);
     if (s->light_count > 0) print_lights(s, p);
     print_photon_stats(st);

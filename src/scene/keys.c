@@ -162,6 +162,10 @@ static const scene_key table[] = {
      .meaning = "Output image when --output is not given; a relative path goes into a folder named after the scene"},
     {.name = "ground_truth", RE(ground_truth), .type = KEY_BOOL, .read_by = ALL, .def = 0,
      .meaning = "Also write the first surface's depth, the time of first arrival, normal and albedo per pixel (docs/sensor.md)"},
+    {.name = "amcw_frequencies", RE(amcw_frequencies), .type = KEY_NUMBER_LIST, .read_by = ALL, .def_text = "[]",
+     .lo = 0, .hi = 1e6, .bounds = KEY_LO | KEY_LO_OPEN | KEY_HI,
+     .meaning = "AMCW time-of-flight output: per pixel the correlation at each of these modulation frequencies (MHz, "
+                "the scene unit a metre), and the depth from the first two (<stem>_amcw.npy, _amcw_depth.npy; docs/amcw.md)"},
     {.name = "output_file", RE(output_file), .type = KEY_STRING, .def_text = "",
      .meaning = "The authors' LDR preview; dartspp writes none"},
     NOT_READ("spp_step", KEY_SECTION_RENDERER, "Tungsten's passes per step; not read"),
@@ -208,6 +212,7 @@ const char *scene_key_type_name(scene_key_type t)
     case KEY_STRING: return "string";
     case KEY_DURATION: return "duration";
     case KEY_SHAPE3: return "[int, int, int]";
+    case KEY_NUMBER_LIST: return "[number, ...]";
     case KEY_ANY: return "any";
     }
     return "?";
@@ -231,6 +236,9 @@ void scene_key_range_text(const scene_key *k, char *out, size_t n)
         for (int i = 0; k->choices[i] && len < n; i++)
             len += (size_t)snprintf(out + len, n - len, "%s%s", i ? ", " : "", k->choices[i]);
     } else if (k->type == KEY_SHAPE3) snprintf(out, n, "each in [%g, %g], the last ≥ %g", k->lo, k->hi, k->lo + 1);
+    else if (k->type == KEY_NUMBER_LIST)
+        snprintf(out, n, "[] or 1 to %d distinct numbers, each in %s%g, %g]", KEY_LIST_MAX,
+                 k->bounds & KEY_LO_OPEN ? "(" : "[", k->lo, k->hi);
     else if ((k->bounds & KEY_LO) && (k->bounds & KEY_HI)) snprintf(out, n, "[%g, %g]", k->lo, k->hi);
     else if (k->bounds & KEY_LO) snprintf(out, n, "%s %g%s", k->bounds & KEY_LO_OPEN ? ">" : "≥", k->lo, k->integral ? ", whole" : "");
     else if (k->bounds & KEY_HI) snprintf(out, n, "≤ %g", k->hi);

@@ -176,6 +176,41 @@ static int read_shape_key(json_ctx *c, const scene_key *k, const char *where, co
     return 0;
 }
 
+static int list_value_in_range(const scene_key *k, double v)
+{
+    int lo_ok = !(k->bounds & KEY_LO) || (k->bounds & KEY_LO_OPEN ? v > k->lo : v >= k->lo);
+    return isfinite(v) && lo_ok && (!(k->bounds & KEY_HI) || v <= k->hi);
+}
+
+/* [] or 1 to KEY_LIST_MAX distinct numbers in the key's range; a bare number is a list of one. */
+static int read_list_key(json_ctx *c, const scene_key *k, const char *where, const cJSON *v, key_number_list *out)
+{
+    memset(out, 0, sizeof *out);
+    if (!v) return 0;
+    char range[96];
+    scene_key_range_text(k, range, sizeof range);
+    if (cJSON_IsNumber(v)) {
+        if (!list_value_in_range(k, v->valuedouble))
+            return jfail(c, where, k->name, "%.17g is out of range (expected %s)", v->valuedouble, range);
+        out->count = 1;
+        out->v[0] = v->valuedouble;
+        return 0;
+    }
+    if (!cJSON_IsArray(v) || cJSON_GetArraySize(v) > KEY_LIST_MAX)
+        return jfail(c, where, k->name, "expected %s", range);
+    const cJSON *e;
+    cJSON_ArrayForEach(e, v) {
+        if (!cJSON_IsNumber(e)) return jfail(c, where, k->name, "expected %s", range);
+        if (!list_value_in_range(k, e->valuedouble))
+            return jfail(c, where, k->name, "%.17g is out of range (expected %s)", e->valuedouble, range);
+        for (int i = 0; i < out->count; i++)
+            if (out->v[i] == e->valuedouble)
+                return jfail(c, where, k->name, "%.17g is given twice (expected %s)", e->valuedouble, range);
+        out->v[out->count++] = e->valuedouble;
+    }
+    return 0;
+}
+
 /* Reads one key of the table into its field: the value in obj, or the default. */
 static int read_key(json_ctx *c, const scene_key *k, const cJSON *obj, scene *s)
 {
@@ -201,6 +236,7 @@ static int read_key(json_ctx *c, const scene_key *k, const cJSON *obj, scene *s)
         cJSON_Delete(def);
         return rc;
     }
+    case KEY_NUMBER_LIST: return read_list_key(c, k, where, v, field);
     case KEY_ANY: return 0;
     }
     return 0;
@@ -215,6 +251,7 @@ static int key_at_default(const scene_key *k, scene *s)
     case KEY_CHOICE: return *(const int *)f == (int)key_default(k, s);
     case KEY_INT: return *(const long *)f == (long)key_default(k, s);
     case KEY_NUMBER: return *(const double *)f == key_default(k, s);
+    case KEY_NUMBER_LIST: return ((const key_number_list *)f)->count == 0;
     default: return 0;
     }
 }
@@ -397,6 +434,23 @@ static const cJSON *section_object(json_ctx *c, const cJSON *root, scene_key_sec
     return v;
 }
 
+/* renderer.amcw_frequencies into the time window, which every film is made from (docs/amcw.md §2). */
+static int resolve_amcw(json_ctx *c, const renderer_settings *re, integrator_settings *in)
+{
+    const key_number_list *l = &re->amcw_frequencies;
+    time_window *tw = &in->window;
+    tw->amcw_count = l->count;
+    for (int i = 0; i < l->count; i++) tw->amcw_mhz[i] = l->v[i];
+    if (!l->count) return 0;
+    if (tw->delta)
+        return jfail(c, "renderer", "amcw_frequencies", "AMCW integrates the light over time, a delta gate "
+                     "(integrator.delta_time_gate) keeps one instant: use a box gate, frames or steady state");
+    if (tw->camera_unwarp)
+        jwarn(c, "renderer.amcw_frequencies: with integrator.camera_unwarp the phases leave out the camera leg, so "
+                 "<stem>_amcw_depth.npy is not the distance to the camera (docs/amcw.md §4)");
+    return 0;
+}
+
 int settings_parse(json_ctx *c, const cJSON *root, scene *s)
 {
     int bad_in, bad_re, n;
@@ -406,7 +460,7 @@ int settings_parse(json_ctx *c, const cJSON *root, scene *s)
     const scene_key *keys = scene_keys(&n);
     for (int i = 0; i < n; i++)
         if (read_key(c, &keys[i], keys[i].section == KEY_SECTION_INTEGRATOR ? in : re, s)) return -1;
-    if (resolve_integrator(c, in, &s->integrator)) return -1;
+    if (resolve_integrator(c, in, &s->integrator) || resolve_amcw(c, &s->renderer, &s->integrator)) return -1;
     const cJSON *timeout = jget_item(c, re, "timeout");
     if (cJSON_IsNumber(timeout) && timeout->valuedouble < 0)
         snprintf(s->renderer.timeout_negative, sizeof s->renderer.timeout_negative, "%g", timeout->valuedouble);

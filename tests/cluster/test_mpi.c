@@ -100,6 +100,51 @@ static void test_derivatives_as_one_process(void **state)
     }
 }
 
+/* The float32 values of a .npy file written by dartspp (complex64 read as its float pairs) into *n floats. */
+static float *npy_floats(const char *path, size_t *n)
+{
+    size_t len = 0;
+    char *b = read_all(path, &len);
+    if (!b || len < 10) fail_msg("cannot read %s", path);
+    size_t head = 10 + ((size_t)(unsigned char)b[8] | (size_t)(unsigned char)b[9] << 8);
+    *n = (len - head) / 4;
+    float *v = malloc(*n * sizeof *v + 1);
+    assert_non_null(v);
+    memcpy(v, b + head, *n * sizeof *v);
+    free(b);
+    return v;
+}
+
+/* The AMCW sums (docs/amcw.md) of the path tracer with a gate, 3 ranks against one process: reduced as the
+ * image's (doubles), so within 2 float ulps of the largest |value| (signed parts: relative to the largest, as
+ * signed_max_rel_diff), and the depth within 2 ulps of the largest depth. Broken variant (tests/README.md): the
+ * AMCW sums not reduced (rank 0's zeros) fails at relative difference 1. */
+static void test_amcw_as_one_process(void **state)
+{
+    (void)state;
+    one_vs_three("amcw-gate", "--set type=path_tracer --set transient_time_center=15 --set transient_time_width=2 "
+                 "--set amcw_frequencies=[20,300]", 0);
+    for (int k = 0; k < 2; k++) {
+        char fa[1200], fb[1200];
+        snprintf(fa, sizeof fa, "%s/amcw-gate-one_%s.npy", cbox_dir, k ? "amcw_depth" : "amcw");
+        snprintf(fb, sizeof fb, "%s/amcw-gate-mpi_%s.npy", cbox_dir, k ? "amcw_depth" : "amcw");
+        size_t na, nb;
+        float *a = npy_floats(fa, &na), *b = npy_floats(fb, &nb);
+        assert_int_equal(na, nb);
+        double m = 0.0, mag = 0.0;
+        for (size_t i = 0; i < na; i++) {
+            m = fmax(m, fabs((double)a[i] - b[i]));
+            mag = fmax(mag, fabs((double)a[i]));
+        }
+        free(a);
+        free(b);
+        if (!(mag > 0.0)) fail_msg("%s is zero everywhere: the comparison would prove nothing", fa);
+        print_message("  amcw-gate %s: largest difference %.3g of the largest value (bound %.3g)\n",
+                      k ? "depth" : "values", m / mag, 2 * 0x1p-24);
+        assert_true(m / mag <= 2 * 0x1p-24);
+    }
+}
+
 static void test_same_image_as_one_process(void **state)
 {
     (void)state;
@@ -263,6 +308,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_same_image_as_one_process),
         cmocka_unit_test(test_derivatives_as_one_process),
+        cmocka_unit_test(test_amcw_as_one_process),
         cmocka_unit_test(test_time_budget_two_ranks),
         cmocka_unit_test(test_interrupt_writes_completed_passes),
         cmocka_unit_test(test_memory_guard_counts_ranks),

@@ -381,6 +381,12 @@ static void key_value(const scene_key *k, char *out, size_t n)
         snprintf(out, n, "%s", s[pick(13)]);
         return;
     }
+    case KEY_NUMBER_LIST: {
+        static const char *const l[] = {"[]", "[20]", "[20, 25]", "[1, 2, 3, 4]", "[0]", "[-5]", "[20, 20]",
+                                        "[1, 2, 3, 4, 5]", "[1e999]", "\"20\"", "[\"20\"]", "30", "[1e6]", "[1e7]"};
+        snprintf(out, n, "%s", l[pick(14)]);
+        return;
+    }
     case KEY_ANY: snprintf(out, n, "%s", odd_values[pick(N_ODD)]); return;
     case KEY_INT:
     case KEY_NUMBER: break;

@@ -1,7 +1,7 @@
 /* `dartspp render --resume`: a render continued from its checkpoint state equals the uninterrupted render of
  * the same seed and pass count byte for byte (the gate image, every frame and the cube), for DARTS photon
  * points, the path tracer and frame mode, after a SIGKILL in the middle and after a render that simply
- * stopped at fewer passes; a checkpoint of another plan, seed or resolution is refused; a re-run that would
+ * stopped at fewer passes, and the AMCW sums with them; a checkpoint of another plan, seed or resolution is refused; a re-run that would
  * overwrite a checkpoint holding more passes says so and refuses unless --overwrite. The real sanitized
  * binary on the demo scene at 16x16. The reference is the uninterrupted render of the same command line:
  * what is tested is that resuming changes nothing, so no expected value comes from an earlier run. */
@@ -150,6 +150,12 @@ static void check_resume(const char *d, const char *mode, int kill_it, long stop
         snprintf(b, sizeof b, "%s/resumed_cube.npy", d);
         assert_same_file(a, b);
     }
+    if (strstr(mode, "amcw_frequencies")) /* the AMCW sums are in the state too (docs/amcw.md §3) */
+        for (int k = 0; k < 2; k++) {
+            snprintf(a, sizeof a, "%s/full_%s.npy", d, k ? "amcw_depth" : "amcw");
+            snprintf(b, sizeof b, "%s/resumed_%s.npy", d, k ? "amcw_depth" : "amcw");
+            assert_same_file(a, b);
+        }
     snprintf(a, sizeof a, "%s/resumed.state", d);
     assert_int_equal(state_passes(a), PASSES);
     print_message("  %s: resumed at pass %ld, %d passes byte-identical to the uninterrupted render (%d frames)\n",
@@ -169,6 +175,12 @@ static void test_path_tracer_frames_stopped(void **state)
  * of the run's own pass count (iteration − resumed passes) fails both (the images differ). */
 #define DELTA(type) "--set volume_photon_type=" type " --set delta_time_gate=true --set transient_time_width=0.2 " \
                     "--set enable_guiding=false --set enable_elliptical=false --set strict_time_width=false"
+/* The AMCW sums (docs/amcw.md): checkpointed, resumed and written like the image's. Broken variant: the state
+ * without them (the resumed values hold only the resumed run's passes) fails. */
+static void test_amcw_killed(void **state)
+{
+    check_resume(*state, "--set type=path_tracer --set amcw_frequencies=[20,300] " FRAMES(2), 1, 0, ".pfm", 2);
+}
 static void test_delta_beams_stopped(void **state) { check_resume(*state, DELTA("beams"), 0, 3, ".exr", 0); }
 static void test_delta_points_killed(void **state) { check_resume(*state, DELTA("points"), 1, 0, ".pfm", 0); }
 
@@ -194,6 +206,7 @@ static void test_mismatch_refused(void **state)
         {"--seed 12", "seed 11, this run has seed 12"},
         {"--set resolution=8", "16x16, this run renders 8x8"},
         {"--set frame_num=2", "0 frames, this run 2"},
+        {"--set amcw_frequencies=[20]", "AMCW sums of 0 modulation frequencies, this run 1"},
         {"--spp 2", "holds 3 passes, more than the 2"},
     };
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
@@ -280,6 +293,7 @@ int main(void)
         cmocka_unit_test_setup_teardown(test_frames_killed, setup_dir, test_teardown_tmpdir),
         cmocka_unit_test_setup_teardown(test_photon_points_stopped_exr, setup_dir, test_teardown_tmpdir),
         cmocka_unit_test_setup_teardown(test_path_tracer_frames_stopped, setup_dir, test_teardown_tmpdir),
+        cmocka_unit_test_setup_teardown(test_amcw_killed, setup_dir, test_teardown_tmpdir),
         cmocka_unit_test_setup_teardown(test_delta_beams_stopped, setup_dir, test_teardown_tmpdir),
         cmocka_unit_test_setup_teardown(test_delta_points_killed, setup_dir, test_teardown_tmpdir),
         cmocka_unit_test_setup_teardown(test_mismatch_refused, setup_dir, test_teardown_tmpdir),

@@ -76,6 +76,17 @@ static void key_setting(const scene_key *k, const scene *s, int toggle, char *ou
         snprintf(v, vn, "%.17g", x);
         return;
     case KEY_SHAPE3: snprintf(v, vn, "%s", toggle ? "[16,16,32]" : "[128,128,256]"); return;
+    case KEY_NUMBER_LIST: {
+        const key_number_list *l = f;
+        if (toggle) {
+            snprintf(v, vn, "%s", l->count ? "[]" : "[20,25]");
+            return;
+        }
+        size_t len = (size_t)snprintf(v, vn, "[");
+        for (int i = 0; i < l->count && len < vn; i++) len += (size_t)snprintf(v + len, vn - len, i ? ",%.17g" : "%.17g", l->v[i]);
+        if (len < vn) snprintf(v + len, vn - len, "]");
+        return;
+    }
     case KEY_STRING: snprintf(v, vn, "%s", toggle ? "other" : (const char *)f); return;
     case KEY_DURATION: snprintf(v, vn, "%s", toggle ? "2m" : "30s"); return;
     case KEY_ANY: snprintf(v, vn, "true"); return;
@@ -416,6 +427,13 @@ static void test_bounds_and_choices_enforced(void **state)
             snprintf(set, sizeof set, "%s=[%g,%g,%g]", k->name, k->lo, k->lo, k->lo);
             ok += refused_with_key(set, sec, k->name, "expected three integers");
             checked++;
+        }
+        if (k->type == KEY_NUMBER_LIST) {
+            snprintf(set, sizeof set, "%s=[%.17g]", k->name, k->bounds & KEY_LO_OPEN ? k->lo : k->lo - 1);
+            ok += refused_with_key(set, sec, k->name, "out of range");
+            snprintf(set, sizeof set, "%s=[%.17g,%.17g]", k->name, k->hi, k->hi);
+            ok += refused_with_key(set, sec, k->name, "given twice");
+            checked += 2;
         }
     }
     print_message("  %d bad values, %d refused as required\n", checked, ok);
