@@ -6,7 +6,8 @@
  * over 16 tiles), twice: independent seeds (z of the difference of the per-pass means, no budget), and common
  * random numbers (below). Default tier: the plain path tracer (phase sampling and next-event estimation) and
  * baseline photon points with fixed radii (the same kernel bias in both); `make stress`: the DARTS path tracer
- * (time-angular MIS through phase_eval), the uniform-time path tracer and DARTS photon points (DA with the table's g).
+ * (time-angular MIS through phase_eval), the uniform-time path tracer, DARTS photon points (DA with the table's g),
+ * photon beams and the sliced balls (same seed: within 2.6e-4 and 4.1e-5 of a tile).
  *
  * Measured 2026-11-28 (ASan): plain +0.05 % of the total, max tile |z| 3.09, same seed 2.6e-6 of a tile; baseline
  * photon points −5.8 % (se 2.5 %), 1.88, same seed 7.1e-5 (another pair of seeds, 300 passes: +1.2 %, z 0.53).
@@ -148,12 +149,32 @@ static void test_stress_methods(void **state)
             150);
 }
 
+/* make stress: photon beams and Liu et al.'s sliced balls (fresh directions by phase_sample, their densities and
+ * the gather's MIS by phase_eval). */
+static void test_stress_volume_types(void **state)
+{
+    (void)state;
+    if (!stress_full()) {
+        print_message("  photon beams, sliced balls: with DARTSPP_STRESS=full (make stress)\n");
+        return;
+    }
+    compare("photon beams, table vs HG",
+            "\"type\": \"progressive_transient_photon_map\", \"volume_photon_type\": \"beams\", \"photon_count\": 4000,"
+            " \"volume_photon_count\": 1e6, \"gather_photon_count\": 256, \"gather_radius\": 0.15,"
+            " \"volume_gather_radius\": 0.05, \"alpha\": 0.7, \"volume_alpha\": 0.7, " GATE, 100);
+    compare("sliced balls, table vs HG",
+            "\"type\": \"progressive_transient_photon_map\", \"volume_photon_type\": \"balls\", \"photon_count\": 200,"
+            " \"volume_photon_count\": 1e6, \"gather_photon_count\": 256, \"gather_radius\": 0.15,"
+            " \"volume_gather_radius\": 0.05, \"alpha\": 0.7, \"volume_alpha\": 0.7, " GATE, 60);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_plain),
         cmocka_unit_test(test_photon_points),
         cmocka_unit_test(test_stress_methods),
+        cmocka_unit_test(test_stress_volume_types),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
 }
