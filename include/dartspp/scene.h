@@ -18,16 +18,46 @@ typedef struct {
 } texture;
 
 /* ---- media ---- */
-typedef enum { PHASE_ISOTROPIC, PHASE_HENYEY_GREENSTEIN, PHASE_IDA } phase_type;
+typedef enum { PHASE_ISOTROPIC, PHASE_HENYEY_GREENSTEIN, PHASE_IDA, PHASE_TABULATED } phase_type;
+/* A tabulated phase function (phase_function type "tabulated", src/scene/phase_table.c): p(θ) piecewise linear in
+ * the scattering angle θ between the file's knots, normalised so that 2π ∫₀^π p(θ) sinθ dθ = 1. */
+typedef struct phase_table {
+    int n;          /* knots, >= 2 */
+    double *theta;  /* radians, strictly increasing, theta[0] = 0, theta[n − 1] = π */
+    double *p;      /* p(θ_i) per steradian, normalised */
+    double *cdf;    /* P(θ < theta[i]); cdf[0] = 0, cdf[n − 1] = 1 */
+    double g;       /* ⟨cos θ⟩ of the interpolant */
+    char path[1024];/* the file, as resolved from the scene file */
+} phase_table;
+
 typedef struct {
     phase_type type;
-    double g; /* HG asymmetry; for `ida` the anisotropy the table is built for (0 unless given) */
+    double g; /* HG asymmetry; for `ida` the anisotropy the table is built for (0 unless given); for `tabulated`
+               * the table's ⟨cos θ⟩, read only by the diffusion models that steer DARTS (DA, EDA) */
+    phase_table *table; /* `tabulated` only; owned by the scene (scene_free) */
 } phase_function;
+
+/* The phase function is the constant 1/(4π) (isotropic, or HG with g = 0). */
+static inline int phase_is_isotropic(const phase_function *pf)
+{
+    return pf->type == PHASE_ISOTROPIC || (pf->type != PHASE_TABULATED && pf->g == 0.0);
+}
 
 /* p(ω_in → ω_out) per steradian; both are propagation directions (Tungsten convention). */
 double phase_eval(const phase_function *pf, vec3 w_in, vec3 w_out);
 /* Samples ω_out ∝ phase; the weight phase/pdf is exactly 1. */
 vec3 phase_sample(const phase_function *pf, vec3 w_in, double u1, double u2);
+/* A tabulated phase function from a CSV file of "theta_deg,value" rows (a header line and '#' comment lines
+ * allowed; θ strictly increasing from 0 to 180 degrees; values >= 0 and finite, relative): the interpolant linear
+ * in θ between the rows, normalised. 0, or -1 with "<path>:<line>: phase function table: <reason>" in err. */
+int phase_table_load(phase_table *t, const char *path, dp_error *err);
+/* The same from arrays (θ in degrees): for tests and the loader. */
+int phase_table_init(phase_table *t, const double *theta_deg, const double *value, int n, const char *name, dp_error *err);
+void phase_table_free(phase_table *t);
+/* The normalised interpolant at θ (radians, clamped to [0, π]) per steradian. */
+double phase_table_eval(const phase_table *t, double theta);
+/* θ ~ 2π p(θ) sinθ (u in [0, 1)): the interval by its CDF, then the exact inverse within it (Newton in a bracket). */
+double phase_table_sample_theta(const phase_table *t, double u);
 
 /* Free flight from a segment start with the next surface at tmax (may be INFINITY): one colour channel
  * picked uniformly, pdf averaged over channels (one-sample MIS), so coloured media stay unbiased. Returns
@@ -42,6 +72,11 @@ double medium_sample_free_flight(const struct medium *m, double tmax, dp_rng *rn
  * the surface first). */
 int medium_free_flight_grey(const struct medium *m, dp_rng *rng, double *t);
 vec3 medium_grey_event_beta(const struct medium *m, vec3 beta);
+
+/* σt of a medium given by its meteorological visibility V (medium keys `visibility`, `visibility_convention`;
+ * docs/lidar.md §6): ln(20)/V for the meteorological optical range (5 % contrast threshold, WMO), ln(50)/V for
+ * Koschmieder's 2 % (koschmieder != 0). */
+double medium_visibility_extinction(double visibility, int koschmieder);
 
 #define MEDIUM_VACUUM (-1)
 typedef struct medium {

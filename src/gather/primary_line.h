@@ -71,7 +71,7 @@ static inline vec3 volume_photon_splat_slot(const gather_input *g, film_pixel *p
     double u = 1.0 - d2 / r2;
     double K = 3.0 / (M_PI * r2) * u * u;
     vec3 wp = v3(p->dir[0], p->dir[1], p->dir[2]);
-    double f = K * (m->phase.type == PHASE_ISOTROPIC || m->phase.g == 0.0 ? DP_INV_4PI : phase_eval(&m->phase, wp, v3_neg(d)));
+    double f = K * (phase_is_isotropic(&m->phase) ? DP_INV_4PI : phase_eval(&m->phase, wp, v3_neg(d)));
     vec3 tr = m->sigma_t.x == m->sigma_t.y && m->sigma_t.y == m->sigma_t.z ? v3s(exp(-m->sigma_t.x * t))
                                                                             : v3_exp_neg(v3_scale(m->sigma_t, t));
     vec3 c = v3_scale(v3_mul(v3_mul(thr, tr), v3(p->power[0], p->power[1], p->power[2])), f);

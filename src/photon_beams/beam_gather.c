@@ -21,7 +21,7 @@ static void beam_hit(void *ctx, const photon_beam *b, double t, double s, double
     film_slot slot = film_time_slot(c->pix->f, c->t_cam + b->time + m->eta * s + leg, b->frame, b->bounce + c->b_cam - 1);
     if (!slot.counts) return; /* before the kernel, the phase function and the exponentials */
     vec3 wb = v3(b->dir[0], b->dir[1], b->dir[2]);
-    double f = m->phase.type == PHASE_ISOTROPIC || m->phase.g == 0.0 ? DP_INV_4PI : phase_eval(&m->phase, wb, v3_neg(c->d));
+    double f = phase_is_isotropic(&m->phase) ? DP_INV_4PI : phase_eval(&m->phase, wb, v3_neg(c->d));
     double k = f * inv_sin / (2.0 * c->g->r); /* box kernel over the offset across both lines */
     vec3 tr, along;
     if (b->long_beam) { /* the DARTS pass: T_b(s), the beam reaching the next surface */

@@ -71,6 +71,11 @@ static uint64_t media(const scene *s)
         h_d(&h, m->eta), h_i(&h, m->max_bounces), h_i(&h, m->phase.type), h_d(&h, m->phase.g), h_i(&h, m->eda);
         h_d(&h, m->eda_alpha), h_d(&h, m->eda_r_lo), h_d(&h, m->eda_r_hi), h_d(&h, m->eda_s_max);
         h_str(&h, m->eda_table_path);
+        const phase_table *t = m->phase.type == PHASE_TABULATED ? m->phase.table : NULL;
+        if (t) { /* the table's knots, normalised (its CDF follows from them) */
+            h_i(&h, t->n);
+            for (int k = 0; k < t->n; k++) h_d(&h, t->theta[k]), h_d(&h, t->p[k]);
+        }
     }
     return h;
 }

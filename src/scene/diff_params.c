@@ -12,7 +12,8 @@
 #define PTR_TOKENS 8
 
 static const char DIFFERENTIABLE[] =
-    "media[i]: sigma_s, sigma_a (or one channel), density, speed_of_light, phase_function/g; primitives[i]: "
+    "media[i]: sigma_s, sigma_a (or one channel), density, visibility, albedo (with visibility), speed_of_light, "
+    "phase_function/g; primitives[i]: "
     "emission or power (or one channel), pulse_start, pulse_width, transform/position/<0|1|2>; bsdfs[i]: albedo "
     "(or one channel); camera/transform/position/<0|1|2>; integrator: transient_time_center, transient_time_width, "
     "start_time, vaccum_speed_of_light";
@@ -234,7 +235,20 @@ static int medium_param(const diff_ctx *d, const json_ptr *p, const cJSON *obj, 
     } else if (!strcmp(key, "speed_of_light") && p->n == at + 1) {
         r->deta = -m->eta * m->eta; /* η = 1/v: ∂η/∂v = −1/v² = −η² */
         return time_refusal(d, p, -1);
+    } else if (!strcmp(key, "visibility") && p->n == at + 1) {
+        /* σs, σa ∝ 1/V (media_load.c, medium_visibility_extinction): ∂σ/∂V = −σ/V */
+        double vis = cJSON_IsNumber(kv) ? kv->valuedouble : 0.0;
+        if (!(vis > 0.0)) return dfail(d, p, "expected a number > 0 there");
+        r->dsigma_s = v3_scale(m->sigma_s, -1.0 / vis);
+        r->dsigma_a = v3_scale(m->sigma_a, -1.0 / vis);
+    } else if (!strcmp(key, "albedo") && p->n == at + 1 && cJSON_GetObjectItemCaseSensitive(obj, "visibility")) {
+        /* σs = albedo·σt, σa = (1 − albedo)·σt with σt fixed by the visibility */
+        r->dsigma_s = m->sigma_t;
+        r->dsigma_a = v3_neg(m->sigma_t);
     } else if (!strcmp(key, "phase_function") && p->n == at + 2 && !strcmp(p->tok[at + 1], "g")) {
+        if (m->phase.type == PHASE_TABULATED)
+            return dfail(d, p, "medium '%s' has a tabulated phase function (%s), which reads no g: its shape is the "
+                               "table's and is not a parameter dartspp differentiates", m->name, m->phase.table->path);
         if (m->phase.type == PHASE_ISOTROPIC)
             return dfail(d, p, "medium '%s' has an isotropic phase function, which reads no g; write type "
                                "henyey_greenstein with g 0 to differentiate g there", m->name);
@@ -449,10 +463,40 @@ static int integrator_param(const diff_ctx *d, const json_ptr *p, diff_param *r)
 
 /* ---- one pointer ---- */
 
+/* A pointer to sigma_s, sigma_a or density (or a channel of them) inside a medium given by visibility: those keys
+ * are absent there (media_load.c refuses them together), so say what to differentiate instead. */
+static int visibility_refusal(const diff_ctx *d, const json_ptr *p)
+{
+    const cJSON *v = d->root;
+    for (int k = 0; k < p->n && v; k++) {
+        const char *t = p->tok[k];
+        if (cJSON_IsObject(v) && cJSON_GetObjectItemCaseSensitive(v, "visibility") &&
+            (!strcmp(t, "sigma_s") || !strcmp(t, "sigma_a") || !strcmp(t, "density"))) {
+            const cJSON *name = cJSON_GetObjectItemCaseSensitive(v, "name");
+            char pre[300];
+            ptr_prefix(p, k, pre, sizeof pre);
+            return dfail(d, p, "medium '%s' is given by visibility, so it has no %s in the file: differentiate its "
+                               "visibility (the extinction ln(20)/V or ln(50)/V) or its albedo (the split into "
+                               "scattering and absorption), e.g. %s/visibility",
+                         cJSON_IsString(name) ? name->valuestring : "", t, pre);
+        }
+        if (cJSON_IsArray(v)) {
+            int i = ptr_index(t);
+            v = i >= 0 && i < cJSON_GetArraySize(v) ? cJSON_GetArrayItem(v, i) : NULL;
+        } else if (cJSON_IsObject(v)) {
+            v = cJSON_GetObjectItemCaseSensitive(v, t);
+        } else {
+            v = NULL;
+        }
+    }
+    return 0;
+}
+
 static int resolve_one(const diff_ctx *d, const json_ptr *p, diff_param *r)
 {
     const cJSON *v = NULL;
     if (p->n == 1 && !p->tok[0][0]) return dfail(d, p, "names nothing: an empty key at the top level");
+    if (visibility_refusal(d, p)) return -1;
     int rc = ptr_walk(d, p, &v);
     if (rc < 0) return -1;
     if (!rc && (cJSON_IsObject(v) || (cJSON_IsArray(v) && !is_vec3(v))))

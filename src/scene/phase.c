@@ -1,6 +1,6 @@
-/* Phase functions: isotropic and Henyey–Greenstein (Tungsten convention: μ = ω_in · ω_out between two
- * propagation directions). `ida` evaluates as HG with its g, as in the reference: EDA changes only how the
- * photon pass samples directions (darts.h). */
+/* Phase functions: isotropic, Henyey–Greenstein (Tungsten convention: μ = ω_in · ω_out between two
+ * propagation directions) and tabulated (phase_table.c: p(θ) linear in θ between a file's rows). `ida` evaluates
+ * as HG with its g, as in the reference: EDA changes only how the photon pass samples directions (darts.h). */
 #include "dartspp/scene.h"
 
 static double hg_eval(double g, double mu)
@@ -9,9 +9,16 @@ static double hg_eval(double g, double mu)
     return DP_INV_4PI * (1.0 - g * g) / (denom * sqrt(denom));
 }
 
+/* The angle between two unit vectors, accurate at 0 and π: 2 atan2(|b − a|, |b + a|). */
+static double angle_between(vec3 a, vec3 b)
+{
+    return 2.0 * atan2(v3_len(v3_sub(b, a)), v3_len(v3_add(b, a)));
+}
+
 double phase_eval(const phase_function *pf, vec3 w_in, vec3 w_out)
 {
-    if (pf->type == PHASE_ISOTROPIC || pf->g == 0.0) return DP_INV_4PI;
+    if (pf->type == PHASE_TABULATED) return phase_table_eval(pf->table, angle_between(w_in, w_out));
+    if (phase_is_isotropic(pf)) return DP_INV_4PI;
     return hg_eval(pf->g, v3_dot(w_in, w_out));
 }
 
@@ -26,9 +33,16 @@ static double hg_sample_mu(double g, double u)
 
 vec3 phase_sample(const phase_function *pf, vec3 w_in, double u1, double u2)
 {
-    if (pf->type == PHASE_ISOTROPIC || pf->g == 0.0) return sample_uniform_sphere(u1, u2);
-    double mu = hg_sample_mu(pf->g, u1);
-    double sin_t = sqrt(dp_fmax(0.0, 1.0 - mu * mu)), phi = 2.0 * M_PI * u2;
+    double mu, sin_t;
+    if (pf->type == PHASE_TABULATED) {
+        double theta = phase_table_sample_theta(pf->table, u1);
+        mu = cos(theta), sin_t = sin(theta);
+    } else {
+        if (phase_is_isotropic(pf)) return sample_uniform_sphere(u1, u2);
+        mu = hg_sample_mu(pf->g, u1);
+        sin_t = sqrt(dp_fmax(0.0, 1.0 - mu * mu));
+    }
+    double phi = 2.0 * M_PI * u2;
     vec3 s, t;
     v3_basis(w_in, &s, &t);
     return v3_norm(v3_add(v3_scale(w_in, mu), v3_add(v3_scale(s, sin_t * cos(phi)), v3_scale(t, sin_t * sin(phi)))));

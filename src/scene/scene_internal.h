@@ -84,6 +84,8 @@ void scene_release_embree(scene *s);
 /* ---- media and emitters (media_load.c, light_load.c) ---- */
 /* The scene file's `media` array into s->media. 0, or -1 with the error in c. */
 int parse_media(json_ctx *c, const cJSON *root, scene *s);
+/* Frees a medium's tabulated phase function (the scene owns it; scene_free calls this for every medium). */
+void medium_free_phase(medium *m);
 /* A medium reference: a name, null or "" (vacuum), or an inline object (appended to s->media). */
 int medium_ref(json_ctx *c, scene *s, const cJSON *v, const char *where, const char *key, int *out);
 /* A clear region (σs = σa = 0) where light travels at `speed`: found among the media or appended (Liu et al.'s

@@ -633,6 +633,7 @@ void scene_free(scene *s)
     scene_release_embree(s);
     texture_free_all(s);
     free(s->bsdfs);
+    for (int i = 0; s->media && i < s->medium_count; i++) medium_free_phase(&s->media[i]);
     free(s->media);
     free(s->surfaces);
     for (int i = 0; i < s->light_count; i++) emitter_free(&s->lights[i]);

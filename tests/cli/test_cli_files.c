@@ -324,8 +324,8 @@ static void test_shipped_scenes_without_warnings(void **state)
     const char *d = *state;
     char out[16384];
     const char *scenes[] = {"scenes/fogbox/fogbox.json", "scenes/fogbox/two-pulses.json", "scenes/gated-fog/gated-fog.json",
-                            "scenes/cbox-fog/transient.json", "scenes/cbox-fog/path_tracer.json"};
-    for (int i = 0; i < 5; i++)
+                            "scenes/cbox-fog/transient.json", "scenes/cbox-fog/path_tracer.json", "scenes/fog-mie/fog-mie.json"};
+    for (int i = 0; i < (int)(sizeof scenes / sizeof scenes[0]); i++)
         for (int pt = 0; pt < 2; pt++) {
             int rc = run(out, sizeof out, "render %s %s --set resolution=4 --spp 1 --quiet --output %s/s%d%d.exr", scenes[i],
                          pt ? "--set type=path_tracer" : "", d, i, pt);

@@ -394,8 +394,8 @@ static int run_da_case(const da_case *k, int fixed_record, double defensive, uin
     return fail;
 }
 
-static const phase_function ISO = {PHASE_ISOTROPIC, 0.0};
-static const phase_function HG05 = {PHASE_HENYEY_GREENSTEIN, 0.5};
+static const phase_function ISO = {PHASE_ISOTROPIC, 0.0, NULL};
+static const phase_function HG05 = {PHASE_HENYEY_GREENSTEIN, 0.5, NULL};
 
 static int run_da_both(const da_case *k, uint64_t seed)
 {
@@ -766,7 +766,7 @@ static int run_da_stress(double ss, double albedo, double g, int window, int fin
 {
     double sa = ss * (1.0 - albedo) / albedo, st = ss + sa;
     stress_window w = window_of(window, st);
-    phase_function ph = {g == 0.0 ? PHASE_ISOTROPIC : PHASE_HENYEY_GREENSTEIN, g};
+    phase_function ph = {g == 0.0 ? PHASE_ISOTROPIC : PHASE_HENYEY_GREENSTEIN, g, NULL};
     char name[160];
     snprintf(name, sizeof name, "sigma_s %g, albedo %g, g %+.2f, %s, tmax %s", ss, albedo, g, w.name,
              finite_tmax ? "0.7 mfp" : "inf");

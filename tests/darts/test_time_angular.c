@@ -297,7 +297,7 @@ static int mix_case(const ta_case *c, int ci, const phase_function *ph, const ch
 static void test_mix_weights(void **state)
 {
     (void)state;
-    phase_function iso = {PHASE_ISOTROPIC, 0.0}, hg = {PHASE_HENYEY_GREENSTEIN, 0.6};
+    phase_function iso = {PHASE_ISOTROPIC, 0.0, NULL}, hg = {PHASE_HENYEY_GREENSTEIN, 0.6, NULL};
     int fails = 0;
     for (int i = 0; i < N_CASES; i++) {
         fails += mix_case(&cases[i], i, &iso, "iso", 0);
@@ -342,7 +342,7 @@ static void test_degenerate(void **state)
         {{2.0, 2.0, 3.0}, 0.0},   {{2.0, 2.0, 3.0}, 1e-12}, {{1.0, 2.0, 3.0}, 1.0},
         {{1.0 + 1e-12, 2.0, 3.0}, 1.0}, {{2.0, 2.0, 3.0}, INFINITY}, {{2.0, 2.0, 3.0}, NAN},
     };
-    phase_function hg = {PHASE_HENYEY_GREENSTEIN, 0.6};
+    phase_function hg = {PHASE_HENYEY_GREENSTEIN, 0.6, NULL};
     for (size_t i = 0; i < sizeof d / sizeof d[0]; i++) {
         assert_int_equal(time_angular_sample(x, d[i].target, d[i].r, 0.3, 0.7, &out, &pdf), 0);
         assert_true(time_angular_pdf(x, d[i].target, d[i].r, w) == 0.0);
