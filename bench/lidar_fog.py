@@ -26,6 +26,7 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 SCENE = os.path.join(ROOT, "scenes", "street-fog-lidar", "street-fog-lidar.json")
 DARTSPP = os.path.join(ROOT, "build", "dartspp")
 VISIBILITIES = [150.0, 50.0, 20.0]  # meteorological optical range, metres (σt = ln 20 / V, docs/lidar.md §6)
+ALBEDO = 0.9998                      # water droplets at 905 nm (docs/lidar.md §6: the Mie tables' 0.99984)
 MATCH = 0.5                         # metres: a fog echo within this of a clear-air echo of its beam is that target
 
 
@@ -49,8 +50,10 @@ def scene_for(base, visibility):
     if visibility is None:
         fog["sigma_s"], fog["sigma_a"] = 0.0, 0.0
     else:
-        fog["visibility"] = visibility
-        fog["visibility_convention"] = "mor"
+        fog["visibility"], fog["visibility_convention"], fog["albedo"] = visibility, "mor", ALBEDO
+    pf = fog.get("phase_function", {})
+    if pf.get("type") == "tabulated" and not os.path.isabs(pf["file"]):  # the scenes are written elsewhere
+        pf["file"] = os.path.normpath(os.path.join(os.path.dirname(SCENE), pf["file"]))
     return s
 
 
@@ -82,8 +85,10 @@ def echoes_by_beam(points):
 
 
 def compare(clear, fog):
-    """(hard-target echoes lost, their count; false fog echoes, fog echo count) against the clear-air echoes."""
+    """(hard-target echoes lost, their count; false fog echoes, fog echo count; beams with a false echo) against
+    the clear-air echoes."""
     lost = total = false = fog_total = 0
+    false_beams = set()
     for beam, targets in clear.items():
         got = fog.get(beam, [])
         for r, _ in targets:
@@ -93,8 +98,10 @@ def compare(clear, fog):
         targets = clear.get(beam, [])
         for g, _ in got:
             fog_total += 1
-            false += not any(abs(r - g) <= MATCH for r, _ in targets)
-    return lost, total, false, fog_total
+            if not any(abs(r - g) <= MATCH for r, _ in targets):
+                false += 1
+                false_beams.add(beam)
+    return lost, total, false, fog_total, len(false_beams)
 
 
 def intensity_noise(frames, clear):
@@ -137,6 +144,12 @@ def plot(clouds, path):
     plt.close(fig)
 
 
+def patch_mean(w, beam):
+    """The mean waveform of the 3 x 3 beams about beam (channel, azimuth step): the last axis kept."""
+    c, k = beam
+    return w[..., max(c - 1, 0):c + 2, max(k - 1, 0):k + 2, :].mean(axis=(-3, -2))
+
+
 def plot_waveforms(waves, path, beam):
     import matplotlib
     matplotlib.use("Agg")
@@ -144,23 +157,27 @@ def plot_waveforms(waves, path, beam):
     fig, ax = plt.subplots(figsize=(8, 4))
     for title, w, o in waves:
         r = (np.arange(w.shape[-1]) + 0.5) * RANGE_BIN
-        line, = ax.semilogy(r, np.maximum(w[beam], 1e-12), label="%s: all orders" % title)
+        line, = ax.semilogy(r, np.maximum(patch_mean(w, beam), 1e-12), label="%s: all orders" % title)
         if o is not None:
-            ax.semilogy(r, np.maximum(o[1][beam], 1e-12), "--", color=line.get_color(), label="%s: single scattering" % title)
-    ax.set_ylim(1e-9, 1e-1)
+            ax.semilogy(r, np.maximum(patch_mean(o[1], beam), 1e-12), "--", color=line.get_color(),
+                        label="%s: single scattering" % title)
+    ax.set_ylim(1e-9, 1e-3)
+    ax.set_xlim(0, 35)
     ax.set_xlabel("range (m)")
     ax.set_ylabel("energy per bin per unit aperture area")
-    ax.set_title("waveform of channel %d, azimuth step %d" % beam)
+    ax.set_title("mean waveform of the 3 x 3 beams about channel %d, azimuth step %d (the pedestrian), %d frames"
+                 % (beam[0], beam[1], FRAMES))
     ax.legend(fontsize=7)
     fig.savefig(path, dpi=110, bbox_inches="tight")
     plt.close(fig)
 
 
 RANGE_BIN = 0.15
+FRAMES = 1
 
 
 def main():
-    global RANGE_BIN
+    global RANGE_BIN, FRAMES
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--passes", type=int, default=64)
     ap.add_argument("--frames", type=int, default=4)
@@ -168,6 +185,7 @@ def main():
     ap.add_argument("--out", default=os.path.join(ROOT, "bench", "results"))
     ap.add_argument("--images", default=os.path.join(ROOT, "docs", "images"))
     a = ap.parse_args()
+    FRAMES = a.frames
     if not os.path.exists(DARTSPP):
         sys.exit("build dartspp first (make)")
     with open(SCENE) as f:
@@ -193,23 +211,27 @@ def main():
                 w, o, p, sec = render(scene_for(base, v), tmp, "v%g_s%d" % (v, seed), a.passes, seed, a.threads)
                 frames.append(echoes_by_beam(p))
                 secs.append(sec)
+                wsum = w if seed == 1 else wsum + w
+                osum = o if seed == 1 else osum + o
                 if seed == 1:
                     clouds.append(("visibility %g m" % v, p))
-                    waves.append(("V %g m" % v, w, o))
                     # the multiple-scattering excess beyond the near field (r > 3 m): the energy of all orders over
                     # that of single scattering (by fog or a surface), minus 1
                     near = int(3.0 / RANGE_BIN)
                     single = o[1][..., near:].sum()
                     ms.append(w[..., near:].sum() / single - 1.0 if single > 0 else float("nan"))
+            waves.append(("V %g m" % v, wsum / a.frames, osum / a.frames))
             stats = [compare(clear, fr) for fr in frames]
             lost = np.mean([s[0] / max(s[1], 1) for s in stats])
             false = np.mean([s[2] / max(s[3], 1) for s in stats])
+            false_beams = np.mean([s[4] / beams for s in stats])
             noise, n_noise = intensity_noise(frames, clear)
             rate = beams * a.passes / np.mean(secs)
-            rows.append((v, np.log(20.0) / v, lost, false, np.mean([s[3] for s in stats]), ms[0], rate, noise, n_noise))
-            print("visibility %5g m: lost %.1f %%, false %.1f %% of %d echoes, multiple scattering %+.1f %%, "
-                  "%.0f beam samples/s, echo noise %.1f %% (%d echoes)" % (v, 100 * lost, 100 * false, rows[-1][4],
-                  100 * ms[0], rate, 100 * noise, n_noise), flush=True)
+            rows.append((v, np.log(20.0) / v, lost, false, false_beams, np.mean([s[3] for s in stats]), ms[0], rate,
+                         noise, n_noise))
+            print("visibility %5g m: lost %.1f %%, false %.1f %% of %d echoes (%.1f %% of the beams), multiple "
+                  "scattering %+.1f %%, %.0f beam samples/s, echo noise %.1f %% (%d echoes)" % (v, 100 * lost,
+                  100 * false, rows[-1][5], 100 * false_beams, 100 * ms[0], rate, 100 * noise, n_noise), flush=True)
         os.makedirs(a.images, exist_ok=True)
         plot(clouds, os.path.join(a.images, "lidar_fog_points.png"))
         plot_waveforms(waves, os.path.join(a.images, "lidar_fog_waveform.png"), (c, k))
@@ -221,12 +243,12 @@ def main():
         f.write("%s, %s, %d threads; %d beams (%d channels x %d azimuths), %d passes per frame, %d frames per "
                 "visibility; clear-air echoes: %d.\n\n" % (time.strftime("%Y-%m-%d"), cpu_model(), a.threads, beams,
                 cam["channels"], cam["azimuth_steps"], a.passes, a.frames, sum(len(t) for t in clear.values())))
-        f.write("| visibility (MOR, m) | σt (1/m) | hard echoes lost | false fog echoes | echoes per frame | "
-                "multiple scattering beyond 3 m | beam samples/s | echo-intensity noise per frame |\n")
-        f.write("|---|---|---|---|---|---|---|---|\n")
-        for v, st, lost, false, n, ms, rate, noise, nn in rows:
-            f.write("| %g | %.3f | %.1f %% | %.1f %% | %.0f | %+.1f %% | %.0f | %.1f %% (%d echoes) |\n" % (
-                v, st, 100 * lost, 100 * false, n, 100 * ms, rate, 100 * noise, nn))
+        f.write("| visibility (MOR, m) | σt (1/m) | hard echoes lost | false fog echoes | beams with a false echo | "
+                "echoes per frame | multiple scattering beyond 3 m | beam samples/s | echo-intensity noise per frame |\n")
+        f.write("|---|---|---|---|---|---|---|---|---|\n")
+        for v, st, lost, false, fb, n, ms, rate, noise, nn in rows:
+            f.write("| %g | %.3f | %.1f %% | %.1f %% | %.1f %% | %.0f | %+.1f %% | %.0f | %.1f %% (%d echoes) |\n" % (
+                v, st, 100 * lost, 100 * false, 100 * fb, n, 100 * ms, rate, 100 * noise, nn))
     print("wrote %s and the plots in %s" % (os.path.join(a.out, "lidar-fog.md"), a.images))
 
 
