@@ -49,6 +49,9 @@ FILE *atomic_fopen(const char *path, const char *mode, atomic_file *af, dp_error
 /* Closes the stream and commits. If `failed` (the caller's writing went wrong), the stream has an error
  * or cannot be closed: "<path>: write failed: <errno text>", the temporary file removed, -1. */
 int atomic_fclose(atomic_file *af, int failed, dp_error *err);
+/* A whole text file: text and a newline, written atomically; text NULL (a failed allocation upstream, e.g.
+ * cJSON_Print): "<path>: out of memory" and nothing written. */
+int atomic_write_text(const char *path, const char *text, dp_error *err);
 /* Closes the stream and removes the temporary file (the caller reports why). */
 void atomic_fabort(atomic_file *af);
 

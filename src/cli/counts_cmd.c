@@ -229,10 +229,7 @@ static int write_sidecar(const char *path, const counts_args *a, const spad_bins
     if (coates_path) cJSON_AddStringToObject(root, "coates", coates_path);
     char *text = cJSON_Print(root);
     cJSON_Delete(root);
-    if (!text) return dp_fail_kind(err, DP_ERROR_MEMORY, "%s: out of memory", path);
-    atomic_file af;
-    FILE *f = atomic_fopen(path, "w", &af, err);
-    int rc = f ? atomic_fclose(&af, fprintf(f, "%s\n", text) < 0, err) : -1;
+    int rc = atomic_write_text(path, text, err);
     free(text);
     return rc;
 }

@@ -183,6 +183,14 @@ int atomic_fclose(atomic_file *af, int failed, dp_error *err)
     return atomic_commit(af->fd, af->tmp_path, af->path, err);
 }
 
+int atomic_write_text(const char *path, const char *text, dp_error *err)
+{
+    if (!text) return dp_fail_kind(err, DP_ERROR_MEMORY, "%s: out of memory", path);
+    atomic_file af;
+    FILE *f = atomic_fopen(path, "w", &af, err);
+    return f ? atomic_fclose(&af, fprintf(f, "%s\n", text) < 0, err) : -1;
+}
+
 void atomic_fabort(atomic_file *af)
 {
     if (af->f) fclose(af->f);

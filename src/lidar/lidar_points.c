@@ -177,10 +177,7 @@ int lidar_waveforms_sidecar_write(const char *path, const lidar_params *l, dp_er
     cJSON_AddNumberToObject(root, "peak_reference_at_max_range", lidar_peak_reference(l, l->max_range));
     char *text = cJSON_Print(root);
     cJSON_Delete(root);
-    if (!text) return dp_fail_kind(err, DP_ERROR_MEMORY, "%s: out of memory", path);
-    atomic_file af;
-    FILE *f = atomic_fopen(path, "w", &af, err);
-    int rc = f ? atomic_fclose(&af, fprintf(f, "%s\n", text) < 0, err) : -1;
+    int rc = atomic_write_text(path, text, err);
     free(text);
     return rc;
 }
