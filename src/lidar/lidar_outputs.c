@@ -39,18 +39,15 @@ int lidar_waveforms(const film *f, int order, float **out, dp_error *err)
     return 0;
 }
 
-static int write_waveforms(const film *f, const char *stem, void (*wrote)(const char *), dp_error *err)
+static int write_waveforms(const film *f, const float *w, const char *stem, void (*wrote)(const char *), dp_error *err)
 {
     const lidar_params *l = &f->lidar->lidar;
     char path[4200];
-    float *w = NULL;
     size_t shape[3] = {(size_t)l->channels, (size_t)l->azimuth_steps, (size_t)l->bins};
     snprintf(path, sizeof path, "%s_waveforms.npy", stem);
-    if (lidar_waveforms(f, -1, &w, err)) return -1;
-    int rc = npy_write_f32(path, shape, 3, w, err);
-    free(w);
-    if (!rc && wrote) wrote(path);
-    return rc;
+    if (npy_write_f32(path, shape, 3, w, err)) return -1;
+    if (wrote) wrote(path);
+    return 0;
 }
 
 /* bounce_orders K: (K + 1, channels, azimuth_steps, bins), the waveform of the paths of 0, 1, ..., K − 1 and of K
@@ -80,14 +77,11 @@ static int write_order_waveforms(const film *f, const char *stem, void (*wrote)(
     return 0;
 }
 
-static int write_points(const film *f, const char *stem, void (*wrote)(const char *), dp_error *err)
+static int write_points(const film *f, const float *w, const char *stem, void (*wrote)(const char *), dp_error *err)
 {
     const camera *cam = f->lidar;
-    float *w = NULL;
-    if (lidar_waveforms(f, -1, &w, err)) return -1;
     lidar_points pts = {0};
     int rc = lidar_points_from_waveforms(&cam->lidar, cam->pos, cam->forward, v3_neg(cam->right), cam->up, w, &pts, err);
-    free(w);
     char npy[4200], ply[4200];
     snprintf(npy, sizeof npy, "%s_points.npy", stem);
     snprintf(ply, sizeof ply, "%s_points.ply", stem);
@@ -104,8 +98,12 @@ int lidar_write_outputs(const film *f, const char *stem, void (*wrote)(const cha
 {
     char sidecar[4200];
     snprintf(sidecar, sizeof sidecar, "%s_waveforms.json", stem);
-    if (write_waveforms(f, stem, wrote, err) || lidar_waveforms_sidecar_write(sidecar, &f->lidar->lidar, err)) return -1;
-    if (wrote) wrote(sidecar);
-    if (f->window.orders > 0 && write_order_waveforms(f, stem, wrote, err)) return -1;
-    return write_points(f, stem, wrote, err);
+    float *w = NULL;
+    if (lidar_waveforms(f, -1, &w, err)) return -1;
+    int rc = write_waveforms(f, w, stem, wrote, err) || lidar_waveforms_sidecar_write(sidecar, &f->lidar->lidar, err);
+    if (!rc && wrote) wrote(sidecar);
+    if (!rc && f->window.orders > 0) rc = write_order_waveforms(f, stem, wrote, err);
+    if (!rc) rc = write_points(f, w, stem, wrote, err);
+    free(w);
+    return rc ? -1 : 0;
 }
