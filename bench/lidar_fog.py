@@ -13,7 +13,6 @@ Results: DIR/lidar-fog.md (a table, with the date and the CPU), plots in --image
 import argparse
 import json
 import os
-import platform
 import shutil
 import subprocess
 import sys
@@ -22,23 +21,14 @@ import time
 
 import numpy as np
 
+from machine import cpu_model
+
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 SCENE = os.path.join(ROOT, "scenes", "street-fog-lidar", "street-fog-lidar.json")
 DARTSPP = os.path.join(ROOT, "build", "dartspp")
 VISIBILITIES = [150.0, 50.0, 20.0]  # meteorological optical range, metres (σt = ln 20 / V, docs/lidar.md §6)
 ALBEDO = 0.9998                      # water droplets at 905 nm (docs/lidar.md §6: the Mie tables' 0.99984)
 MATCH = 0.5                         # metres: a fog echo within this of a clear-air echo of its beam is that target
-
-
-def cpu_model():
-    try:
-        with open("/proc/cpuinfo") as f:
-            for line in f:
-                if line.startswith("model name"):
-                    return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or "unknown CPU"
 
 
 def scene_for(base, visibility):

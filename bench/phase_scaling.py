@@ -14,25 +14,14 @@ memory bandwidth and the machine's other load, so a 2-core measurement bounds th
 measure the many-core behaviour. Written by us (the numbers come from dartspp's Python API)."""
 import argparse
 import os
-import platform
 import random
 import time
 
 import dartspp
+from machine import cpu_model
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 PHASES = ["t_photon", "t_maps", "t_gather"]
-
-
-def cpu_model():
-    try:
-        with open("/proc/cpuinfo") as f:
-            for line in f:
-                if line.startswith("model name"):
-                    return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or "unknown CPU"
 
 
 def run(scene, resolution, passes, seed, threads):

@@ -91,13 +91,20 @@ static double sphere_theta(const phase_table *t, int k)
     return s;
 }
 
+/* The three tables the checks run on: HG 0.9 on a fine grid near 0°, the shipped Mie table of advection fog, and a
+ * coarse table with zeros. */
+static void three_tables(phase_table t[3])
+{
+    hg_table(&t[0], 0.9, 0.05, 10.0, 0.5);
+    load_table(&t[1], MIE_ADVECTION);
+    coarse_table(&t[2]);
+}
+
 static void test_normalised(void **state)
 {
     (void)state;
     phase_table t[3];
-    hg_table(&t[0], 0.9, 0.05, 10.0, 0.5);
-    load_table(&t[1], MIE_ADVECTION);
-    coarse_table(&t[2]);
+    three_tables(t);
     const char *names[3] = {"HG 0.9", "Mie advection fog", "coarse with zeros"};
     for (int i = 0; i < 3; i++) {
         double one = sphere_theta(&t[i], 0), g = sphere_theta(&t[i], 1) / one;
@@ -195,9 +202,7 @@ static void test_sampler_chi2(void **state)
 {
     (void)state;
     phase_table t[3];
-    hg_table(&t[0], 0.9, 0.05, 10.0, 0.5);
-    load_table(&t[1], MIE_ADVECTION);
-    coarse_table(&t[2]);
+    three_tables(t);
     int fails = sampler_check("HG 0.9 table", &t[0], 300000, 1) + sampler_check("Mie advection fog", &t[1], 300000, 2) +
                 sampler_check("coarse with zeros", &t[2], 300000, 3);
     for (int i = 0; i < 3; i++) phase_table_free(&t[i]);
