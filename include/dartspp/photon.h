@@ -105,6 +105,10 @@ typedef struct volume_photon_map volume_photon_map;
 volume_photon_map *volume_map_build(const photon *ph, size_t n, double r, dp_error *err);
 void volume_map_free(volume_photon_map *m);
 size_t volume_map_size(const volume_photon_map *m);
+/* The build's invariant, checked: every node's photon range splits at a plane between its children's
+ * photons (some axis with max(left) <= min(right)). The queries stay exact without it (the boxes are the
+ * photons' own), so only this check sees a wrong split. O(n log n); for tests. */
+int volume_map_splits_ok(const volume_photon_map *m);
 
 /* Called for every photon p with t = (p - o)·d in [0, tmax] and d2 = |p - o|^2 - t^2 <= r^2
  * (d unit; tmax may be INFINITY). Visit order is fixed by the map, so results are deterministic. */
@@ -149,8 +153,8 @@ void surface_map_free(surface_photon_map *m);
  * array given to surface_map_build, and their squared distances. Returns the count found. Thread-safe. */
 int surface_map_query_knn(const surface_photon_map *m, vec3 x, int k, double R, int *idx, double *d2);
 
-/* Bytes volume_map_build allocates for n photons (the memory guard's estimate; the surface map's default
- * backend is the same structure). */
+/* Bytes volume_map_build allocates for n photons, the build's scratch included (the memory guard's estimate;
+ * the surface map's default backend is the same structure). */
 size_t volume_map_bytes(size_t n);
 
 /* ---- photon pass ----

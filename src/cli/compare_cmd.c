@@ -8,7 +8,7 @@
 static void usage(FILE *f)
 {
     fprintf(f, "usage: dartspp compare IMAGE REFERENCE [--csv]   (EXR or PFM, the same size)\n"
-               "  --csv       one line: mse,rmse,rel_mse,mse_q99,q99,nonfinite,pixels\n"
+               "  --csv       one line: mse,rmse,rel_mse,mse_q99,q99,nonfinite,pixels,mse_trimmed,trimmed\n"
                "  -h, --help  this text\n");
 }
 
@@ -54,13 +54,16 @@ int cli_compare(int argc, char **argv)
     if (!rc) rc = image_compare(&img, &ref, &e, &err);
     if (rc) fprintf(stderr, "dartspp compare: %s\n", err.msg);
     else if (csv)
-        printf("%.9g,%.9g,%.9g,%.9g,%.9g,%ld,%ld\n", e.mse, e.rmse, e.rel_mse, e.mse_q99, e.q99, e.nonfinite, e.pixels);
+        printf("%.9g,%.9g,%.9g,%.9g,%.9g,%ld,%ld,%.9g,%ld\n", e.mse, e.rmse, e.rel_mse, e.mse_q99, e.q99, e.nonfinite,
+               e.pixels, e.mse_trimmed, e.trimmed);
     else
         printf("image              %s\nreference          %s\nmse                %.6g\nrmse               %.6g\n"
                "relative mse       %.6g   (mean of (x-r)^2/(r^2+0.01))\n"
                "mse / q99^2        %.6g   (both divided by the reference's 0.99 quantile %.6g)\n"
+               "trimmed mse        %.6g   (without the %ld pixels of largest error, 0.1 %%)\n"
                "non-finite pixels  %ld   (of %ld compared)\n",
-               paths[0], paths[1], e.mse, e.rmse, e.rel_mse, e.mse_q99, e.q99, e.nonfinite, e.pixels);
+               paths[0], paths[1], e.mse, e.rmse, e.rel_mse, e.mse_q99, e.q99, e.mse_trimmed, e.trimmed, e.nonfinite,
+               e.pixels);
     image_free(&img);
     image_free(&ref);
     return rc ? 2 : 0;

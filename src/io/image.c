@@ -129,15 +129,35 @@ long image_nonfinite_pixels(const image_rgb *img, int *first_x, int *first_y)
     return bad;
 }
 
-static void add_pixel(error_sums *s, const float *x, const float *r, double q)
+/* Adds one pixel to the sums; returns its squared error summed over the channels. */
+static double add_pixel(error_sums *s, const float *x, const float *r, double q)
 {
+    double se = 0.0;
     for (int c = 0; c < 3; ++c) {
         double d = (double)x[c] - (double)r[c];
         double dq = (double)x[c] / q - (double)r[c] / q;
-        s->se += d * d;
+        se += d * d;
         s->rel += d * d / ((double)r[c] * (double)r[c] + 1e-2);
         s->se_q += dq * dq;
     }
+    s->se += se;
+    return se;
+}
+
+static int by_value(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+/* The mean squared error per channel value over all but the `drop` pixels of largest error (se: each
+ * pixel's squared error summed over its channels; reordered). */
+static double trimmed_mse(double *se, size_t n, size_t drop)
+{
+    qsort(se, n, sizeof *se, by_value);
+    double sum = 0.0;
+    for (size_t i = 0; i + drop < n; i++) sum += se[i];
+    return n > drop ? sum / (3.0 * (double)(n - drop)) : 0.0;
 }
 
 int image_compare(const image_rgb *img, const image_rgb *ref, image_error *out, dp_error *err)
@@ -151,14 +171,15 @@ int image_compare(const image_rgb *img, const image_rgb *ref, image_error *out, 
     double q = out->q99 != 0.0 ? out->q99 : 1.0;
     error_sums s = {0, 0, 0};
     size_t n = (size_t)img->width * (size_t)img->height;
+    double *pixel_se = malloc(n * sizeof *pixel_se);
+    if (!pixel_se) return dp_fail_kind(err, DP_ERROR_MEMORY, "compare: out of memory");
     for (size_t i = 0; i < n; ++i) {
         const float *x = img->rgb + 3 * i, *r = ref->rgb + 3 * i;
         if (!pixel_finite(x) || !pixel_finite(r)) {
             out->nonfinite++;
             continue;
         }
-        add_pixel(&s, x, r, q);
-        out->pixels++;
+        pixel_se[out->pixels++] = add_pixel(&s, x, r, q);
     }
     double count = 3.0 * (double)out->pixels;
     if (count > 0) {
@@ -167,6 +188,9 @@ int image_compare(const image_rgb *img, const image_rgb *ref, image_error *out, 
         out->mse_q99 = s.se_q / count;
     }
     out->rmse = sqrt(out->mse);
+    out->trimmed = (long)floor(IMAGE_TRIM_SHARE * (double)out->pixels);
+    out->mse_trimmed = trimmed_mse(pixel_se, (size_t)out->pixels, (size_t)out->trimmed);
+    free(pixel_se);
     return 0;
 }
 

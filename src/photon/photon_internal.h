@@ -38,6 +38,24 @@ static inline int buf_push(photon_buf *b, const photon *ph, const void *side, si
     return 0;
 }
 
+/* Grows b to hold at least `need` photons (doubling, as buf_push does), without changing its count. */
+static inline int buf_reserve(photon_buf *b, size_t need, size_t stride)
+{
+    if (need <= b->cap) return 0;
+    size_t cap = b->cap ? b->cap : PHOTON_BUF_FIRST;
+    while (cap < need) cap *= 2;
+    photon *q = realloc(b->p, cap * sizeof(photon));
+    if (!q) return -1;
+    b->p = q;
+    if (stride) {
+        unsigned char *e = realloc(b->d, cap * stride);
+        if (!e) return -1;
+        b->d = e;
+    }
+    b->cap = cap;
+    return 0;
+}
+
 static inline void buf_free(photon_buf *b)
 {
     free(b->p);
@@ -64,6 +82,18 @@ static inline int beam_buf_push(beam_buf *b, const photon_beam *bm)
     return 0;
 }
 
+static inline int beam_buf_reserve(beam_buf *b, size_t need)
+{
+    if (need <= b->cap) return 0;
+    size_t cap = b->cap ? b->cap : PHOTON_BUF_FIRST;
+    while (cap < need) cap *= 2;
+    photon_beam *q = realloc(b->p, cap * sizeof(photon_beam));
+    if (!q) return -1;
+    b->p = q;
+    b->cap = cap;
+    return 0;
+}
+
 typedef struct {
     path_vertex *p;
     size_t n, cap;
@@ -83,6 +113,18 @@ static inline int vertex_buf_push(vertex_buf *b, const path_vertex *v)
 }
 
 /* Written by one thread per photon stored: on cache lines of its own (core.h, dp_calloc_cache_aligned). */
+static inline int vertex_buf_reserve(vertex_buf *b, size_t need)
+{
+    if (need <= b->cap) return 0;
+    size_t cap = b->cap ? b->cap : PHOTON_BUF_FIRST;
+    while (cap < need) cap *= 2;
+    path_vertex *q = realloc(b->p, cap * sizeof(path_vertex));
+    if (!q) return -1;
+    b->p = q;
+    b->cap = cap;
+    return 0;
+}
+
 typedef struct {
     _Alignas(DP_CACHE_LINE) photon_buf vol;
     photon_buf surf;

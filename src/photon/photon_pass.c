@@ -458,54 +458,87 @@ typedef struct {
     photon_chain_stats chains; /* the merged surface chains */
 } pass_totals;
 
-/* Appends the photons of one path from a thread buffer in path order, or closes the budget. */
-static int merge_path(photon_buf *dst, budget_state *bs, const photon_buf *src, size_t off, uint32_t n, size_t stride)
+/* Where one path's (or chain's) records go in the merged arrays; NO_DEST where the budget dropped them. */
+typedef struct {
+    size_t vol, surf, beams, verts;
+} path_dest;
+
+#define NO_DEST SIZE_MAX
+
+/* Claims n slots of a budget in path order: the slot's start, or NO_DEST once a path did not fit (the budget
+ * is then full: no later path is counted or stored). */
+static size_t claim(budget_state *bs, size_t *count, size_t n)
 {
-    if (bs->full) return 0;
-    if (dst->n + n > bs->budget) {
+    if (bs->full) return NO_DEST;
+    if (*count + n > bs->budget) {
         bs->full = 1;
-        return 0;
+        return NO_DEST;
     }
-    for (uint32_t i = 0; i < n; i++)
-        if (buf_push(dst, &src->p[off + i], stride ? src->d + (off + i) * stride : NULL, stride)) return -1;
+    size_t at = *count;
+    *count += n;
     bs->paths++;
+    return at;
+}
+
+/* The batch's destinations in path order: a prefix sum over its counts (serial, but only over numbers; the
+ * copies then run in parallel, merge_copy). With vertices the path's beams go with them under the volume
+ * budget. Returns -1 when the merged arrays cannot grow. */
+static int merge_plan(pass_totals *pt, const photon_pass_input *in, const path_count *pc, long nb, path_dest *pd)
+{
+    size_t n_vol = pt->vol.n, n_surf = pt->surf.n, n_beams = pt->beams.n, n_verts = pt->verts.n;
+    for (long i = 0; i < nb; i++) {
+        const path_count *c = &pc[i];
+        path_dest d = {NO_DEST, NO_DEST, NO_DEST, NO_DEST};
+        pt->early += c->early_exit;
+        if (in->vertices) {
+            d.verts = claim(&pt->bv, &n_verts, c->n_verts);
+            if (d.verts != NO_DEST) d.beams = n_beams, n_beams += c->n_beams;
+        } else if (in->beams) {
+            d.beams = claim(&pt->bv, &n_beams, c->n_beams);
+        } else {
+            d.vol = claim(&pt->bv, &n_vol, c->n_vol);
+        }
+        d.surf = claim(&pt->bsf, &n_surf, c->n_surf);
+        pd[i] = d;
+    }
+    size_t stride = in->deriv_stride;
+    if (buf_reserve(&pt->vol, n_vol, stride) || buf_reserve(&pt->surf, n_surf, stride) ||
+        beam_buf_reserve(&pt->beams, n_beams) || vertex_buf_reserve(&pt->verts, n_verts))
+        return -1;
+    pt->vol.n = n_vol, pt->surf.n = n_surf, pt->beams.n = n_beams, pt->verts.n = n_verts;
     return 0;
 }
 
-/* merge_path for beams: the path's beams under the volume budget */
-static int merge_beams(beam_buf *dst, budget_state *bs, const beam_buf *src, size_t off, uint32_t n)
+/* n photons (and their derivative records) from a thread buffer to their place in the merged array */
+static void copy_photons(photon_buf *dst, size_t at, const photon_buf *src, size_t off, size_t n, size_t stride)
 {
-    if (bs->full) return 0;
-    if (dst->n + n > bs->budget) {
-        bs->full = 1;
-        return 0;
-    }
-    for (uint32_t i = 0; i < n; i++)
-        if (beam_buf_push(dst, &src->p[off + i])) return -1;
-    bs->paths++;
-    return 0;
+    if (at == NO_DEST || n == 0) return;
+    memcpy(dst->p + at, src->p + off, n * sizeof(photon));
+    if (stride) memcpy(dst->d + at * stride, src->d + off * stride, n * stride);
 }
 
-/* merge_path for vertices: the path's vertices under the volume budget, and its beams with them */
-static int merge_vertices(pass_totals *pt, const thread_bufs *src, const path_count *c)
+/* The batch's records to the places merge_plan gave them, in parallel over paths: the merged arrays are in
+ * path order whatever the thread count. */
+static void merge_copy(pass_totals *pt, const photon_pass_input *in, const thread_bufs *tb, const path_count *pc,
+                       const path_dest *pd, long nb, int nt)
 {
-    budget_state *bs = &pt->bv;
-    if (bs->full) return 0;
-    if (pt->verts.n + c->n_verts > bs->budget) {
-        bs->full = 1;
-        return 0;
+    size_t stride = in->deriv_stride;
+#pragma omp parallel for num_threads(nt) schedule(static, 256) default(none) shared(pt, tb, pc, pd, nb, stride)
+    for (long i = 0; i < nb; i++) {
+        const thread_bufs *src = &tb[pc[i].thread];
+        copy_photons(&pt->vol, pd[i].vol, &src->vol, pc[i].off_vol, pc[i].n_vol, stride);
+        copy_photons(&pt->surf, pd[i].surf, &src->surf, pc[i].off_surf, pc[i].n_surf, stride);
+        if (pd[i].beams != NO_DEST && pc[i].n_beams)
+            memcpy(pt->beams.p + pd[i].beams, src->beams.p + pc[i].off_beams, pc[i].n_beams * sizeof(photon_beam));
+        if (pd[i].verts != NO_DEST && pc[i].n_verts)
+            memcpy(pt->verts.p + pd[i].verts, src->verts.p + pc[i].off_verts, pc[i].n_verts * sizeof(path_vertex));
     }
-    for (uint32_t i = 0; i < c->n_verts; i++)
-        if (vertex_buf_push(&pt->verts, &src->verts.p[c->off_verts + i])) return -1;
-    for (uint32_t i = 0; i < c->n_beams; i++)
-        if (beam_buf_push(&pt->beams, &src->beams.p[c->off_beams + i])) return -1;
-    bs->paths++;
-    return 0;
 }
 
 static void scale_powers(photon *p, size_t n, long paths)
 {
     float inv = paths > 0 ? (float)(1.0 / paths) : 0.0f;
+#pragma omp parallel for schedule(static) default(none) shared(p, n, inv)
     for (size_t i = 0; i < n; i++)
         for (int c = 0; c < 3; c++) p[i].power[c] *= inv;
 }
@@ -531,7 +564,7 @@ void photon_pass_input_init(photon_pass_input *in, const scene *s, const render_
 
 /* Light paths in independent batches; with surface chains on, they stop once the volume budget is full. */
 static int independent_paths(const scene *s, const photon_pass_input *in, int nt, thread_bufs *tb, path_count *pc,
-                             int chains, pass_totals *pt)
+                             path_dest *pd, int chains, pass_totals *pt)
 {
     long max_paths = (long)in->light_paths;
     const darts_guide *guide = &in->guide;
@@ -556,14 +589,8 @@ static int independent_paths(const scene *s, const photon_pass_input *in, int nt
                 pc[i] = c;
             }
         }
-        for (long i = 0; i < nb && !rc; i++) { /* merge in path order */
-            const thread_bufs *src = &tb[pc[i].thread];
-            pt->early += pc[i].early_exit;
-            if (in->vertices) rc |= merge_vertices(pt, src, &pc[i]);
-            else if (in->beams) rc |= merge_beams(&pt->beams, &pt->bv, &src->beams, pc[i].off_beams, pc[i].n_beams);
-            else rc |= merge_path(&pt->vol, &pt->bv, &src->vol, pc[i].off_vol, pc[i].n_vol, in->deriv_stride);
-            rc |= merge_path(&pt->surf, &pt->bsf, &src->surf, pc[i].off_surf, pc[i].n_surf, in->deriv_stride);
-        }
+        rc = merge_plan(pt, in, pc, nb, pd); /* merged in path order */
+        if (!rc) merge_copy(pt, in, tb, pc, pd, nb, nt);
         pt->next += nb;
     }
     return rc;
@@ -580,21 +607,42 @@ static void chain_stats_add(photon_chain_stats *sum, const photon_chain_stats *c
     sum->early_exits += c->early_exits;
 }
 
-/* The rest of the light paths as surface chains of CHAIN_STEPS paths each, CHAIN_BATCH chains between two
- * merges; a chain's photons are kept whole or not at all (the surface budget), in chain order. */
+/* The chains' photons to the surface array in chain order, under the surface budget (a chain that does not fit
+ * closes it and is dropped, with its statistics): the places first, serial over counts, then the copies in
+ * parallel. */
+static int merge_chains(pass_totals *pt, const photon_pass_input *in, const thread_bufs *tb, const chain_count *cc,
+                        size_t *at, int nb, int nt)
+{
+    size_t n_surf = pt->surf.n, stride = in->deriv_stride;
+    for (int i = 0; i < nb; i++) {
+        at[i] = claim(&pt->bsf, &n_surf, cc[i].n);
+        if (at[i] != NO_DEST) chain_stats_add(&pt->chains, &cc[i].st);
+    }
+    if (buf_reserve(&pt->surf, n_surf, stride)) return -1;
+    pt->surf.n = n_surf;
+#pragma omp parallel for num_threads(nt) schedule(dynamic, 1) default(none) shared(pt, tb, cc, at, nb, stride)
+    for (int i = 0; i < nb; i++) copy_photons(&pt->surf, at[i], &tb[cc[i].thread].surf, cc[i].off, cc[i].n, stride);
+    return 0;
+}
+
+/* The rest of the light paths as surface chains of CHAIN_STEPS paths each, at least CHAIN_BATCH chains (and 8
+ * per thread, so that the chains' unequal lengths even out before the barrier) between two merges; a chain's
+ * photons are kept whole or not at all (the surface budget), in chain order: the batch size changes no result. */
 #define CHAIN_STEPS 1024
 #define CHAIN_BATCH 32
 static int chain_paths(const scene *s, const photon_pass_input *in, int nt, thread_bufs *tb, pass_totals *pt)
 {
     long left = (long)in->light_paths - pt->next;
     long n_chains = (left + CHAIN_STEPS - 1) / CHAIN_STEPS;
-    chain_count cc[CHAIN_BATCH];
+    int batch = 8 * nt > CHAIN_BATCH ? 8 * nt : CHAIN_BATCH;
+    chain_count *cc = malloc((size_t)batch * sizeof *cc);
+    size_t *at = malloc((size_t)batch * sizeof *at);
     chain_scratch **cs = calloc((size_t)nt, sizeof *cs);
-    int rc = cs ? 0 : -1;
+    int rc = cs && cc && at ? 0 : -1;
     for (int t = 0; t < nt && !rc; t++) rc = (cs[t] = chain_scratch_new()) ? 0 : -1;
-    for (long c0 = 0; !rc && c0 < n_chains && !pt->bsf.full; c0 += CHAIN_BATCH) {
+    for (long c0 = 0; !rc && c0 < n_chains && !pt->bsf.full; c0 += batch) {
         if ((pt->interrupted = dp_stopped(in->stop))) break;
-        int nb = n_chains - c0 < CHAIN_BATCH ? (int)(n_chains - c0) : CHAIN_BATCH;
+        int nb = n_chains - c0 < batch ? (int)(n_chains - c0) : batch;
 #pragma omp parallel num_threads(nt)
         {
             int me = omp_get_thread_num();
@@ -607,13 +655,12 @@ static int chain_paths(const scene *s, const photon_pass_input *in, int nt, thre
                 cc[i] = count;
             }
         }
-        for (int i = 0; i < nb && !rc && !pt->bsf.full; i++) {
-            rc |= merge_path(&pt->surf, &pt->bsf, &tb[cc[i].thread].surf, cc[i].off, cc[i].n, in->deriv_stride);
-            if (!pt->bsf.full) chain_stats_add(&pt->chains, &cc[i].st); /* a chain that did not fit is dropped */
-        }
+        rc = merge_chains(pt, in, tb, cc, at, nb, nt);
     }
     for (int t = 0; cs && t < nt; t++) chain_scratch_free(cs[t]);
     free(cs);
+    free(cc);
+    free(at);
     return rc;
 }
 
@@ -630,8 +677,9 @@ int photon_pass(const scene *s, const photon_pass_input *in, photon_set *out, dp
     int nt = omp_get_max_threads();
     thread_bufs *tb = dp_calloc_cache_aligned((size_t)nt, sizeof(thread_bufs));
     path_count *pc = malloc(PHOTON_PASS_BATCH * sizeof(path_count));
+    path_dest *pd = malloc(PHOTON_PASS_BATCH * sizeof(path_dest));
     int chains = photon_pass_uses_chains(in);
-    int rc = (!tb || !pc) ? -1 : independent_paths(s, in, nt, tb, pc, chains, &pt);
+    int rc = (!tb || !pc || !pd) ? -1 : independent_paths(s, in, nt, tb, pc, pd, chains, &pt);
     size_t n_independent = pt.surf.n; /* surface photons of the independent paths */
     if (!rc && chains && pt.bv.full && !pt.interrupted && pt.next < (long)in->light_paths)
         rc = chain_paths(s, in, nt, tb, &pt);
@@ -646,6 +694,7 @@ int photon_pass(const scene *s, const photon_pass_input *in, photon_set *out, dp
     }
     free(tb);
     free(pc);
+    free(pd);
     if (rc) {
         buf_free(&pt.vol);
         buf_free(&pt.surf);

@@ -78,6 +78,16 @@ static void flann_params(struct FLANNParameters *p, int build)
 
 static int coord_ok(double c) { return isfinite(c) && fabs(c) <= COORD_MAX; }
 
+/* The first photon with a coordinate that is not coord_ok, n if none (in parallel: a pass over every photon) */
+static size_t first_bad_photon(const photon *ph, size_t n)
+{
+    size_t bad = n;
+#pragma omp parallel for schedule(static) reduction(min : bad) default(none) shared(ph, n)
+    for (size_t i = 0; i < n; i++)
+        if (!(coord_ok(ph[i].pos[0]) && coord_ok(ph[i].pos[1]) && coord_ok(ph[i].pos[2])) && i < bad) bad = i;
+    return bad;
+}
+
 static surface_photon_map *build(const photon *ph, size_t n, int use_flann, dp_error *err)
 {
     if (n > 0 && !ph) {
@@ -88,15 +98,12 @@ static surface_photon_map *build(const photon *ph, size_t n, int use_flann, dp_e
         dp_fail_kind(err, DP_ERROR_INTERNAL, "surface photon map: %zu photons exceed FLANN's limit of %d", n, INT_MAX);
         return NULL;
     }
-    for (size_t i = 0; i < n; i++) {
-        for (int c = 0; c < 3; c++) {
-            if (!coord_ok(ph[i].pos[c])) {
-                dp_fail_kind(err, DP_ERROR_INTERNAL,
-                             "surface photon map: photon %zu has position (%g, %g, %g) (non-finite or beyond %g)",
-                        i, (double)ph[i].pos[0], (double)ph[i].pos[1], (double)ph[i].pos[2], COORD_MAX);
-                return NULL;
-            }
-        }
+    size_t bad = first_bad_photon(ph, n);
+    if (bad < n) {
+        dp_fail_kind(err, DP_ERROR_INTERNAL,
+                     "surface photon map: photon %zu has position (%g, %g, %g) (non-finite or beyond %g)", bad,
+                     (double)ph[bad].pos[0], (double)ph[bad].pos[1], (double)ph[bad].pos[2], COORD_MAX);
+        return NULL;
     }
     surface_photon_map *m = calloc(1, sizeof *m);
     if (!m) {

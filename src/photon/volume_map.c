@@ -5,9 +5,10 @@
  * sits at the same depth and holds at most LEAF_MAX photons. The photons of the node with index j on level
  * k are the contiguous range [j·n >> k, (j+1)·n >> k) of the tree-ordered arrays, so no ranges are stored.
  * The build splits each range at its middle along the largest extent of its photons (a selection, not a
- * sort: O(n) per level), and each node keeps the float box of its photons grown by r plus a tiny padding
- * that absorbs rounding, and the range of its photons' times (for the queries with a time window). Subtrees
- * are built as OpenMP tasks; each is deterministic, so the map does not depend on the thread count.
+ * sort: O(n) per level; the long ranges of the top levels by a parallel partition), and each node keeps the
+ * float box of its photons grown by r plus a tiny padding that absorbs rounding, and the range of its
+ * photons' times (for the queries with a time window). Subtrees are built as OpenMP tasks; each is
+ * deterministic, so the map does not depend on the thread count.
  *
  * Query: iterative depth-first traversal (left child first, so the order is fixed by the map) with a slab
  * test that stays exact for zero direction components, then the photon test in double:
@@ -19,16 +20,20 @@
 #include <float.h>
 #include <stdint.h>
 #include <stdlib.h>
+#include <string.h>
 
 #define LEAF_MAX 16                 /* photons per leaf, at most (tuning: bench/results/volume_map.md) */
 #define STACK_MAX 64                /* traversal stack; the tree depth is below 32 */
 #define PAD_REL 1e-12               /* box padding relative to coordinate size (~4500 double ulps) */
-#define TASK_MIN ((size_t)1 << 15)  /* ranges smaller than this are built without spawning tasks */
+#define TASK_MIN ((size_t)1 << 10)  /* ranges smaller than this are built without spawning tasks */
 #define INSERTION_MAX 16            /* selection finishes ranges this short by insertion sort */
 #define AXIS_SAMPLES 64             /* points looked at to choose a split axis */
 #define PIVOT_SAMPLES 255           /* keys sampled to place a pivot in long ranges */
 #define PIVOT_SAMPLE_MIN 4096       /* ranges at least this long use a sampled pivot */
 #define WINDOW_MARGIN 1e-9          /* time window widening relative to the magnitudes summed (rounding) */
+#define PAR_SELECT_MIN ((size_t)1 << 16) /* ranges at least this long are split by the parallel partition */
+#define PAR_CHUNKS 64               /* its fixed chunks: the partition does not depend on the thread count */
+#define BAND_SAMPLES_MAX 4096       /* keys sampled, at most, to bracket the wanted rank (band_keys) */
 
 typedef struct {
     float lo[3], hi[3];
@@ -240,6 +245,88 @@ static void select_nth(point_item *pts, size_t count, size_t k, int axis)
     insertion_sort(pts, lo, hi, axis);
 }
 
+/* The node's box and time range from its children's */
+static void union_children(const builder *b, size_t node)
+{
+    union_box(&b->boxes[node], &b->boxes[2 * node + 1], &b->boxes[2 * node + 2]);
+    union_times(&b->times[node], &b->times[2 * node + 1], &b->times[2 * node + 2]);
+}
+
+/* ---- the parallel partition of the top levels ----
+ * Quickselect splits a range on one thread: at the root that is a pass over every photon while the other
+ * threads wait, and the first levels together cost about two such passes on the critical path. Ranges of
+ * at least PAR_SELECT_MIN photons are therefore split in three parallel passes over PAR_CHUNKS fixed chunks
+ * (count, scatter to scratch, copy back) around two sampled keys that bracket the wanted rank (a band of
+ * 10–20 % of the range), and only the band is then selected on one thread. Written by hand: no library
+ * we use offers a parallel selection on our items. */
+
+/* Two keys bracketing rank k of the range: the sample ranks ∓ 5σ around k's among S evenly strided keys,
+ * σ = √S/2 the largest standard deviation of a sample rank. S balances the serial costs of a split, about
+ * S·c_sample to sample and select the keys against 5/√S·count·c_select for the band: S ≈ (count/4)^(2/3),
+ * e.g. 1,626 keys and a 12 % band for 2^18 photons. */
+static void band_keys(const point_item *pts, size_t count, size_t k, int axis, float *lo, float *hi)
+{
+    float keys[BAND_SAMPLES_MAX];
+    double want = pow((double)count / 4.0, 2.0 / 3.0);
+    int n = want < BAND_SAMPLES_MAX ? (int)want : BAND_SAMPLES_MAX;
+    int half = (int)ceil(2.5 * sqrt((double)n));
+    size_t step = count / (size_t)n;
+    for (int i = 0; i < n; i++) keys[i] = pts[(size_t)i * step + step / 2].pos[axis];
+    int r = (int)((double)k * n / (double)count);
+    int r_lo = r - half < 0 ? 0 : r - half;
+    int r_hi = r + half > n - 1 ? n - 1 : r + half;
+    *lo = select_key(keys, n, r_lo);
+    *hi = select_key(keys, n, r_hi);
+}
+
+/* 0: key below lo, 1: in [lo, hi], 2: above hi */
+static int band_group(float key, float lo, float hi) { return (key >= lo) + (key > hi); }
+
+static size_t chunk_start(size_t count, int c) { return count * (size_t)c / PAR_CHUNKS; }
+
+/* Reorders pts[0, count) into the three groups (in chunk order inside each, so the result is the same on
+ * any number of threads) through scratch; returns the groups' sizes. */
+static void band_partition(point_item *pts, point_item *scratch, size_t count, int axis, float lo, float hi,
+                           size_t sizes[3])
+{
+    size_t n[PAR_CHUNKS][3], off[PAR_CHUNKS][3];
+#pragma omp parallel for schedule(static) default(none) shared(pts, count, axis, lo, hi, n)
+    for (int c = 0; c < PAR_CHUNKS; c++) {
+        n[c][0] = n[c][1] = n[c][2] = 0;
+        for (size_t i = chunk_start(count, c); i < chunk_start(count, c + 1); i++)
+            n[c][band_group(pts[i].pos[axis], lo, hi)]++;
+    }
+    size_t at = 0;
+    for (int g = 0; g < 3; g++) {
+        sizes[g] = at;
+        for (int c = 0; c < PAR_CHUNKS; c++) off[c][g] = at, at += n[c][g];
+        sizes[g] = at - sizes[g];
+    }
+#pragma omp parallel for schedule(static) default(none) shared(pts, scratch, count, axis, lo, hi, off)
+    for (int c = 0; c < PAR_CHUNKS; c++) {
+        size_t o[3] = {off[c][0], off[c][1], off[c][2]};
+        for (size_t i = chunk_start(count, c); i < chunk_start(count, c + 1); i++)
+            scratch[o[band_group(pts[i].pos[axis], lo, hi)]++] = pts[i];
+    }
+#pragma omp parallel for schedule(static) default(none) shared(pts, scratch, count)
+    for (int c = 0; c < PAR_CHUNKS; c++)
+        memcpy(pts + chunk_start(count, c), scratch + chunk_start(count, c),
+               (chunk_start(count, c + 1) - chunk_start(count, c)) * sizeof *pts);
+}
+
+/* select_nth for long ranges: the band partition, then the selection inside the group that holds rank k
+ * (the band, unless the sample missed it: about once in 10^6 ranges, and still exact). */
+static void select_nth_parallel(point_item *pts, point_item *scratch, size_t count, size_t k, int axis)
+{
+    float lo, hi;
+    size_t g[3];
+    band_keys(pts, count, k, axis, &lo, &hi);
+    band_partition(pts, scratch, count, axis, lo, hi, g);
+    if (k < g[0]) select_nth(pts, g[0], k, axis);
+    else if (k < g[0] + g[1]) select_nth(pts + g[0], g[1], k - g[0], axis);
+    else select_nth(pts + g[0] + g[1], g[2], k - g[0] - g[1], axis);
+}
+
 /* Builds the subtree of node (the j-th node of level): median split, children, then the node's box as
  * the union of theirs; a leaf's box is its photons' bounds grown by the padding. */
 static void build_node(const builder *b, size_t node, int level, size_t j)
@@ -261,8 +348,7 @@ static void build_node(const builder *b, size_t node, int level, size_t j)
         build_node(b, 2 * node + 1, level + 1, 2 * j);
         build_node(b, 2 * node + 2, level + 1, 2 * j + 1);
     }
-    union_box(&b->boxes[node], &b->boxes[2 * node + 1], &b->boxes[2 * node + 2]);
-    union_times(&b->times[node], &b->times[2 * node + 1], &b->times[2 * node + 2]);
+    union_children(b, node);
 }
 
 /* Copies the positions into build items (in parallel: this is also the first touch of their pages); fails on
@@ -287,11 +373,34 @@ static int gather_points(const photon *ph, size_t n, point_item *pts, double *ma
     return 0;
 }
 
-static void build_tree(builder *b)
+/* Levels whose ranges are all at least PAR_SELECT_MIN long (none below the leaves' level). */
+static int parallel_levels(const builder *b)
 {
-#pragma omp parallel default(none) shared(b)
+    int levels = 0;
+    while (levels < b->depth && range_start(b->n, 1, levels) >= PAR_SELECT_MIN) levels++;
+    return levels;
+}
+
+/* The top levels breadth first, each range split by the parallel partition; then every subtree below them
+ * as a task (build_node); then the top levels' boxes, bottom up. */
+static void build_tree(builder *b, point_item *scratch)
+{
+    int top = parallel_levels(b);
+    for (int level = 0; level < top; level++)
+        for (size_t j = 0; j < (size_t)1 << level; j++) {
+            size_t lo = range_start(b->n, j, level), hi = range_start(b->n, j + 1, level);
+            size_t mid = range_start(b->n, 2 * j + 1, level + 1);
+            select_nth_parallel(b->points + lo, scratch + lo, hi - lo, mid - lo, split_axis(b->points + lo, hi - lo));
+        }
+    size_t first = ((size_t)1 << top) - 1; /* the heap index of level top's first node */
+#pragma omp parallel default(none) shared(b, top, first)
 #pragma omp single
-    build_node(b, 0, 0, 0);
+    for (size_t j = 0; j < (size_t)1 << top; j++) {
+#pragma omp task default(none) firstprivate(b, top, first, j)
+        build_node(b, first + j, top, j);
+    }
+    for (int level = top - 1; level >= 0; level--)
+        for (size_t j = 0; j < (size_t)1 << level; j++) union_children(b, ((size_t)1 << level) - 1 + j);
 }
 
 static void copy_photons_in_tree_order(const photon *ph, const point_item *pts, photon *out, size_t n)
@@ -304,8 +413,9 @@ size_t volume_map_bytes(size_t n)
 {
     if (n == 0) return sizeof(volume_photon_map);
     size_t node_count = ((size_t)2 << leaf_depth(n)) - 1;
+    size_t scratch = n >= PAR_SELECT_MIN ? n * sizeof(point_item) : 0; /* the parallel partition's, during the build */
     return sizeof(volume_photon_map) + node_count * (sizeof(node_box) + sizeof(time_range)) +
-           n * (sizeof(point_item) + sizeof(photon));
+           n * (sizeof(point_item) + sizeof(photon)) + scratch;
 }
 
 volume_photon_map *volume_map_build(const photon *ph, size_t n, double r, dp_error *err)
@@ -345,7 +455,14 @@ volume_photon_map *volume_map_build(const photon *ph, size_t n, double r, dp_err
     }
     /* boxes reach r beyond their photons, plus PAD_REL of the coordinate scale to cover rounding */
     builder b = {n, m->depth, r + PAD_REL * (r + max_abs), m->points, m->boxes, ph, m->times};
-    build_tree(&b);
+    point_item *scratch = NULL; /* the parallel partition's, while the map is built */
+    if (parallel_levels(&b) > 0 && !(scratch = malloc(n * sizeof *scratch))) {
+        dp_fail_kind(err, DP_ERROR_MEMORY, "volume photon map: out of memory for %zu photons", n);
+        volume_map_free(m);
+        return NULL;
+    }
+    build_tree(&b, scratch);
+    free(scratch);
     copy_photons_in_tree_order(ph, m->points, m->photons, n);
     return m;
 }
@@ -361,6 +478,28 @@ void volume_map_free(volume_photon_map *m)
 }
 
 size_t volume_map_size(const volume_photon_map *m) { return m ? m->n : 0; }
+
+/* Whether the children of the j-th node of level split its range at a plane (volume_map_splits_ok) */
+static int node_splits(const volume_photon_map *m, int level, size_t j)
+{
+    size_t lo = range_start(m->n, j, level), mid = range_start(m->n, 2 * j + 1, level + 1);
+    size_t hi = range_start(m->n, j + 1, level);
+    for (int a = 0; a < 3; a++) {
+        float left_max = -INFINITY, right_min = INFINITY;
+        for (size_t i = lo; i < mid; i++) left_max = fmaxf(left_max, m->points[i].pos[a]);
+        for (size_t i = mid; i < hi; i++) right_min = fminf(right_min, m->points[i].pos[a]);
+        if (left_max <= right_min) return 1;
+    }
+    return 0;
+}
+
+int volume_map_splits_ok(const volume_photon_map *m)
+{
+    for (int level = 0; m && m->n > 0 && level < m->depth; level++)
+        for (size_t j = 0; j < (size_t)1 << level; j++)
+            if (!node_splits(m, level, j)) return 0;
+    return 1;
+}
 
 size_t volume_map_source(const volume_photon_map *m, const photon *p)
 {

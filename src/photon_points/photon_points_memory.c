@@ -44,8 +44,8 @@ void photon_points_memory(const scene *s, const render_plan *p, memory_estimate 
         batch_beams = (double)pilot.n_beams / pilot.paths * PHOTON_PASS_BATCH;
         batch_verts = (double)pilot.n_verts / pilot.paths * PHOTON_PASS_BATCH; /* sliced types' vertices */
     }
-    /* each set's array at its capacity, and its map: volume_map_bytes is about (16 + 56) B a photon plus the
-     * nodes (the surface map is the same tree); in double for huge budgets */
+    /* each set's array at its capacity, and its map: volume_map_bytes is about (16 + 56) B a photon, 16 B of
+     * build scratch and the nodes (the surface map is the same tree); in double for huge budgets */
     double per_mapped = (double)volume_map_bytes(1 << 20) / (1 << 20);
     int volume = s->medium_count > 0, beams = p->volume_photon_type != VOLUME_PHOTON_POINTS;
     int sliced = volume_type_sliced(p->volume_photon_type);

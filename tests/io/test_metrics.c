@@ -119,6 +119,54 @@ static void test_compare_hand_values(void **state)
     image_free(&ref);
 }
 
+/* The trimmed MSE (issue 52) by hand: a zero reference and pixel i off by i/1000 in its red channel only.
+ * 2000 pixels drop the two of largest error (⌊0.001·2000⌋): Σ_{i<1998} (i/1000)² over 3·1998 values; 999 pixels
+ * drop none (the MSE itself); a firefly of 10^6 among 2000 is what is dropped; a NaN pixel counts in
+ * neither N (1999 then drop one) nor the sums. */
+static double error_of(int i) { return (double)(float)(i / 1000.0); } /* as the float image holds it */
+
+static double trimmed_by_hand(int n, int drop)
+{
+    double sum = 0.0;
+    for (int i = 0; i < n - drop; i++) sum += error_of(i) * error_of(i);
+    return sum / (3.0 * (n - drop));
+}
+
+static void test_compare_trimmed(void **state)
+{
+    (void)state;
+    const int sizes[2] = {2000, 999};
+    for (int k = 0; k < 2; k++) {
+        int n = sizes[k];
+        image_rgb img, ref;
+        image_error e;
+        dp_error err;
+        assert_int_equal(image_alloc(&img, n, 1, &err), 0);
+        assert_int_equal(image_alloc(&ref, n, 1, &err), 0);
+        for (int i = 0; i < n; i++) img.rgb[3 * (n - 1 - i)] = (float)(i / 1000.0); /* largest errors first */
+        assert_int_equal(image_compare(&img, &ref, &e, &err), 0);
+        assert_int_equal(e.trimmed, n / 1000);
+        assert_close(e.mse_trimmed, trimmed_by_hand(n, n / 1000), 1e-12);
+        if (n < 1000) assert_close(e.mse_trimmed, e.mse, 1e-12); /* summed in another order */
+        img.rgb[3 * 7 + 1] = 1e6f; /* a firefly: with 2000 pixels it is one of the two dropped */
+        img.rgb[3 * 8 + 2] = NAN;  /* left out of everything */
+        assert_int_equal(image_compare(&img, &ref, &e, &err), 0);
+        assert_int_equal(e.pixels, n - 1);
+        if (n == 2000) {
+            /* 1999 pixels compared drop one, the firefly (pixel 7, i = 1992); pixel 8 (i = 1991) is the NaN */
+            double sum = 0.0;
+            for (int i = 0; i < n; i++) sum += i == 1991 || i == 1992 ? 0.0 : error_of(i) * error_of(i);
+            assert_int_equal(e.trimmed, 1);
+            assert_close(e.mse_trimmed, sum / (3.0 * 1998), 1e-12);
+        } else {
+            assert_close(e.mse_trimmed, e.mse, 1e-12 * e.mse); /* summed in another order */
+            assert_true(e.mse > 1e8); /* 10^12 over 3·998 values: the firefly stays */
+        }
+        image_free(&img);
+        image_free(&ref);
+    }
+}
+
 /* Mean of independent renders and the variance of that mean, by hand: values {1, 3} and {2, 2, 5}. */
 static void test_mean_of_hand_values(void **state)
 {
@@ -350,6 +398,7 @@ int main(void)
         cmocka_unit_test(test_quantile_negative_values),
         cmocka_unit_test(test_quantile_matches_sorted_definition),
         cmocka_unit_test(test_compare_hand_values),
+        cmocka_unit_test(test_compare_trimmed),
         cmocka_unit_test(test_compare_nonfinite_excluded),
         cmocka_unit_test(test_compare_zero_reference),
         cmocka_unit_test(test_compare_size_mismatch),

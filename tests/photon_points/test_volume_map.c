@@ -2,7 +2,8 @@
 /* Volume photon map: every beam query must return exactly the photons a brute-force scan accepts, with
  * the same t and d2, for random, axis-parallel, inside-the-cloud, zero-length and unbounded segments, zero
  * and huge radii, empty and one-photon maps and duplicate positions; and the visit order must not depend
- * on the build (run twice, or with another thread count). Photons carry their input index in `bounce`.
+ * on the build (run twice, or with another thread count); maps large enough for the parallel partition of
+ * the top levels, with ties and a sample that misses the median. Photons carry their input index in `bounce`.
  * The query with a time window must visit, in order, the plain query's photons minus some outside the
  * window and never one inside it (the film's gate test, computed as the sensor pass does), for random and
  * boundary times and both camera legs. */
@@ -126,6 +127,7 @@ static volume_photon_map *build_or_fail(const photon *ph, size_t n, double r)
     volume_photon_map *m = volume_map_build(ph, n, r, &err);
     if (!m) fail_msg("volume_map_build: %s", err.msg);
     assert_int_equal(volume_map_size(m), n);
+    assert_true(volume_map_splits_ok(m)); /* the build's invariant, which no query can see */
     return m;
 }
 
@@ -454,6 +456,42 @@ static void test_duplicate_positions(void **state)
     free(ph);
 }
 
+/* Maps of 300,000 photons: their top levels are split by the parallel partition (ranges of 65,536 photons
+ * and more; docs/design.md §2.4). Three clouds: uniform; x on five planes only (the two keys that bracket the
+ * median rank are equal, and a fifth of the photons ties with them); and one built so that the sampled keys
+ * miss the median rank at the root (the sampled positions hold x ≥ 1, all others x in [0, 0.5] and a thin
+ * y, z spread, so x is the split axis): the selection must then fall back to the group that holds the rank.
+ * Every node must split at a plane (build_or_fail: volume_map_splits_ok; the queries alone cannot see a
+ * wrong split, the boxes being exact), and every query must match the brute-force scan. */
+static void test_parallel_partition(void **state)
+{
+    (void)state;
+    const size_t n = 300000;
+    const double r = 0.02;
+    const int keys = (int)pow(n / 4.0, 2.0 / 3.0); /* the root's key sample, as volume_map.c band_keys draws it */
+    const size_t step = n / (size_t)keys;
+    for (int cloud = 0; cloud < 3; cloud++) {
+        photon *ph = random_cloud(n, 141 + (uint64_t)cloud);
+        for (size_t i = 0; i < n && cloud == 1; i++) ph[i].pos[0] = 0.25f * (float)(i % 5);
+        for (size_t i = 0; i < n && cloud == 2; i++) {
+            int sampled = i % step == step / 2 && i / step < (size_t)keys;
+            double x = sampled ? 1.0 + 1e-3 * (double)(i / step) : 0.5 * ph[i].pos[0];
+            set_pos(&ph[i], x, 0.1 * ph[i].pos[1], 0.1 * ph[i].pos[2]);
+        }
+        volume_photon_map *m = build_or_fail(ph, n, r);
+        dp_rng g = rng_stream(150 + (uint64_t)cloud, 0, 0);
+        size_t total = 0;
+        for (int i = 0; i < 150; i++) {
+            const photon *target = &ph[rng_next_u64(&g) % n];
+            vec3 d = random_dir(&g);
+            total += check_query(m, ph, n, r, v3_sub(pos_of(target), d), d, i % 2 ? INFINITY : 2.0);
+        }
+        assert_true(total >= 150); /* every ray runs through its target photon */
+        volume_map_free(m);
+        free(ph);
+    }
+}
+
 static void record_order(void *ctx, const photon *p, double t, double d2)
 {
     (void)t;
@@ -690,6 +728,7 @@ int main(void)
         cmocka_unit_test(test_rays_through_photons),
         cmocka_unit_test(test_photons_at_radius),
         cmocka_unit_test(test_visit_order_deterministic),
+        cmocka_unit_test(test_parallel_partition),
         cmocka_unit_test(test_window_random),
         cmocka_unit_test(test_window_boundaries),
         cmocka_unit_test(test_window_nonfinite),
