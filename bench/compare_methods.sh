@@ -1,12 +1,13 @@
 #!/bin/sh
 # The DARTS paper's comparison set at equal time (its Fig. 7 and paper §6.1): bench/compare_methods.sh SCENE.json SECONDS
 # SEEDS [REFERENCE.exr|-] [NAME] [render args...]
-# Renders SCENE with each method for SECONDS of wall time, SEEDS seeds, the methods alternating inside each
-# seed (a slow spell of the machine falls on all of them), and prints the paper's table: per method the
-# passes, the MSE against REFERENCE (and MSE − V_ref when REFERENCE.var holds the reference's own noise), the
-# papers' q99-normalised MSE, each relative to DARTS PT, and each method's own variance from the spread of
-# its seeds (no reference needed; SEEDS >= 2), each ratio with a 95 % interval over seeds (bench/seed_stats.py;
-# BASE=method picks the denominator, DARTS PT by default). Methods (METHODS="..." picks a subset, in this order):
+# Renders SCENE with each method for SECONDS of wall time, SEEDS seeds (8 or more: fewer are refused unless
+# FEW_SEEDS=1), the methods alternating inside each seed (a slow spell of the machine falls on all of them), and
+# prints the paper's table: per method the passes, the MSE against REFERENCE (and MSE − V_ref when
+# REFERENCE.var holds the reference's own noise), the trimmed MSE (the 0.1 % of pixels of largest error
+# dropped), the papers' q99-normalised MSE, each relative to DARTS PT, each method's own variance from the
+# spread of its seeds (no reference needed), and the bias² of its seeds' mean apart from that noise, each ratio
+# with a 95 % interval over seeds (bench/seed_stats.py; BASE=method picks the denominator, DARTS PT by default). Methods (METHODS="..." picks a subset, in this order):
 #   uniform_pt  uniform-time path tracer (Jarabo et al. 2014 as the DARTS supplement B.4 corrects it)
 #   pt          plain path tracer
 #   pp          baseline progressive photon points
@@ -31,6 +32,8 @@ extra="$*"
 bin=${DARTSPP:-build/dartspp}
 [ -x "$bin" ] || make build/dartspp >&2
 [ "$ref" = - ] || [ -f "$ref" ] || { echo "$0: no reference image $ref" >&2; exit 2; }
+[ "$seeds" -ge 8 ] || [ "${FEW_SEEDS:-}" = 1 ] ||
+    { echo "$0: $seeds seeds: ratios need 8 or more for their intervals (FEW_SEEDS=1 to try fewer)" >&2; exit 2; }
 out=bench/results/$name; mkdir -p "$out"
 table=bench/results/$name-methods-${secs}s.md
 pt="--set type=path_tracer"

@@ -8,7 +8,10 @@
 # reference, and that MSE minus the reference's own noise (REF_NOISE, default 0.0003: see
 # ../shared/references/README.md). Without PEER_TUNGSTEN it runs dartspp alone and says so. REFERENCE
 # "none" (a scene without an unbiased reference, e.g. the dragon) leaves the MSE columns out.
-# Seeds are 1..SEEDS for both (seed 99 made the authors' 40-minute image; use other seeds against it).
+# Seeds are 1..SEEDS for both (seed 99 made the authors' 40-minute image; use other seeds against it); 8 or
+# more (fewer refused unless FEW_SEEDS=1). After that table, bench/seed_stats.py's: the full and the trimmed MSE
+# (the 0.1 % of pixels of largest error dropped), the seed variance and the bias² of the mean apart from the
+# noise, each theirs ÷ ours with a 95 % bootstrap interval over seeds.
 # Our extra options go in DARTSPP_ARGS (e.g. "--set volume_gather=beam"). Output: out/peer/<stem>-<s>s<TAG>/
 # (TAG from PEER_TAG, so that variants do not overwrite each other). PEER_TABLE_ONLY=1 prints the table of
 # an earlier run in that folder again without rendering.
@@ -21,6 +24,8 @@ noise=${REF_NOISE:-0.0003}
 [ -f "$scene" ] || { echo "$0: no scene $scene" >&2; exit 2; }
 scene_abs=$(cd "$(dirname "$scene")" && pwd)/$(basename "$scene") # the peer runs in the output folder
 [ "$ref" = none ] || [ -f "$ref" ] || { echo "$0: no reference image $ref" >&2; exit 2; }
+[ "$seeds" -ge 8 ] || [ "${FEW_SEEDS:-}" = 1 ] ||
+    { echo "$0: $seeds seeds: ratios need 8 or more for their intervals (FEW_SEEDS=1 to try fewer)" >&2; exit 2; }
 if [ -n "$peer" ] && [ ! -x "$peer" ]; then echo "$0: PEER_TUNGSTEN=$peer is not an executable" >&2; exit 2; fi
 stem=$(basename "$scene" .json)
 o=out/peer/$stem-${secs}s${PEER_TAG:-}
@@ -104,3 +109,9 @@ if grep -q '^theirs ' "$o/runs.txt"; then
                if (!none && ("ours" in m) && ("theirs" in m) && m["ours"] > 0 && n["ours"] > 0)
                    printf "MSE, theirs ÷ ours: %.2f (minus the reference noise: %.2f)\n", m["theirs"] / m["ours"], n["theirs"] / n["ours"] }' "$o/summary.txt"
 fi
+# every ratio with its interval over seeds (theirs ÷ ours: BASE ours)
+labels=ours
+grep -q '^theirs ' "$o/runs.txt" && labels="ours theirs"
+echo
+[ "$ref" = none ] && sref=- || sref=$ref
+DARTSPP=$bin /usr/bin/python3 bench/seed_stats.py "$o" ours "$labels" "$seeds" "$sref" "$noise"

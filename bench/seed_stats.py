@@ -3,18 +3,21 @@
 
 bench/seed_stats.py DIR BASE METHODS SEEDS [REFERENCE] [VREF]
 
-DIR holds LABEL-sK.exr (K = 1..SEEDS) and LABEL-sK.txt (the render's stdout, "rendered N passes ...") for
-every LABEL in METHODS (space-separated). For each method:
+DIR holds LABEL-sK.exr or LABEL-sK.pfm (K = 1..SEEDS) and LABEL-sK.txt (the render's stdout, "rendered N passes
+...") for every LABEL in METHODS (space-separated). For each method:
 - passes: the mean over seeds;
-- MSE against REFERENCE (mean over seeds, minus VREF, the reference's own noise), and the papers'
-  MSE/q99² (dartspp compare --csv);
+- MSE against REFERENCE (mean over seeds, minus VREF, the reference's own noise), the trimmed MSE (without the
+  0.1 % of pixels of largest error: `dartspp compare`, docs/cli.md §4) and the papers' MSE/q99²;
 - the seed variance: the mean per-pixel variance between seeds, from disjoint pairs of seeds (s1, s2), (s3,
   s4), ...: each pair gives MSE(a, b)/2, an unbiased estimate that shares no image with the others;
+- the bias of the mean, apart from the noise: the MSE of the seeds' mean image (`dartspp merge`) against
+  REFERENCE is bias² + V/SEEDS + VREF, so bias² = that − V/SEEDS − VREF with V the seed variance, ± twice the
+  standard error of V/SEEDS over the pairs (printed "≤ x" when it does not stand out of that: the reference or
+  the seeds do not resolve it);
 - each figure's ratio to BASE's, with a 95 % percentile bootstrap interval: seeds (MSE) or pairs (variance)
   resampled with replacement, each method independently (its runs share nothing with BASE's), 4000 times.
-Prints one Markdown table row per method: | label | passes | MSE | ratio [CI] | MSE/q99² | ratio [CI] |
-variance | ratio [CI] |. Written by us for the benchmarks (no library needed: the numbers come from
-`dartspp compare`)."""
+Prints one Markdown table row per method. Written by us for the benchmarks (no library needed: the numbers come
+from `dartspp compare` and `dartspp merge`)."""
 import os
 import random
 import subprocess
@@ -24,9 +27,27 @@ BIN = os.environ.get("DARTSPP", "build/dartspp")
 
 
 def compare(a, b):
+    """MSE, MSE/q99² and the trimmed MSE of image a against b"""
     row = subprocess.run([BIN, "compare", a, b, "--csv"], check=True, capture_output=True, text=True).stdout
     f = row.strip().split(",")
-    return float(f[0]), float(f[3])
+    return float(f[0]), float(f[3]), float(f[7])
+
+
+def image_of(d, label, k):
+    for ext in (".exr", ".pfm"):
+        path = "%s/%s-s%d%s" % (d, label, k, ext)
+        if os.path.exists(path):
+            return path
+    return None
+
+
+def mean_image_mse(imgs, ref, d, label):
+    """MSE of the seeds' mean image against the reference (dartspp merge writes the mean)"""
+    if len(imgs) < 2:
+        return float("nan")
+    out = "%s/%s-mean.pfm" % (d, label)
+    subprocess.run([BIN, "merge", out] + imgs, check=True, capture_output=True, text=True)
+    return compare(out, ref)[0]
 
 
 def passes(path):
@@ -66,6 +87,16 @@ def fmt(r):
     return "%.3g [%.3g, %.3g]" % (v, lo, hi)
 
 
+def bias_cell(mse_mean, var, k, vref):
+    """bias² of the mean = MSE(mean, ref) − V/k − V_ref, ± twice the standard error of V/k (from the spread of
+    the pairs' variances); '≤ x' (x = estimate + 2 se) where it does not stand out of that noise"""
+    if len(var) < 2 or mse_mean != mse_mean:
+        return "-"
+    b = mse_mean - mean(var) / k - vref
+    se = (sum((v - mean(var)) ** 2 for v in var) / (len(var) - 1) / len(var)) ** 0.5 / k
+    return "%.3g ± %.2g" % (b, 2 * se) if b > 2 * se else "≤ %.2g" % (max(b, 0.0) + 2 * se)
+
+
 def main():
     if len(sys.argv) < 5:
         sys.exit("usage: seed_stats.py DIR BASE METHODS SEEDS [REFERENCE] [VREF]")
@@ -74,29 +105,32 @@ def main():
     vref = float(sys.argv[6]) if len(sys.argv) > 6 else 0.0
     stats = {}
     for m in methods:
-        imgs = ["%s/%s-s%d.exr" % (d, m, k) for k in range(1, seeds + 1)]
-        imgs = [p for p in imgs if os.path.exists(p)]
-        mse, q = [], []
+        imgs = [image_of(d, m, k) for k in range(1, seeds + 1)]
+        imgs = [p for p in imgs if p]
+        mse, q, trim = [], [], []
         if ref:
             for p in imgs:
-                a, b = compare(p, ref)
+                a, b, c = compare(p, ref)
                 mse.append(a)
                 q.append(b)
+                trim.append(c)
         var = [compare(imgs[i], imgs[i + 1])[0] / 2 for i in range(0, len(imgs) - 1, 2)]
         ps = [passes(p[:-4] + ".txt") for p in imgs]
-        stats[m] = (mean(ps), mse, q, var, len(imgs))
+        mm = mean_image_mse(imgs, ref, d, m) if ref else float("nan")
+        stats[m] = {"passes": mean(ps), "mse": mse, "q": q, "trim": trim, "var": var, "n": len(imgs), "mm": mm}
     if base not in stats:
         sys.exit("seed_stats.py: base method %s not among %s" % (base, methods))
-    _, bmse, bq, bvar, _ = stats[base]
-    print("| method | seeds | passes | MSE − V_ref | ÷ %s [95 %% CI] | MSE/q99² | ÷ %s [95 %% CI] | variance (seed pairs) "
-          "| ÷ %s [95 %% CI] |" % (base, base, base))
-    print("|---|---|---|---|---|---|---|---|---|")
+    b = stats[base]
+    print("| method | seeds | passes | MSE − V_ref | ÷ %s [95 %% CI] | trimmed MSE | ÷ %s [95 %% CI] | MSE/q99² "
+          "| ÷ %s [95 %% CI] | seed variance (pairs) | ÷ %s [95 %% CI] | bias² of the mean |" % ((base,) * 4))
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|")
     for m in methods:
-        p, mse, q, var, n = stats[m]
-        print("| %s | %d | %.0f | %s | %s | %s | %s | %s | %s |" % (
-            m, n, p, "%.4g" % (mean(mse) - vref) if mse else "-", fmt(ratio_ci(mse, bmse, vref)),
-            "%.4g" % mean(q) if q else "-", fmt(ratio_ci(q, bq)), "%.4g" % mean(var) if var else "-",
-            fmt(ratio_ci(var, bvar))))
+        st = stats[m]
+        cell = lambda xs, shift=0.0: "%.4g" % (mean(xs) - shift) if xs else "-"
+        print("| %s | %d | %.0f | %s | %s | %s | %s | %s | %s | %s | %s | %s |" % (
+            m, st["n"], st["passes"], cell(st["mse"], vref), fmt(ratio_ci(st["mse"], b["mse"], vref)),
+            cell(st["trim"]), fmt(ratio_ci(st["trim"], b["trim"])), cell(st["q"]), fmt(ratio_ci(st["q"], b["q"])),
+            cell(st["var"]), fmt(ratio_ci(st["var"], b["var"])), bias_cell(st["mm"], st["var"], st["n"], vref)))
 
 
 if __name__ == "__main__":
