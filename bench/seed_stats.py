@@ -9,7 +9,9 @@ DIR holds LABEL-sK.exr or LABEL-sK.pfm (K = 1..SEEDS) and LABEL-sK.txt (the rend
 - MSE against REFERENCE (mean over seeds, minus VREF, the reference's own noise), the trimmed MSE (without the
   0.1 % of pixels of largest error: `dartspp compare`, docs/cli.md §4) and the papers' MSE/q99²;
 - the seed variance: the mean per-pixel variance between seeds, from disjoint pairs of seeds (s1, s2), (s3,
-  s4), ...: each pair gives MSE(a, b)/2, an unbiased estimate that shares no image with the others;
+  s4), ...: each pair gives MSE(a, b)/2, an unbiased estimate that shares no image with the others; and the
+  trimmed seed variance, the trimmed MSE(a, b)/2 (no reference needed: for unbiased methods the figure to
+  compare when the reference cannot resolve the MSE);
 - the bias of the mean, apart from the noise: the MSE of the seeds' mean image (`dartspp merge`) against
   REFERENCE is bias² + V/SEEDS + VREF, so bias² = that − V/SEEDS − VREF with V the seed variance, ± twice the
   standard error of V/SEEDS over the pairs (printed "≤ x" when it does not stand out of that: the reference or
@@ -114,23 +116,28 @@ def main():
                 mse.append(a)
                 q.append(b)
                 trim.append(c)
-        var = [compare(imgs[i], imgs[i + 1])[0] / 2 for i in range(0, len(imgs) - 1, 2)]
+        pairs = [compare(imgs[i], imgs[i + 1]) for i in range(0, len(imgs) - 1, 2)]
+        var = [c[0] / 2 for c in pairs]
+        var_trim = [c[2] / 2 for c in pairs]
         ps = [passes(p[:-4] + ".txt") for p in imgs]
         mm = mean_image_mse(imgs, ref, d, m) if ref else float("nan")
-        stats[m] = {"passes": mean(ps), "mse": mse, "q": q, "trim": trim, "var": var, "n": len(imgs), "mm": mm}
+        stats[m] = {"passes": mean(ps), "mse": mse, "q": q, "trim": trim, "var": var, "var_trim": var_trim,
+                    "n": len(imgs), "mm": mm}
     if base not in stats:
         sys.exit("seed_stats.py: base method %s not among %s" % (base, methods))
     b = stats[base]
     print("| method | seeds | passes | MSE − V_ref | ÷ %s [95 %% CI] | trimmed MSE | ÷ %s [95 %% CI] | MSE/q99² "
-          "| ÷ %s [95 %% CI] | seed variance (pairs) | ÷ %s [95 %% CI] | bias² of the mean |" % ((base,) * 4))
-    print("|---|---|---|---|---|---|---|---|---|---|---|---|")
+          "| ÷ %s [95 %% CI] | seed variance (pairs) | ÷ %s [95 %% CI] | trimmed seed variance | ÷ %s [95 %% CI] "
+          "| bias² of the mean |" % ((base,) * 5))
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     for m in methods:
         st = stats[m]
         cell = lambda xs, shift=0.0: "%.4g" % (mean(xs) - shift) if xs else "-"
-        print("| %s | %d | %.0f | %s | %s | %s | %s | %s | %s | %s | %s | %s |" % (
+        print("| %s | %d | %.0f | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s |" % (
             m, st["n"], st["passes"], cell(st["mse"], vref), fmt(ratio_ci(st["mse"], b["mse"], vref)),
             cell(st["trim"]), fmt(ratio_ci(st["trim"], b["trim"])), cell(st["q"]), fmt(ratio_ci(st["q"], b["q"])),
-            cell(st["var"]), fmt(ratio_ci(st["var"], b["var"])), bias_cell(st["mm"], st["var"], st["n"], vref)))
+            cell(st["var"]), fmt(ratio_ci(st["var"], b["var"])), cell(st["var_trim"]),
+            fmt(ratio_ci(st["var_trim"], b["var_trim"])), bias_cell(st["mm"], st["var"], st["n"], vref)))
 
 
 if __name__ == "__main__":
