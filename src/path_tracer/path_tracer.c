@@ -99,10 +99,39 @@ static void connect_lights(pixel_ctx *c, const path_state *ps, vec3 x, const pha
     for (int i = 0; i < c->pass->s->light_count; i++) connect_light(c, ps, i, x, pf, ss);
 }
 
+/* One side of the gate on the crossing: keeps t in [*t0, *t1] where A + B·t < lim (below = 1) or >= lim. */
+static void keep_side(double A, double B, double lim, int below, double *t0, double *t1)
+{
+    if (B == 0.0) {
+        if (below ? !(A < lim) : !(A >= lim)) *t1 = *t0; /* empty */
+        return;
+    }
+    double tc = (lim - A) / B;
+    if ((B > 0.0) == below) *t1 = dp_fmin(*t1, tc);
+    else *t0 = dp_fmax(*t0, tc);
+}
+
+/* An aimed path's crossing restricted to its bin (docs/emitters.md §4.2): the vertex at t has the path time
+ * τ(t) = τ + η·t (0 on the unwarped camera segment) + the leg's, and the leg runs s(t) = (o + t·d − pos)·axis
+ * along −axis through regions of η in [η_lb, η_ub], so only t with τ + η·t + η_lb·s(t) < end and
+ * τ + η·t + η_ub·s(t) >= start can count: both linear in t. Widened by 1e-9 of the times (rounding); the
+ * derivatives keep the whole crossing (their path-space estimate treats the draw as fixed). */
+static void beam_gate_interval(const pixel_ctx *c, const path_state *ps, const emitter *L, double eta, double *t0,
+                               double *t1)
+{
+    const pt_aim *a = &c->aim;
+    if (!a->on || c->pass->deriv) return;
+    double s0 = v3_dot(v3_sub(ps->o, L->pos), L->axis), ds = v3_dot(ps->d, L->axis);
+    double slack = 1e-9 * (fabs(a->bin.end) + fabs(ps->time) + eta * *t1);
+    keep_side(ps->time + a->g->eta_lb * s0, eta + a->g->eta_lb * ds, a->bin.end + slack, 1, t0, t1);
+    keep_side(ps->time + a->g->eta_ub * s0, eta + a->g->eta_ub * ds, a->bin.start - slack, 0, t0, t1);
+}
+
 /* The crossing of a parallel beam (docs/emitters.md §4.2): a vertex at t in [t0, t1], the part of the
- * segment inside the beam, by a σ-exponential truncated to it (uniform where σ·(t1 − t0) is tiny); its
- * estimate β·σs·e^{−σt·t}/p(t) times the deterministic connection along −axis. It estimates the light that
- * the segment's medium vertices would connect to, which they then leave out. */
+ * segment inside the beam (on an aimed path only the part whose time can land in its bin), by a σ-exponential
+ * truncated to it (uniform where σ·(t1 − t0) is tiny); its estimate β·σs·e^{−σt·t}/p(t) times the
+ * deterministic connection along −axis. It estimates the light that the segment's medium vertices would
+ * connect to, which they then leave out. */
 void pt_beam_crossing(pixel_ctx *c, const path_state *ps, int i, double tmax, int draw_emission, double w, int frame)
 {
     const scene *s = c->pass->s;
@@ -112,6 +141,8 @@ void pt_beam_crossing(pixel_ctx *c, const path_state *ps, int i, double tmax, in
     if (!medium_scatters(m) || ps->medium_events + 1 > m->max_bounces ||
         !bounces_count(&c->pass->p->bounces, ps->depth + 2) || !emitter_beam_crossing(L, ps->o, ps->d, tmax, &t0, &t1))
         return;
+    beam_gate_interval(c, ps, L, c->pass->p->window.camera_unwarp && ps->depth == 0 ? 0.0 : m->eta, &t0, &t1);
+    if (!(t1 > t0)) return;
     double len = t1 - t0, sigma = v3_avg(m->sigma_t), a = sigma * len, u = rng_uniform(c->rng), t, pdf;
     if (a > 1e-6) {
         double mass = -expm1(-a);
