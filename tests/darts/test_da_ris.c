@@ -138,11 +138,24 @@ static void test_thick_segments(void **state)
     assert_int_equal(run_both(&k1, 40) + run_both(&k2, 50) + run_both(&k3, 60) + run_both(&k4, 70), 0);
 }
 
+/* T just past C: the candidates nearer than ~0.05 are causal for T (s = T − t ≈ 40, exponent ≈ −300), the
+ * others only for S_reach (s ≈ 80, exponent ≈ −150), so the first ones' float targets underflow (e^{−150} is
+ * below FLT_MIN) and only the floor keeps them selectable, by the defensive share. Plain RIS (ε = 0) would pick
+ * them with probability ~1e-38 and weight ~1e38: unbiased, but no finite run shows it, so ε = 0.2 only. */
+static void test_float_underflow(void **state)
+{
+    (void)state;
+    const ris_case k = {"causal split (T - C = 0.05)", 40.0, 0.0, 40.05, 80.0, 1, v3s(9.0), v3s(1.0), 0.0, 50.0,
+                        200000};
+    assert_int_equal(run_case(&k, 0.2, 80), 0);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_thin_segments),
         cmocka_unit_test(test_thick_segments),
+        cmocka_unit_test(test_float_underflow),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
