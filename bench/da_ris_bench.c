@@ -1,11 +1,13 @@
-/* DA-RIS micro-benchmark (docs/darts.md §6.5): the time per call of da_sample_distance on inputs recorded from
+/* DA-RIS micro-benchmark (docs/darts.md §6.5): the time per call of da_sample_distance, and of
+ * da_sample_distance_rev (the same file at another revision, renamed by bench/da_ris_bench.sh), on inputs recorded from
  * a render (bench/data/da_inputs_cbox_fog.txt: every 97th call of the DARTS path tracer on the fog Cornell
  * box, scenes/cbox-fog/transient.json at 64², one per line: valid, x, e, C, S_lo, S_hi, T, 1/p(T), S_reach,
  * d, t_max), and how many of the calls draw the medium and fall back.
  *
  *   da_ris_bench INPUTS SIGMA_S SIGMA_A ROUNDS
  *
- * Runs ROUNDS passes over the inputs with one thread, 5 times, and prints the best ns per call. */
+ * Runs ROUNDS passes over the inputs with one thread, 15 times for each version, alternating (so that a
+ * machine shared with other work slows both alike), and prints the best ns per call of each. */
 #include "dartspp/darts.h"
 
 #include <stdio.h>
@@ -45,6 +47,30 @@ static double now(void)
     return ts.tv_sec + 1e-9 * ts.tv_nsec;
 }
 
+typedef void (*da_fn)(const medium *, const ellipse_record *, vec3, double, double, dp_rng *, da_sample *);
+void da_sample_distance_rev(const medium *m, const ellipse_record *r, vec3 d, double tmax, double defensive,
+                            dp_rng *rng, da_sample *out);
+
+/* one timed run: ROUNDS passes over the inputs; the medium and fallback shares into *med, *fb */
+static double run(da_fn fn, const medium *m, const da_input *in, int n, int rounds, int rep, double *med, double *fb)
+{
+    dp_rng rng = rng_stream(7, rep, 0);
+    long medium_events = 0, fallbacks = 0;
+    double t0 = now(), sink = 0.0;
+    for (int k = 0; k < rounds; k++)
+        for (int i = 0; i < n; i++) {
+            da_sample out;
+            fn(m, &in[i].r, in[i].d, in[i].tmax, 0.2, &rng, &out);
+            sink += out.t;
+            medium_events += out.medium_event;
+            fallbacks += out.fallback;
+        }
+    double dt = (now() - t0) / ((double)rounds * n);
+    *med = (double)medium_events / ((double)rounds * n);
+    *fb = (double)fallbacks / ((double)rounds * n);
+    return sink == -1.0 ? 0.0 : dt;
+}
+
 int main(int argc, char **argv)
 {
     if (argc != 5) {
@@ -61,26 +87,17 @@ int main(int argc, char **argv)
     int rounds = atoi(argv[4]);
     medium m = {.sigma_s = v3s(ss), .sigma_a = v3s(sa), .sigma_t = v3s(ss + sa), .eta = 1.0, .max_bounces = 1000,
                 .phase = {PHASE_ISOTROPIC, 0.0, NULL}};
-    double best = INFINITY, sink = 0.0;
-    long medium_events = 0, fallbacks = 0;
-    for (int rep = 0; rep < 5; rep++) {
-        dp_rng rng = rng_stream(7, rep, 0);
-        medium_events = fallbacks = 0;
-        double t0 = now();
-        for (int k = 0; k < rounds; k++)
-            for (int i = 0; i < n; i++) {
-                da_sample out;
-                da_sample_distance(&m, &in[i].r, in[i].d, in[i].tmax, 0.2, &rng, &out);
-                sink += out.t + out.weight.x;
-                medium_events += out.medium_event;
-                fallbacks += out.fallback;
-            }
-        double dt = (now() - t0) / ((double)rounds * n);
-        if (dt < best) best = dt;
-    }
-    long calls = (long)rounds * n;
-    printf("%d inputs, %ld calls: %.1f ns per call (best of 5); medium %.3f, fallback %.4f (checksum %.6g)\n", n, calls,
-           1e9 * best, (double)medium_events / calls, (double)fallbacks / calls, sink);
+    da_fn fns[2] = {da_sample_distance_rev, da_sample_distance};
+    const char *names[2] = {"revision", "working tree"};
+    double best[2] = {INFINITY, INFINITY}, med[2], fb[2];
+    for (int rep = 0; rep < 15; rep++)
+        for (int v = 0; v < 2; v++) {
+            double dt = run(fns[v], &m, in, n, rounds, rep, &med[v], &fb[v]);
+            if (dt < best[v]) best[v] = dt;
+        }
+    for (int v = 0; v < 2; v++)
+        printf("%-12s %d inputs x %d rounds: %.1f ns per call (best of 15); medium %.3f, fallback %.4f\n", names[v], n,
+               rounds, 1e9 * best[v], med[v], fb[v]);
     free(in);
     return 0;
 }
