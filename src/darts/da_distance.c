@@ -68,37 +68,36 @@ static int candidate_count(const ellipse_record *r, vec3 d, double st, double tm
 /* The candidates' targets (scaled): Φ(s, ℓ) = (4Ds)^{−3/2}·exp(−ℓ²/(4Ds) − σa·s), the DA Green's function of a
  * point source up to constants that cancel in RIS (paper eq. 9). Reachability compares squares (ℓ < s ⇔ ℓ² <
  * s², s > 0). The values are scaled by the largest exponent and the smallest 4Ds (RIS is scale-free) so that
- * none overflows and the largest exponential is 1, and floored at FLT_MIN where reachable: w_j > 0 exactly
- * on the candidates that can still reach the bin. Returns the number of those. */
+ * none overflows and the largest exponential is 1, evaluated in float, and floored at FLT_MIN where reachable:
+ * w_j > 0 exactly on the candidates that can still reach the bin. Returns the number of those. */
 static int candidate_targets(const ellipse_record *r, const double *t_c, int M, double perp2, double p_proj,
                              double D, double sa, float *w)
 {
-    float x[M_MAX], expo[M_MAX];
-    float x_min = FLT_MAX, expo_max = -FLT_MAX;
+    double x[M_MAX], x_min = INFINITY;
+    float expo[M_MAX], expo_max = -FLT_MAX;
     int valid = 0;
     for (int j = 0; j < M; j++) {
         double t = t_c[j], dp = p_proj - t;
         double ell2 = perp2 + dp * dp, s = 0.0, sT = r->T - t, sR = r->S_reach - t;
         if (r->valid && sT > 0.0 && sT * sT > ell2) s = sT;   /* causal for the sampled residual */
         else if (sR > 0.0 && sR * sR > ell2) s = sR;          /* reachable only later in the bin */
-        double fourDs = 4.0 * D * s;
-        x[j] = (float)fourDs;
-        if (!(x[j] > 0.0f) || !isfinite(x[j])) {
-            x[j] = 0.0f;
+        x[j] = 4.0 * D * s;
+        if (!(x[j] > 0.0) || !isfinite(x[j])) {
+            x[j] = 0.0;
             continue;
         }
-        expo[j] = (float)(-ell2 / fourDs - sa * s);
-        if (expo[j] < -FLT_MAX) expo[j] = -FLT_MAX;
+        double e = -ell2 / x[j] - sa * s;
+        expo[j] = e > -FLT_MAX ? (float)e : -FLT_MAX;
         if (x[j] < x_min) x_min = x[j];
         if (expo[j] > expo_max) expo_max = expo[j];
         valid++;
     }
     for (int j = 0; j < M; j++) {
-        if (!(x[j] > 0.0f)) {
+        if (!(x[j] > 0.0)) {
             w[j] = 0.0f;
             continue;
         }
-        float ratio = x_min / x[j]; /* (4Ds_min/4Ds)^{3/2} <= 1 */
+        float ratio = (float)(x_min / x[j]); /* (4Ds_min/4Ds)^{3/2} <= 1 */
         float v = ratio * sqrtf(ratio) * exp2_neg((expo[j] - expo_max) * 1.44269504f);
         w[j] = v > FLT_MIN ? v : FLT_MIN;
     }
