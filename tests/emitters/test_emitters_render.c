@@ -193,13 +193,13 @@ static void test_beam_single_scatter(void **state)
                "\"enable_elliptical\": true", 1, 4.4, 5.4, 0, 300, 18);
 }
 
-/* Issue 52: an aimed path draws its crossing only where the path time can land in its bin (docs/emitters.md
- * §4.2), so a narrow gate keeps every crossing sample. The DARTS path tracer under a gate of 0.15 (a seventh
- * of the in-beam times), warped and unwarped, against the same quadrature, 150 passes (standard error of the
- * total 0.42 % and 0.52 %; with the whole crossing drawn, as before, 2.0 % and 1.9 % at 300 passes). (The
- * uniform-time path tracer draws the same crossings as DARTS with a parallel beam: the same image.) Broken
- * variants (tests/README.md): the restricted draw weighted by the pdf of the whole crossing; the leg's s(t)
- * taken without its t·(ω·axis) term. */
+/* Issue 52: an aimed path draws its crossing only where the path time can land in its bin
+ * (docs/emitters.md §4.2), so a narrow gate keeps every crossing sample. The DARTS path tracer under a gate
+ * of 0.15 (a seventh of the in-beam times), warped and unwarped, against the same quadrature, 150 passes
+ * (standard error of the total 0.42 % and 0.52 %; with the whole crossing drawn, as before, 2.0 % and 1.9 %
+ * at 300 passes). (The uniform-time path tracer draws the same crossings as DARTS with a parallel beam: the
+ * same image.) Broken variants (tests/README.md): the restricted draw weighted by the pdf of the whole
+ * crossing; the leg's s(t) taken without its t·(ω·axis) term. */
 static void test_beam_narrow_gate(void **state)
 {
     (void)state;
