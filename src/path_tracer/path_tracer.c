@@ -99,19 +99,60 @@ static void connect_lights(pixel_ctx *c, const path_state *ps, vec3 x, const pha
     for (int i = 0; i < c->pass->s->light_count; i++) connect_light(c, ps, i, x, pf, ss);
 }
 
+/* One side of the gate on the crossing: keeps t in [*t0, *t1] where A + B·t < lim (below = 1) or >= lim. */
+static void keep_side(double A, double B, double lim, int below, double *t0, double *t1)
+{
+    if (B == 0.0) {
+        if (below ? !(A < lim) : !(A >= lim)) *t1 = *t0; /* empty */
+        return;
+    }
+    double tc = (lim - A) / B;
+    if ((B > 0.0) == below) *t1 = dp_fmin(*t1, tc);
+    else *t0 = dp_fmax(*t0, tc);
+}
+
+/* The crossing restricted to a bin [start, end) (docs/emitters.md §4.2): the vertex at t has the path time
+ * τ + η·t (η 0 on the unwarped camera segment) plus the leg's, and the leg runs s(t) = (o + t·d − pos)·axis
+ * along −axis through regions of η in [η_lb, η_ub], so only t with τ + η·t + η_lb·s(t) < end and
+ * τ + η·t + η_ub·s(t) >= start can count: both linear in t. Widened by 1e-9 of the times (rounding). */
+static void beam_gate_interval(const path_state *ps, const emitter *L, double tau, double eta, double start,
+                               double end, const darts_plan *d, double *t0, double *t1)
+{
+    double s0 = v3_dot(v3_sub(ps->o, L->pos), L->axis), ds = v3_dot(ps->d, L->axis);
+    double slack = 1e-9 * (fabs(end) + fabs(tau) + eta * *t1);
+    keep_side(tau + d->eta_lb * s0, eta + d->eta_lb * ds, end + slack, 1, t0, t1);
+    keep_side(tau + d->eta_ub * s0, eta + d->eta_ub * ds, start - slack, 0, t0, t1);
+}
+
 /* The crossing of a parallel beam (docs/emitters.md §4.2): a vertex at t in [t0, t1], the part of the
  * segment inside the beam, by a σ-exponential truncated to it (uniform where σ·(t1 − t0) is tiny); its
  * estimate β·σs·e^{−σt·t}/p(t) times the deterministic connection along −axis. It estimates the light that
- * the segment's medium vertices would connect to, which they then leave out. */
+ * the segment's medium vertices would connect to, which they then leave out. Under a gate only the part of
+ * [t0, t1] whose time can land in it is drawn: an aimed path's bin, or on a plain path the window, with the
+ * emission time drawn first (it shifts the whole time); renders with derivatives keep the whole crossing
+ * (their path-space estimate keeps the draw's support fixed). */
 void pt_beam_crossing(pixel_ctx *c, const path_state *ps, int i, double tmax, int draw_emission, double w, int frame)
 {
     const scene *s = c->pass->s;
+    const render_plan *p = c->pass->p;
     const medium *m = &s->media[ps->medium];
     const emitter *L = &s->lights[i];
     double t0, t1;
     if (!medium_scatters(m) || ps->medium_events + 1 > m->max_bounces ||
-        !bounces_count(&c->pass->p->bounces, ps->depth + 2) || !emitter_beam_crossing(L, ps->o, ps->d, tmax, &t0, &t1))
+        !bounces_count(&p->bounces, ps->depth + 2) || !emitter_beam_crossing(L, ps->o, ps->d, tmax, &t0, &t1))
         return;
+    double eta = p->window.camera_unwarp && ps->depth == 0 ? 0.0 : m->eta, tau = ps->time, offset = ps->offset;
+    if (p->window.gated && !p->window.delta && !c->pass->deriv) {
+        if (c->aim.on) {
+            beam_gate_interval(ps, L, tau, eta, c->aim.bin.start, c->aim.bin.end, &p->darts, &t0, &t1);
+        } else if (draw_emission) {
+            offset = path_time_offset(s, L, c->rng);
+            tau += offset;
+            draw_emission = 0;
+            beam_gate_interval(ps, L, tau, eta, p->window.start, time_window_end(&p->window), &p->darts, &t0, &t1);
+        }
+        if (!(t1 > t0)) return;
+    }
     double len = t1 - t0, sigma = v3_avg(m->sigma_t), a = sigma * len, u = rng_uniform(c->rng), t, pdf;
     if (a > 1e-6) {
         double mass = -expm1(-a);
@@ -124,7 +165,8 @@ void pt_beam_crossing(pixel_ctx *c, const path_state *ps, int i, double tmax, in
     if (!(pdf > 0.0) || !(t >= t0 && t <= t1)) return;
     path_state v = *ps;
     v.o = v3_add(ps->o, v3_scale(ps->d, t));
-    v.time = ps->time + (c->pass->p->window.camera_unwarp && ps->depth == 0 ? 0.0 : m->eta * t);
+    v.time = tau + eta * t;
+    v.offset = offset;
     v.tr_done = 0;
     pt_deriv_segment(c, &v, t);
     if (c->pass->deriv) deriv_medium_vertex(c->pass->deriv, &v.dv, ps->medium);

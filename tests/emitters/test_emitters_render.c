@@ -193,6 +193,27 @@ static void test_beam_single_scatter(void **state)
                "\"enable_elliptical\": true", 1, 4.4, 5.4, 0, 300, 18);
 }
 
+/* Issue 52: under a gate a segment draws its crossing only where the path time can land in the gate
+ * (docs/emitters.md §4.2): an aimed path's bin, or a plain path's window with its emission time drawn first.
+ * The DARTS path tracer under a gate of 0.15 (a seventh of the in-beam times), warped and unwarped, and the
+ * plain path tracer, 150 passes, against the same quadrature (standard error of the total 0.42 % and 0.52 %
+ * for DARTS; with the whole crossing drawn, as before, 2.0 % and 1.9 % at 300 passes). (The uniform-time path
+ * tracer draws the same crossings as DARTS with a parallel beam: the same image.) Broken variants
+ * (tests/README.md): the restricted draw weighted by the pdf of the whole crossing; the leg's s(t) taken
+ * without its t·(ω·axis) term; a plain path's interval placed without its emission time. */
+static void test_beam_narrow_gate(void **state)
+{
+    (void)state;
+    check_beam("DARTS, narrow gate [4.8, 4.95)",
+               "\"transient_time_center\": 4.875, \"transient_time_width\": 0.15, \"enable_guiding\": true, "
+               "\"enable_elliptical\": true", 1, 4.8, 4.95, 0, 150, 18);
+    check_beam("plain, narrow gate [4.8, 4.95)", "\"transient_time_center\": 4.875, \"transient_time_width\": 0.15", 1,
+               4.8, 4.95, 0, 150, 18);
+    check_beam("DARTS, unwarped narrow gate [2.4, 2.55)",
+               "\"transient_time_center\": 2.475, \"transient_time_width\": 0.15, \"camera_unwarp\": true, "
+               "\"enable_guiding\": true, \"enable_elliptical\": true", 1, 2.4, 2.55, 1, 150, 18);
+}
+
 /* ---- the fog box lit by the new emitters, per tile ---- */
 
 /* The lights: FOG_BOX_PANEL_AND_SPOT and FOG_BOX_COLLIMATED (tests/render_fixtures.h). */
@@ -495,6 +516,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_beam_single_scatter),
+        cmocka_unit_test(test_beam_narrow_gate),
         cmocka_unit_test(test_area_and_spot),
     };
     /* make stress only (240 s of the 260 s of this program on 2 cores): the sphere, disk and diverging beam
