@@ -257,7 +257,8 @@ double cv_techniques_pdf(const cv_techniques *ct, vec3 d, double tmax, int mis, 
 /* ---- DA distance sampling (docs/darts.md §6) ----
  * One segment from r->x along d, next surface at tmax (may be INFINITY), channel chosen by u_channel.
  * Surface event by free flight (probability e^{−σt_c·tmax}); a medium event is resampled from 8 (4 on thin
- * segments, docs/darts.md §6.5) truncated-exponential candidates (stratified table, random rotation) with target
+ * segments, docs/darts.md §6.5) truncated-exponential candidates (stratified table, random rotation) with
+ * target
  *   p̂(t) = e^{−σt·t}·Φ(s, ℓ(t)),  Φ = (4Ds)^{−3/2}·exp(−ℓ²/(4Ds) − σa·s),  D = 1/(3(σa + σs(1−g))),
  * with s = T − t where the sampled residual T can still reach the camera (T − t > ℓ), and s = S_reach − t
  * on the rest of the reachable set (t + ℓ < S_reach), so that p̂ > 0 wherever a photon can still land in the
