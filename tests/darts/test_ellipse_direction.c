@@ -6,11 +6,12 @@
  *     well inside the peak, 8 azimuths — against ellipse_direction_pdf integrated over each cell by quadrature in
  *     the test's own frame; every sample a unit vector whose returned pdf equals ellipse_direction_pdf there;
  *  b. ∫ ellipse_direction_pdf dω = 1 (quadrature in s = √(1 − cosθ) on geometric panels, relative error < 1e-6);
- *  c. the density is the control vertex's own geometry: pdf(ω)·p(t)·ℓ² is the same for every ω, with p(t) from
- *     ellipse_control_vertex (src/darts/ellipse.c, docs/darts.md §5.2) and ℓ the light leg of its vertex;
+ *  c. the density is the control vertex's own geometry: pdf(ω)·p(t)·ℓ² is the same for every ω and equals
+ *     TC·p(T)/(4πλ) (T²p(T)/(8π) when C = 0), with p(t) from ellipse_control_vertex (src/darts/ellipse.c,
+ *     docs/darts.md §5.2) and ℓ the light leg of its vertex;
  *  d. the degenerate cases: T <= C(1 + 1e-6), T = 0, T or C not finite: no sample, pdf 0, not usable.
  * Broken variants (tests/README.md, "Figures"): a normalisation without the factor 2 of ln((T + C)²/(T − C)²);
- * the inverse CDF with u in place of 1 − u (the peak put at θ = π); φ not rotated (φ = 0). */
+ * the inverse CDF with λ in place of 2λ; φ not rotated (φ = 0). */
 #include "fixtures.h"
 
 #include "dartspp/darts.h"
@@ -214,10 +215,14 @@ static void test_control_vertex_geometry(void **state)
             double ratio = pdf * pdf_t * ell * ell; /* constant iff pdf ∝ 1/(p(t)·ℓ²) */
             lo = fmin(lo, ratio), hi = fmax(hi, ratio);
         }
-        double spread = hi / lo - 1.0;
-        int fail = !(spread < 1e-8);
-        print_message("  c. %-22s pdf(w) p(t) l^2 in [%.10g, %.10g]: spread %.1e%s\n", c->name, lo, hi, spread,
-                      fail ? "  FAILED" : "");
+        /* 1/(p(t)ℓ²) = 2/(p(T)·(T² + C² − 2TC cosθ)), so the ratio is TC/(4πλ) with p(T) = 1, λ = ln((T + C)/(T − C)),
+         * and T²/(8π) on the sphere */
+        double expect = c->C > 0.0 ? c->T * c->C / (4.0 * M_PI * log((c->T + c->C) / (c->T - c->C)))
+                                   : c->T * c->T / (8.0 * M_PI);
+        double spread = hi / lo - 1.0, off = rel_dev(0.5 * (lo + hi), expect);
+        int fail = !(spread < 1e-8) || !(off < 1e-8);
+        print_message("  c. %-22s pdf(w) p(t) l^2 in [%.10g, %.10g]: spread %.1e; TC/(4 pi lambda) %.10g%s\n", c->name,
+                      lo, hi, spread, expect, fail ? "  FAILED" : "");
         fails += fail;
     }
     assert_int_equal(fails, 0);

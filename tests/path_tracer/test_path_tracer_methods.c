@@ -105,6 +105,9 @@ static void test_gate(void **state)
          "\"enable_guiding\": true, \"enable_elliptical\": true, \"eda\": true, \"eda_shape\": [16, 16, 32], "
          "\"eda_table_dir\": \"/tmp/dartspp-test-eda\"", 3000},
         {"uniform time", "\"time_sampling\": \"uniform\"", 3000},
+        {"elliptical, directions share 0.9", "\"enable_elliptical\": true, \"ellipse_direction_share\": 0.9", 3000},
+        {"DARTS, no ellipse directions",
+         "\"enable_guiding\": true, \"enable_elliptical\": true, \"ellipse_directions\": false", 3000},
     };
     check_methods(GATE, 0, NULL, 0, mc, (int)(sizeof mc / sizeof mc[0]), 12000);
 }
