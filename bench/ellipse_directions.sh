@@ -1,0 +1,44 @@
+#!/bin/bash
+# Per-pass variance and CPU time per pass of the DARTS path tracer with and without the directions toward the
+# next elliptical connection (docs/darts.md §14.3), against the uniform-time path tracer, on a small render:
+#   bench/ellipse_directions.sh [SCENE.json] [RES] [SPP] [SEEDS]   (defaults: the fog box, 64, 200, 12)
+# Each method renders SEEDS independent images of SPP passes on one thread (nice 19); the per-pixel variance of
+# one image is the mean over seed pairs of `dartspp compare a b` MSE / 2 (MSE = mean over pixels and channels of
+# (a − b)², whose expectation is twice the per-pixel variance), times SPP the per-pass variance. Time: user CPU
+# seconds per pass (load-independent on a shared machine). METHODS="name|keys ..." overrides the set.
+set -eu
+root=$(cd "$(dirname "$0")/.." && pwd)
+scene=${1:-$root/scenes/cbox-fog/transient.json}
+res=${2:-64}; spp=${3:-200}; seeds=${4:-12}
+bin=${DARTSPP:-$root/build/dartspp}
+work=$(mktemp -d /tmp/ellip-dirs.XXXXXX)
+pt="--set type=path_tracer --set eda=false"
+darts="$pt --set enable_guiding=true --set enable_elliptical=true"
+ell="$pt --set enable_guiding=false --set enable_elliptical=true"
+default_methods="darts_no_dirs|$darts --set ellipse_directions=false
+darts_dirs_0.25|$darts --set ellipse_direction_share=0.25
+darts_dirs_0.5|$darts --set ellipse_direction_share=0.5
+darts_dirs_0.75|$darts --set ellipse_direction_share=0.75
+ell_no_dirs|$ell --set ellipse_directions=false
+ell_dirs_0.5|$ell --set ellipse_direction_share=0.5
+uniform_pt|$pt --set enable_guiding=false --set enable_elliptical=false --set time_sampling=uniform"
+methods=${METHODS:-$default_methods}
+echo "method,per_pass_variance,cpu_s_per_pass,pairs,spp,res"
+while IFS='|' read -r name keys; do
+    [ -n "$name" ] || continue
+    cpu=0
+    for s in $(seq 1 "$seeds"); do
+        TIMEFORMAT=%U
+        u=$( { time nice -n 19 "$bin" render "$scene" $keys --set resolution="$res" --spp "$spp" --threads 1 \
+              --seed "$s" --output "$work/$name-$s.exr" --overwrite --no-cube --no-viewer --quiet >/dev/null 2>&1; } 2>&1 )
+        cpu=$(awk -v a="$cpu" -v b="$u" 'BEGIN{print a+b}')
+    done
+    sum=0; pairs=0
+    for s in $(seq 1 2 $((seeds - 1))); do
+        mse=$("$bin" compare "$work/$name-$s.exr" "$work/$name-$((s + 1)).exr" --csv | cut -d, -f1)
+        sum=$(awk -v a="$sum" -v b="$mse" 'BEGIN{print a+b}'); pairs=$((pairs + 1))
+    done
+    awk -v n="$name" -v s="$sum" -v p="$pairs" -v spp="$spp" -v c="$cpu" -v k="$seeds" -v r="$res" \
+        'BEGIN{printf "%s,%.6g,%.6g,%d,%d,%d\n", n, s / p / 2 * spp, c / (k * spp), p, spp, r}'
+done <<< "$methods"
+rm -rf "$work"
