@@ -23,22 +23,31 @@ ell_no_dirs|$ell --set ellipse_directions=false
 ell_dirs_0.5|$ell --set ellipse_direction_share=0.5
 uniform_pt|$pt --set enable_guiding=false --set enable_elliptical=false --set time_sampling=uniform"
 methods=${METHODS:-$default_methods}
-echo "method,per_pass_variance,cpu_s_per_pass,pairs,spp,res"
+names=(); keyset=()
 while IFS='|' read -r name keys; do
     [ -n "$name" ] || continue
-    cpu=0
-    for s in $(seq 1 "$seeds"); do
+    names+=("$name"); keyset+=("$keys")
+done <<< "$methods"
+declare -A cpu
+# seeds outermost, methods inside: a change of the machine's load falls on every method alike
+for s in $(seq 1 "$seeds"); do
+    for i in "${!names[@]}"; do
+        name=${names[$i]}
         TIMEFORMAT=%U
-        u=$( { time nice -n 19 "$bin" render "$scene" $keys --set resolution="$res" --spp "$spp" --threads 1 \
-              --seed "$s" --output "$work/$name-$s.exr" --overwrite --no-cube --no-viewer --quiet >/dev/null 2>&1; } 2>&1 )
-        cpu=$(awk -v a="$cpu" -v b="$u" 'BEGIN{print a+b}')
+        u=$( { time nice -n 19 "$bin" render "$scene" ${keyset[$i]} --set resolution="$res" --spp "$spp" --threads 1 \
+              --seed "$s" --output "$work/$name-$s.exr" --overwrite --no-cube --no-viewer --quiet >/dev/null 2>&1; } 2>&1 ) ||
+            { echo "render failed: $name (${keyset[$i]})" >&2; exit 1; }
+        cpu[$name]=$(awk -v a="${cpu[$name]:-0}" -v b="$u" 'BEGIN{print a+b}')
     done
+done
+echo "method,per_pass_variance,cpu_s_per_pass,pairs,spp,res"
+for name in "${names[@]}"; do
     sum=0; pairs=0
     for s in $(seq 1 2 $((seeds - 1))); do
         mse=$("$bin" compare "$work/$name-$s.exr" "$work/$name-$((s + 1)).exr" --csv | cut -d, -f1)
         sum=$(awk -v a="$sum" -v b="$mse" 'BEGIN{print a+b}'); pairs=$((pairs + 1))
     done
-    awk -v n="$name" -v s="$sum" -v p="$pairs" -v spp="$spp" -v c="$cpu" -v k="$seeds" -v r="$res" \
+    awk -v n="$name" -v s="$sum" -v p="$pairs" -v spp="$spp" -v c="${cpu[$name]}" -v k="$seeds" -v r="$res" \
         'BEGIN{printf "%s,%.6g,%.6g,%d,%d,%d\n", n, s / p / 2 * spp, c / (k * spp), p, spp, r}'
-done <<< "$methods"
+done
 rm -rf "$work"
