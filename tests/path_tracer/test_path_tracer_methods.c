@@ -1,8 +1,9 @@
 /* tier: stress */
 /* The path tracer's methods against the plain path tracer, per image tile: the DARTS path tracer (DA distance
  * sampling, elliptical control vertices, both, with EDA, with and without the directions toward the next
- * connection (docs/darts.md §14.3, on by default wherever control vertices run), in frame mode, camera-unwarped, with two pulsed
- * lights, behind a glass-free box of Lambertian walls) and the uniform-time path tracer. Every method is an
+ * connection (docs/darts.md §14.3, on by default wherever control vertices run), in frame mode,
+ * camera-unwarped, with two pulsed lights, behind a glass-free box of Lambertian walls) and the uniform-time
+ * path tracer. Every method is an
  * unbiased estimator of the same image, so on the fog box (HG g = 0.3, coloured fog, multiple scattering and
  * surfaces, a 0.5-wide gate) each 4 × 4 tile's mean must agree with the plain path tracer's: z from the
  * spread of per-pass tile totals of both renders (thousands of passes, so the standard errors have
