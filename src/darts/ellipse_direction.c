@@ -4,7 +4,8 @@
  * p(t) = p(T)(T − C cosθ)/ℓ) carries
  *   1/(p(t)·ℓ²) = 1/(p(T)(T − C cosθ)ℓ) = 2/(p(T)·(T² + C² − 2TC cosθ)),
  * as ℓ = (T² + C² − 2TC cosθ)/(2(T − C cosθ)); its two transmittances make e^{−σt·T}, the same for every ω,
- * and only the two phase functions and visibility are left out. So ω is drawn with density ∝ 1/(a − bμ), a = T² + C², b = 2TC, μ = cosθ, φ uniform about e:
+ * and only the two phase functions and visibility are left out. So ω is drawn with density ∝ 1/(a − bμ),
+ * a = T² + C², b = 2TC, μ = cosθ, φ uniform about e:
  *   ∫ dω/(a − bμ) = 2π·(1/b)·ln((a + b)/(a − b)) = 2πλ/(TC),  λ = ln((T + C)/(T − C)),
  *   p(ω) = TC/(2πλ·(a − bμ)),  a − bμ = (T − C)² + 2TC(1 − μ) = |Tω − C e|².
  * Inverse CDF: F(μ) = ln((T + C)²/(a − bμ))/(2λ) = u gives a − bμ = (T + C)² e^{−2λu}, i.e.

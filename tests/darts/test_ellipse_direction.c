@@ -92,7 +92,8 @@ static double cell_integral(const ed_case *c, const frame *f, double m_a, double
             double s = s_a + hs * (i + 0.5 * (gl_x[a] + 1.0)), ws = 0.5 * hs * gl_w[a] * 2.0 * s;
             for (int b = 0; b < GL_N; b++) {
                 double phi = phi_a + (phi_b - phi_a) * 0.5 * (gl_x[b] + 1.0);
-                sum += ws * 0.5 * (phi_b - phi_a) * gl_w[b] * ellipse_direction_pdf(X, L, c->T, frame_dir(f, s * s, phi));
+                double wp = 0.5 * (phi_b - phi_a) * gl_w[b];
+                sum += ws * wp * ellipse_direction_pdf(X, L, c->T, frame_dir(f, s * s, phi));
             }
         }
     return sum;
@@ -130,7 +131,8 @@ static int chi2_directions(const ed_case *c, int ci)
     double total = 0.0;
     for (int i = 0; i < NM; i++)
         for (int j = 0; j < NPHI; j++) {
-            double e = cell_integral(c, &f, edge[i], edge[i + 1], 2.0 * M_PI * j / NPHI, 2.0 * M_PI * (j + 1) / NPHI, 4);
+            double phi_a = 2.0 * M_PI * j / NPHI, phi_b = 2.0 * M_PI * (j + 1) / NPHI;
+            double e = cell_integral(c, &f, edge[i], edge[i + 1], phi_a, phi_b, 4);
             cells[i * NPHI + j] = (chi_cell){0.0, e * N_CHI2};
             total += e;
         }
