@@ -40,14 +40,14 @@ for s in $(seq 1 "$seeds"); do
         cpu[$name]=$(awk -v a="${cpu[$name]:-0}" -v b="$u" 'BEGIN{print a+b}')
     done
 done
-echo "method,per_pass_variance,cpu_s_per_pass,pairs,spp,res"
+# per_pass_variance: the mean over pairs (the variance, fireflies included); median_pair: the median pair's, the
+# typical image without its rare outliers (the two differ where a few samples carry much of the variance)
+echo "method,per_pass_variance,median_pair,cpu_s_per_pass,pairs,spp,res"
 for name in "${names[@]}"; do
-    sum=0; pairs=0
     for s in $(seq 1 2 $((seeds - 1))); do
-        mse=$("$bin" compare "$work/$name-$s.exr" "$work/$name-$((s + 1)).exr" --csv | cut -d, -f1)
-        sum=$(awk -v a="$sum" -v b="$mse" 'BEGIN{print a+b}'); pairs=$((pairs + 1))
-    done
-    awk -v n="$name" -v s="$sum" -v p="$pairs" -v spp="$spp" -v c="${cpu[$name]}" -v k="$seeds" -v r="$res" \
-        'BEGIN{printf "%s,%.6g,%.6g,%d,%d,%d\n", n, s / p / 2 * spp, c / (k * spp), p, spp, r}'
+        "$bin" compare "$work/$name-$s.exr" "$work/$name-$((s + 1)).exr" --csv | cut -d, -f1
+    done | sort -g | awk -v n="$name" -v spp="$spp" -v c="${cpu[$name]}" -v k="$seeds" -v r="$res" \
+        '{ v[NR] = $1; s += $1 } END { m = NR % 2 ? v[(NR + 1) / 2] : (v[NR / 2] + v[NR / 2 + 1]) / 2;
+           printf "%s,%.6g,%.6g,%.6g,%d,%d,%d\n", n, s / NR / 2 * spp, m / 2 * spp, c / (k * spp), NR, spp, r }'
 done
 rm -rf "$work"
