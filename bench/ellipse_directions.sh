@@ -2,6 +2,7 @@
 # Per-pass variance and CPU time per pass of the DARTS path tracer with and without the directions toward the
 # next elliptical connection (docs/darts.md §14.3), against the uniform-time path tracer, on a small render:
 #   bench/ellipse_directions.sh [SCENE.json] [RES] [SPP] [SEEDS]   (defaults: the fog box, 64, 200, 12)
+# SEED0 (default 1): the first seed; KEEP=DIR: the images are left in DIR (else a temporary folder, removed).
 # Each method renders SEEDS independent images of SPP passes on one thread (nice 19); the per-pixel variance of
 # one image is the mean over seed pairs of `dartspp compare a b` MSE / 2 (MSE = mean over pixels and channels of
 # (a − b)², whose expectation is twice the per-pixel variance), times SPP the per-pass variance. Time: user CPU
@@ -11,7 +12,8 @@ root=$(cd "$(dirname "$0")/.." && pwd)
 scene=${1:-$root/scenes/cbox-fog/transient.json}
 res=${2:-64}; spp=${3:-200}; seeds=${4:-12}
 bin=${DARTSPP:-$root/build/dartspp}
-work=$(mktemp -d /tmp/ellip-dirs.XXXXXX)
+first=${SEED0:-1}
+if [ -n "${KEEP:-}" ]; then work=$KEEP; mkdir -p "$work"; else work=$(mktemp -d /tmp/ellip-dirs.XXXXXX); fi
 pt="--set type=path_tracer --set eda=false"
 darts="$pt --set enable_guiding=true --set enable_elliptical=true"
 ell="$pt --set enable_guiding=false --set enable_elliptical=true"
@@ -30,7 +32,7 @@ while IFS='|' read -r name keys; do
 done <<< "$methods"
 declare -A cpu
 # seeds outermost, methods inside: a change of the machine's load falls on every method alike
-for s in $(seq 1 "$seeds"); do
+for s in $(seq "$first" $((first + seeds - 1))); do
     for i in "${!names[@]}"; do
         name=${names[$i]}
         TIMEFORMAT=%U
@@ -44,10 +46,10 @@ done
 # typical image without its rare outliers (the two differ where a few samples carry much of the variance)
 echo "method,per_pass_variance,median_pair,cpu_s_per_pass,pairs,spp,res"
 for name in "${names[@]}"; do
-    for s in $(seq 1 2 $((seeds - 1))); do
+    for s in $(seq "$first" 2 $((first + seeds - 2))); do
         "$bin" compare "$work/$name-$s.exr" "$work/$name-$((s + 1)).exr" --csv | cut -d, -f1
     done | sort -g | awk -v n="$name" -v spp="$spp" -v c="${cpu[$name]}" -v k="$seeds" -v r="$res" \
         '{ v[NR] = $1; s += $1 } END { m = NR % 2 ? v[(NR + 1) / 2] : (v[NR / 2] + v[NR / 2 + 1]) / 2;
            printf "%s,%.6g,%.6g,%.6g,%d,%d,%d\n", n, s / NR / 2 * spp, m / 2 * spp, c / (k * spp), NR, spp, r }'
 done
-rm -rf "$work"
+[ -n "${KEEP:-}" ] || rm -rf "$work"
