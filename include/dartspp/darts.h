@@ -328,6 +328,9 @@ double eda_pdf(const eda_table *t, const float *cell, vec3 e, vec3 w);
  * Where eda_cell gives NULL: phase sampling, weight 1. u: four uniforms in [0, 1). */
 vec3 eda_sample_direction(const eda_table *t, double alpha, const phase_function *ph, vec3 w_in,
                           const ellipse_record *r, const double u[4], double *weight);
+/* The density of eda_sample_direction at the unit direction w: γ·p_E + (1 − γ)·ρ, or ρ where eda_cell gives NULL. */
+double eda_direction_pdf(const eda_table *t, double alpha, const phase_function *ph, vec3 w_in, const ellipse_record *r,
+                         vec3 w);
 
 /* The EDA tables of one render, prepared once before the first iteration: table[i] for medium i, or NULL
  * where EDA is off (phase not `ida` and integrator eda false, or the scene is not gated). */
@@ -366,5 +369,18 @@ vec3 time_angular_mix_sample(const phase_function *ph, vec3 w_in, vec3 x, vec3 t
                              const double u[3], double *weight);
 /* The density of time_angular_mix_sample at w: c·p_TA + (1 − c)·ρ, or ρ where time-angular is degenerate. */
 double time_angular_mix_pdf(const phase_function *ph, vec3 w_in, vec3 x, vec3 target, double r, double share, vec3 w);
+
+/* ---- directions toward the next elliptical connection (DARTS path tracer; ours, docs/darts.md §14.3) ----
+ * At a vertex x with the target (light) at x_L, C = |x_L − x|, μ = cosθ of ω against x_L − x, and the residual T
+ * of the next segment's control vertex: ω with density p(ω) = TC/(2πλ·(T² + C² − 2TCμ)), λ = ln((T + C)/(T − C)),
+ * φ uniform about x_L − x: the control vertex's 1/(p(t)·ℓ²) as a function of ω (docs/darts.md §5.2). Uniform
+ * (1/(4π)) when C <= 1e-9·T (C = 0: the sphere); not run when T <= C(1 + 1e-6) (the peak ~ 1/(T − C)²). */
+
+/* Whether the sampler runs for (x, x_L, T): T finite, > 0, and C <= 1e-9·T or T > C(1 + 1e-6). */
+int ellipse_direction_usable(vec3 x, vec3 target, double T);
+/* Returns 1 with the unit direction *w and its density *pdf (u1 picks cosθ, u2 the azimuth); 0 where not usable. */
+int ellipse_direction_sample(vec3 x, vec3 target, double T, double u1, double u2, vec3 *w, double *pdf);
+/* The density of ellipse_direction_sample at the unit direction w; 0 where not usable. */
+double ellipse_direction_pdf(vec3 x, vec3 target, double T, vec3 w);
 
 #endif

@@ -65,6 +65,8 @@ typedef struct render_plan {
     /* the path tracer */
     int enable_rr;
     double time_angular_share;
+    int ellipse_directions;          /* DARTS path tracer with elliptical connections (docs/darts.md §14.3) */
+    double ellipse_direction_share;
     int uniform_time;                /* time_sampling "uniform" runs: gated, a medium, a light, one η */
     /* DARTS (both integrators) */
     darts_plan darts;

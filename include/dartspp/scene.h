@@ -235,6 +235,8 @@ typedef struct {
     int enable_rr;                  /* path tracer: Russian roulette on throughput */
     int time_sampling;              /* path tracer: time_sampling_choice (uniform: Jarabo et al. 2014) */
     double time_angular_share;      /* path tracer, uniform time: share of time-angular directions */
+    int ellipse_directions;         /* DARTS path tracer: directions toward the next control vertex (docs/darts.md §14.3) */
+    double ellipse_direction_share; /* and their share in the MIS */
     /* photon points */
     double photon_count, volume_photon_count;
     long gather_photon_count;

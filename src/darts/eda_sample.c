@@ -66,3 +66,13 @@ vec3 eda_sample_direction(const eda_table *t, double alpha, const phase_function
     *weight = mix > 0.0 ? f / mix : 0.0;
     return w;
 }
+
+double eda_direction_pdf(const eda_table *t, double alpha, const phase_function *ph, vec3 w_in, const ellipse_record *r,
+                         vec3 w)
+{
+    const float *cell = eda_cell(t, r);
+    double f = phase_eval(ph, w_in, w);
+    if (!cell) return f;
+    double q = r->C / r->T, gamma = q / (q + alpha); /* as eda_sample_direction (eq. 20) */
+    return gamma * eda_pdf(t, cell, r->e, w) + (1.0 - gamma) * f;
+}

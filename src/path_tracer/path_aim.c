@@ -12,7 +12,9 @@
  * the segment's distance sample lands on (the two estimate the same term) — then the distance (DA-RIS, the
  * uniform-time distance drawn at the previous vertex, or free flight).
  * Per medium vertex: the direction (EDA with MIS; uniform time: time-angular with MIS; else the phase
- * function). Surface vertices connect to the path's light as in the plain path tracer. */
+ * function); with elliptical connections and ellipse_directions, the next segment's record is drawn at the
+ * vertex and the direction mixes in the sampler toward its control vertex (docs/darts.md §14.3). Surface
+ * vertices connect to the path's light as in the plain path tracer. */
 #include <stdlib.h>
 
 #include "path_tracer_internal.h"
@@ -85,6 +87,7 @@ int pt_aim_start(pixel_ctx *c, path_state *ps)
     if (!(a->sel_pdf > 0.0)) return 0;
     const emitter *L = &s->lights[i];
     a->pre_r = -1.0;
+    a->rec_ready = 0;
     ps->time = path_time_offset(s, L, c->rng);
     ps->offset = ps->time;
     /* the light's point for this path: the target of its samplers and of its connections */
@@ -198,6 +201,15 @@ static void predrawn_distance(pixel_ctx *c, path_state *ps, const medium *m, dou
     }
 }
 
+/* Whether a medium segment from ps (in m, its record in c->aim.rec) makes its control vertex: the record valid
+ * and the connection's bounces counted. depth and medium_events do not change between a medium vertex and the
+ * segment it starts, so the vertex can ask too. */
+static int segment_connects(const pixel_ctx *c, const path_state *ps, const medium *m)
+{
+    return c->aim.rec.valid && ps->medium_events + 1 <= m->max_bounces &&
+           bounces_count(&c->pass->p->bounces, ps->depth + 2);
+}
+
 int pt_aim_medium_segment(pixel_ctx *c, path_state *ps, double tmax, int *event, double *t)
 {
     const medium *m = &c->pass->s->media[ps->medium];
@@ -205,15 +217,15 @@ int pt_aim_medium_segment(pixel_ctx *c, path_state *ps, double tmax, int *event,
     const darts_guide *g = a->g;
     if (emitter_is_parallel_beam(&c->pass->s->lights[a->light])) return beam_segment(c, ps, m, tmax, event, t);
     int aims = medium_scatters(m) && !pt_unwarped_camera_segment(c, ps);
+    int ready = a->rec_ready; /* drawn at the vertex this segment starts from (vertex_record) */
+    a->rec_ready = 0;
     if (aims) {
-        ellipse_record_init(&a->rec, g, &a->bin, ps->o, ps->time, m->eta, g->ellipse_residual, v3_avg(m->sigma_t),
-                            rng_uniform(c->rng));
+        if (!ready) ellipse_record_init(&a->rec, g, &a->bin, ps->o, ps->time, m->eta, g->ellipse_residual,
+                                        v3_avg(m->sigma_t), rng_uniform(c->rng));
         if (g->early_exit && !darts_can_reach(g, &a->reach, ps->o, ps->time)) return 0;
         if (g->enable_elliptical) {
             ps->connected = 1;
-            if (a->rec.valid && ps->medium_events + 1 <= m->max_bounces &&
-                bounces_count(&c->pass->p->bounces, ps->depth + 2))
-                connect_control_vertex(c, ps, m, tmax);
+            if (segment_connects(c, ps, m)) connect_control_vertex(c, ps, m, tmax);
         }
     }
     if (a->pre_r >= 0.0) {
@@ -251,6 +263,36 @@ static void uniform_time_direction(pixel_ctx *c, path_state *ps, const medium *m
     ps->beta = v3_scale(ps->beta, w);
 }
 
+/* DARTS at a medium vertex with elliptical connections (docs/darts.md §14.3): the next segment's record is
+ * drawn here, from the distribution the segment would draw it from, and its residual T is shared by the
+ * direction and the segment (pt_aim_medium_segment takes it as drawn). The direction comes from one-sample MIS
+ * of the sampler toward the segment's control vertex (ellipse_direction_sample, share c, only where the segment
+ * will make one) and the base technique (EDA with MIS against the phase function, in the same record's cell,
+ * or the phase function); the weight ρ/(c·p_ell + (1 − c)·p_base) is conditional on T, as the control vertex's
+ * p(T)·dT/dt is on ω, so their product divides by the joint density (docs/darts.md §14, "Per medium vertex"). */
+static void ellipse_direction_vertex(pixel_ctx *c, path_state *ps, const medium *m, const eda_table *et)
+{
+    pt_aim *a = &c->aim;
+    const darts_guide *g = a->g;
+    ellipse_record_init(&a->rec, g, &a->bin, ps->o, ps->time, m->eta, g->ellipse_residual, v3_avg(m->sigma_t),
+                        rng_uniform(c->rng));
+    a->rec_ready = 1;
+    double share = segment_connects(c, ps, m) && ellipse_direction_usable(ps->o, a->pt.y, a->rec.T)
+                       ? c->pass->p->ellipse_direction_share : 0.0;
+    double u[5], p_ell, w_base;
+    for (int k = 0; k < 5; k++) u[k] = rng_uniform(c->rng);
+    vec3 w_in = ps->d, w;
+    if (!(u[0] < share && ellipse_direction_sample(ps->o, a->pt.y, a->rec.T, u[1], u[2], &w, &p_ell)))
+        w = et ? eda_sample_direction(et, c->pass->eda->alpha[ps->medium], &m->phase, w_in, &a->rec, u + 1, &w_base)
+               : phase_sample(&m->phase, w_in, u[1], u[2]);
+    double f = phase_eval(&m->phase, w_in, w); /* the phase function's own density (exact sampling) */
+    double p_base = et ? eda_direction_pdf(et, c->pass->eda->alpha[ps->medium], &m->phase, w_in, &a->rec, w) : f;
+    double mix = share > 0.0 ? share * ellipse_direction_pdf(ps->o, a->pt.y, a->rec.T, w) + (1.0 - share) * p_base
+                             : p_base;
+    ps->d = w;
+    ps->beta = mix > 0.0 ? v3_scale(ps->beta, f / mix) : v3s(0.0);
+}
+
 void pt_aim_scatter_direction(pixel_ctx *c, path_state *ps)
 {
     const pt_pass *pp = c->pass;
@@ -261,6 +303,11 @@ void pt_aim_scatter_direction(pixel_ctx *c, path_state *ps)
     }
     const eda_table *et = pp->eda && pp->eda->table && !emitter_is_parallel_beam(&pp->s->lights[c->aim.light])
                               ? pp->eda->table[ps->medium] : NULL;
+    if (pp->p->ellipse_directions && c->aim.g->enable_elliptical && c->aim.g->active &&
+        !emitter_is_parallel_beam(&pp->s->lights[c->aim.light]) && medium_scatters(m)) {
+        ellipse_direction_vertex(c, ps, m, et);
+        return;
+    }
     if (et) { /* EDA toward the light with MIS against the phase function (docs/darts.md §8.2) */
         ellipse_record vr; /* its own residual; the segment's record draws another (docs/darts.md §14) */
         const darts_guide *g = c->aim.g;

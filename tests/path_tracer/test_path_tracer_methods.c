@@ -1,7 +1,9 @@
 /* tier: stress */
 /* The path tracer's methods against the plain path tracer, per image tile: the DARTS path tracer (DA distance
- * sampling, elliptical control vertices, both, with EDA, in frame mode, camera-unwarped, with two pulsed
- * lights, behind a glass-free box of Lambertian walls) and the uniform-time path tracer. Every method is an
+ * sampling, elliptical control vertices, both, with EDA, with and without the directions toward the next
+ * connection (docs/darts.md §14.3, on by default wherever control vertices run), in frame mode,
+ * camera-unwarped, with two pulsed lights, behind a glass-free box of Lambertian walls) and the uniform-time
+ * path tracer. Every method is an
  * unbiased estimator of the same image, so on the fog box (HG g = 0.3, coloured fog, multiple scattering and
  * surfaces, a 0.5-wide gate) each 4 × 4 tile's mean must agree with the plain path tracer's: z from the
  * spread of per-pass tile totals of both renders (thousands of passes, so the standard errors have
@@ -105,6 +107,9 @@ static void test_gate(void **state)
          "\"enable_guiding\": true, \"enable_elliptical\": true, \"eda\": true, \"eda_shape\": [16, 16, 32], "
          "\"eda_table_dir\": \"/tmp/dartspp-test-eda\"", 3000},
         {"uniform time", "\"time_sampling\": \"uniform\"", 3000},
+        {"elliptical, directions share 0.9", "\"enable_elliptical\": true, \"ellipse_direction_share\": 0.9", 3000},
+        {"DARTS, no ellipse directions",
+         "\"enable_guiding\": true, \"enable_elliptical\": true, \"ellipse_directions\": false", 3000},
     };
     check_methods(GATE, 0, NULL, 0, mc, (int)(sizeof mc / sizeof mc[0]), 12000);
 }
