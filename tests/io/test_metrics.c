@@ -318,7 +318,7 @@ static void test_cli_compare_refuses_nonfinite(void **state)
     snprintf(cmd, sizeof cmd, DARTSPP_BIN " compare %s %s --csv", ones, zeros);
     assert_int_equal(test_run(cmd, out, sizeof out), 0);
     ASSERT_CONTAINS(out, "1,1,"); /* mse 1, rmse 1 */
-    ASSERT_CONTAINS(out, ",0,4\n"); /* no non-finite pixel, 4 compared */
+    ASSERT_CONTAINS(out, ",0,4,1,0\n"); /* no non-finite pixel, 4 compared; trimmed MSE 1, none dropped */
 }
 
 /* patch-mean printed 0 for a patch without a finite pixel: now exit 2. A patch with one finite pixel averages
