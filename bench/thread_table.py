@@ -5,13 +5,14 @@ DIR holds LABEL-tT-sS.txt, a render's summary for T threads and seed S ("rendere
 photon pass A s, map builds B s, sensor pass C s", "peak resident M MiB"). Per label and thread count: the mean
 time of the whole pass and of each phase over the seeds, the speed-up over one thread (the ratio of the means)
 with a 95 % percentile bootstrap interval (seeds resampled with replacement, the one-thread and the T-thread
-runs independently, 4000 times), and the peak resident memory. Prints Markdown. Written by us for the
+runs independently, 4000 times: bench/seed_stats.py's ratio_ci), and the peak resident memory. Prints Markdown. Written by us for the
 benchmarks (no library needed)."""
 import glob
 import os
-import random
 import re
 import sys
+
+from seed_stats import ratio_ci
 
 PHASES = ["pass", "photon", "maps", "gather"]
 
@@ -29,17 +30,6 @@ def read(path):
 
 def mean(xs):
     return sum(xs) / len(xs)
-
-
-def interval(one, many, key, n=4000):
-    rnd = random.Random(11)
-    vals = []
-    for _ in range(n):
-        a = [one[rnd.randrange(len(one))][key] for _ in one]
-        b = [many[rnd.randrange(len(many))][key] for _ in many]
-        vals.append(mean(a) / mean(b))
-    vals.sort()
-    return vals[int(0.025 * n)], vals[int(0.975 * n) - 1]
 
 
 def main():
@@ -63,8 +53,7 @@ def main():
             for key in PHASES:
                 cells.append("%.3f" % mean([r[key] for r in rows]))
                 if one:
-                    lo, hi = interval(one, rows, key)
-                    cells.append("%.2f [%.2f, %.2f]" % (mean([r[key] for r in one]) / mean([r[key] for r in rows]), lo, hi))
+                    cells.append("%.2f [%.2f, %.2f]" % ratio_ci([r[key] for r in one], [r[key] for r in rows]))
                 else:
                     cells.append("–")
             cells.append("%.1f" % mean([r["mib"] for r in rows]))

@@ -120,8 +120,9 @@ typedef struct {
     double q99;          /* 0.99 quantile of the reference */
     long nonfinite;      /* pixels left out */
     long pixels;         /* pixels compared (finite in both) */
-    double mse_trimmed;  /* mse without the IMAGE_TRIM_SHARE of pixels with the largest squared error */
-    long trimmed;        /* pixels it leaves out: floor(IMAGE_TRIM_SHARE·pixels) */
+    double mse_trimmed;  /* image_compare_trimmed only (else 0): mse without the IMAGE_TRIM_SHARE of pixels
+                          * with the largest squared error */
+    long trimmed;        /* image_compare_trimmed only: pixels it leaves out, floor(IMAGE_TRIM_SHARE·pixels) */
 } image_error;
 
 /* The trimmed MSE's share of pixels dropped: the 0.1 % with the largest error summed over the channels (the
@@ -129,6 +130,8 @@ typedef struct {
 #define IMAGE_TRIM_SHARE 0.001
 
 int image_compare(const image_rgb *img, const image_rgb *ref, image_error *out, dp_error *err);
+/* image_compare and the trimmed MSE (a sort of the pixels' errors: `dartspp compare`, not the error log). */
+int image_compare_trimmed(const image_rgb *img, const image_rgb *ref, image_error *out, dp_error *err);
 /* Pixels with a NaN or Inf channel, and where the first is (row 0 at the top; -1 when none). */
 long image_nonfinite_pixels(const image_rgb *img, int *first_x, int *first_y);
 

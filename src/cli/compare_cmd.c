@@ -51,7 +51,7 @@ int cli_compare(int argc, char **argv)
     if (!rc && (img.width != ref.width || img.height != ref.height))
         rc = dp_fail(&err, "%s is %dx%d but the reference %s is %dx%d: compare needs images of one size", paths[0],
                      img.width, img.height, paths[1], ref.width, ref.height);
-    if (!rc) rc = image_compare(&img, &ref, &e, &err);
+    if (!rc) rc = image_compare_trimmed(&img, &ref, &e, &err);
     if (rc) fprintf(stderr, "dartspp compare: %s\n", err.msg);
     else if (csv)
         printf("%.9g,%.9g,%.9g,%.9g,%.9g,%ld,%ld,%.9g,%ld\n", e.mse, e.rmse, e.rel_mse, e.mse_q99, e.q99, e.nonfinite,

@@ -160,7 +160,10 @@ static double trimmed_mse(double *se, size_t n, size_t drop)
     return n > drop ? sum / (3.0 * (double)(n - drop)) : 0.0;
 }
 
-int image_compare(const image_rgb *img, const image_rgb *ref, image_error *out, dp_error *err)
+/* The metrics of image_compare; with pixel_se (room for every pixel), each compared pixel's squared error
+ * summed over its channels too, in pixel order. */
+static int compare_pixels(const image_rgb *img, const image_rgb *ref, image_error *out, double *pixel_se,
+                          dp_error *err)
 {
     memset(out, 0, sizeof *out);
     if (!image_values(img) || !image_values(ref)) return dp_fail(err, "compare: empty image");
@@ -171,15 +174,15 @@ int image_compare(const image_rgb *img, const image_rgb *ref, image_error *out, 
     double q = out->q99 != 0.0 ? out->q99 : 1.0;
     error_sums s = {0, 0, 0};
     size_t n = (size_t)img->width * (size_t)img->height;
-    double *pixel_se = malloc(n * sizeof *pixel_se);
-    if (!pixel_se) return dp_fail_kind(err, DP_ERROR_MEMORY, "compare: out of memory");
     for (size_t i = 0; i < n; ++i) {
         const float *x = img->rgb + 3 * i, *r = ref->rgb + 3 * i;
         if (!pixel_finite(x) || !pixel_finite(r)) {
             out->nonfinite++;
             continue;
         }
-        pixel_se[out->pixels++] = add_pixel(&s, x, r, q);
+        double se = add_pixel(&s, x, r, q);
+        if (pixel_se) pixel_se[out->pixels] = se;
+        out->pixels++;
     }
     double count = 3.0 * (double)out->pixels;
     if (count > 0) {
@@ -188,10 +191,26 @@ int image_compare(const image_rgb *img, const image_rgb *ref, image_error *out, 
         out->mse_q99 = s.se_q / count;
     }
     out->rmse = sqrt(out->mse);
-    out->trimmed = (long)floor(IMAGE_TRIM_SHARE * (double)out->pixels);
-    out->mse_trimmed = trimmed_mse(pixel_se, (size_t)out->pixels, (size_t)out->trimmed);
-    free(pixel_se);
     return 0;
+}
+
+int image_compare(const image_rgb *img, const image_rgb *ref, image_error *out, dp_error *err)
+{
+    return compare_pixels(img, ref, out, NULL, err);
+}
+
+int image_compare_trimmed(const image_rgb *img, const image_rgb *ref, image_error *out, dp_error *err)
+{
+    size_t n = (size_t)img->width * (size_t)img->height;
+    double *pixel_se = malloc((n ? n : 1) * sizeof *pixel_se);
+    if (!pixel_se) return dp_fail_kind(err, DP_ERROR_MEMORY, "compare: out of memory");
+    int rc = compare_pixels(img, ref, out, pixel_se, err);
+    if (!rc) {
+        out->trimmed = (long)floor(IMAGE_TRIM_SHARE * (double)out->pixels);
+        out->mse_trimmed = trimmed_mse(pixel_se, (size_t)out->pixels, (size_t)out->trimmed);
+    }
+    free(pixel_se);
+    return rc;
 }
 
 int image_mean_of(const image_rgb *imgs, int k, image_rgb *mean, double *var_of_mean, dp_error *err)

@@ -18,32 +18,19 @@ typedef struct {
 
 #define PHOTON_BUF_FIRST 1024 /* a photon buffer's first capacity; it then doubles (photon_array_bytes) */
 
-/* Appends a photon and, when stride > 0, its derivative record `side` (the same index in b->d). */
-static inline int buf_push(photon_buf *b, const photon *ph, const void *side, size_t stride)
+/* The capacity of a buffer that must hold `need` items: PHOTON_BUF_FIRST, then doubling. */
+static inline size_t buf_capacity(size_t cap, size_t need)
 {
-    if (b->n == b->cap) {
-        size_t cap = b->cap ? 2 * b->cap : PHOTON_BUF_FIRST;
-        photon *q = realloc(b->p, cap * sizeof(photon));
-        if (!q) return -1;
-        b->p = q;
-        if (stride) {
-            unsigned char *e = realloc(b->d, cap * stride);
-            if (!e) return -1;
-            b->d = e;
-        }
-        b->cap = cap;
-    }
-    if (stride) memcpy(b->d + b->n * stride, side, stride);
-    b->p[b->n++] = *ph;
-    return 0;
+    cap = cap ? cap : PHOTON_BUF_FIRST;
+    while (cap < need) cap *= 2;
+    return cap;
 }
 
-/* Grows b to hold at least `need` photons (doubling, as buf_push does), without changing its count. */
+/* Grows b to hold at least `need` photons (and their derivative records when stride > 0), its count kept. */
 static inline int buf_reserve(photon_buf *b, size_t need, size_t stride)
 {
     if (need <= b->cap) return 0;
-    size_t cap = b->cap ? b->cap : PHOTON_BUF_FIRST;
-    while (cap < need) cap *= 2;
+    size_t cap = buf_capacity(b->cap, need);
     photon *q = realloc(b->p, cap * sizeof(photon));
     if (!q) return -1;
     b->p = q;
@@ -53,6 +40,15 @@ static inline int buf_reserve(photon_buf *b, size_t need, size_t stride)
         b->d = e;
     }
     b->cap = cap;
+    return 0;
+}
+
+/* Appends a photon and, when stride > 0, its derivative record `side` (the same index in b->d). */
+static inline int buf_push(photon_buf *b, const photon *ph, const void *side, size_t stride)
+{
+    if (buf_reserve(b, b->n + 1, stride)) return -1;
+    if (stride) memcpy(b->d + b->n * stride, side, stride);
+    b->p[b->n++] = *ph;
     return 0;
 }
 
@@ -69,28 +65,21 @@ typedef struct {
     size_t n, cap;
 } beam_buf;
 
-static inline int beam_buf_push(beam_buf *b, const photon_beam *bm)
-{
-    if (b->n == b->cap) {
-        size_t cap = b->cap ? 2 * b->cap : PHOTON_BUF_FIRST;
-        photon_beam *q = realloc(b->p, cap * sizeof(photon_beam));
-        if (!q) return -1;
-        b->p = q;
-        b->cap = cap;
-    }
-    b->p[b->n++] = *bm;
-    return 0;
-}
-
 static inline int beam_buf_reserve(beam_buf *b, size_t need)
 {
     if (need <= b->cap) return 0;
-    size_t cap = b->cap ? b->cap : PHOTON_BUF_FIRST;
-    while (cap < need) cap *= 2;
+    size_t cap = buf_capacity(b->cap, need);
     photon_beam *q = realloc(b->p, cap * sizeof(photon_beam));
     if (!q) return -1;
     b->p = q;
     b->cap = cap;
+    return 0;
+}
+
+static inline int beam_buf_push(beam_buf *b, const photon_beam *bm)
+{
+    if (beam_buf_reserve(b, b->n + 1)) return -1;
+    b->p[b->n++] = *bm;
     return 0;
 }
 
@@ -99,25 +88,10 @@ typedef struct {
     size_t n, cap;
 } vertex_buf;
 
-static inline int vertex_buf_push(vertex_buf *b, const path_vertex *v)
-{
-    if (b->n == b->cap) {
-        size_t cap = b->cap ? 2 * b->cap : PHOTON_BUF_FIRST;
-        path_vertex *q = realloc(b->p, cap * sizeof(path_vertex));
-        if (!q) return -1;
-        b->p = q;
-        b->cap = cap;
-    }
-    b->p[b->n++] = *v;
-    return 0;
-}
-
-/* Written by one thread per photon stored: on cache lines of its own (core.h, dp_calloc_cache_aligned). */
 static inline int vertex_buf_reserve(vertex_buf *b, size_t need)
 {
     if (need <= b->cap) return 0;
-    size_t cap = b->cap ? b->cap : PHOTON_BUF_FIRST;
-    while (cap < need) cap *= 2;
+    size_t cap = buf_capacity(b->cap, need);
     path_vertex *q = realloc(b->p, cap * sizeof(path_vertex));
     if (!q) return -1;
     b->p = q;
@@ -125,6 +99,14 @@ static inline int vertex_buf_reserve(vertex_buf *b, size_t need)
     return 0;
 }
 
+static inline int vertex_buf_push(vertex_buf *b, const path_vertex *v)
+{
+    if (vertex_buf_reserve(b, b->n + 1)) return -1;
+    b->p[b->n++] = *v;
+    return 0;
+}
+
+/* Written by one thread per photon stored: on cache lines of its own (core.h, dp_calloc_cache_aligned). */
 typedef struct {
     _Alignas(DP_CACHE_LINE) photon_buf vol;
     photon_buf surf;
