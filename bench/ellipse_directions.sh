@@ -3,7 +3,7 @@
 # next elliptical connection (docs/darts.md §14.3), against the uniform-time path tracer, on a small render:
 #   bench/ellipse_directions.sh [SCENE.json] [RES] [SPP] [SEEDS]   (defaults: the fog box, 64, 200, 12)
 # SEED0 (default 1): the first seed; KEEP=DIR: the images are left in DIR (else a temporary folder, removed).
-# Each method renders SEEDS independent images of SPP passes on one thread (nice 19); the per-pixel variance of
+# Each method renders SEEDS independent images of SPP passes on one thread (nice 19, or NICE); the per-pixel variance of
 # one image is the mean over seed pairs of `dartspp compare a b` MSE / 2 (MSE = mean over pixels and channels of
 # (a − b)², whose expectation is twice the per-pixel variance), times SPP the per-pass variance. Time: user CPU
 # seconds per pass (load-independent on a shared machine). METHODS="name|keys ..." overrides the set.
@@ -36,7 +36,7 @@ for s in $(seq "$first" $((first + seeds - 1))); do
     for i in "${!names[@]}"; do
         name=${names[$i]}
         TIMEFORMAT=%U
-        u=$( { time nice -n 19 "$bin" render "$scene" ${keyset[$i]} --set resolution="$res" --spp "$spp" --threads 1 \
+        u=$( { time nice -n "${NICE:-19}" "$bin" render "$scene" ${keyset[$i]} --set resolution="$res" --spp "$spp" --threads 1 \
               --seed "$s" --output "$work/$name-$s.exr" --overwrite --no-cube --no-viewer --quiet >/dev/null 2>&1; } 2>&1 ) ||
             { echo "render failed: $name (${keyset[$i]})" >&2; exit 1; }
         cpu[$name]=$(awk -v a="${cpu[$name]:-0}" -v b="$u" 'BEGIN{print a+b}')

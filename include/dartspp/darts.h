@@ -382,5 +382,13 @@ int ellipse_direction_usable(vec3 x, vec3 target, double T);
 int ellipse_direction_sample(vec3 x, vec3 target, double T, double u1, double u2, vec3 *w, double *pdf);
 /* The density of ellipse_direction_sample at the unit direction w; 0 where not usable. */
 double ellipse_direction_pdf(vec3 x, vec3 target, double T, vec3 w);
+/* At the surface site ss of a camera path (a BSDF without delta lobes; docs/darts.md §14.4): with probability
+ * share (u[0] < share) the direction from ellipse_direction_sample(x, target, T, u[1], u[2]), else from
+ * surface_sample_bsdf(ss, u + 1, all lobes); out->weight = f·|n_s·ω| / (share·p_ell + (1 − share)·p_bsdf)
+ * (one-sample balance heuristic), out->lobe a non-delta lobe of the BSDF. share 0, or the ellipse sampler not
+ * usable: the BSDF sample as is. Returns 0 when nothing is sampled or the weight is 0 (below an opaque
+ * surface). */
+int ellipse_direction_surface_sample(const surface_site *ss, vec3 x, vec3 target, double T, double share,
+                                     const double u[4], surface_sample *out);
 
 #endif

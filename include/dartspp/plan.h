@@ -67,6 +67,7 @@ typedef struct render_plan {
     double time_angular_share;
     int ellipse_directions;          /* DARTS path tracer with elliptical connections (docs/darts.md §14.3) */
     double ellipse_direction_share;
+    int ellipse_surface_directions;  /* and at surface vertices (docs/darts.md §14.4) */
     int uniform_time;                /* time_sampling "uniform" runs: gated, a medium, a light, one η */
     /* DARTS (both integrators) */
     darts_plan darts;

@@ -237,6 +237,7 @@ typedef struct {
     double time_angular_share;      /* path tracer, uniform time: share of time-angular directions */
     int ellipse_directions;         /* DARTS path tracer: directions toward the next control vertex (docs/darts.md §14.3) */
     double ellipse_direction_share; /* and their share in the MIS */
+    int ellipse_surface_directions; /* and at surface vertices too (docs/darts.md §14.4) */
     /* photon points */
     double photon_count, volume_photon_count;
     long gather_photon_count;

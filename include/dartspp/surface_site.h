@@ -38,6 +38,11 @@ vec3 surface_eval(const surface_site *ss, vec3 w, unsigned lobes);
 /* f(wi, w)·|n_s·w| for a world direction w, over the selected lobes (0 where a consistency check fails). */
 vec3 surface_eval_cos(const surface_site *ss, vec3 w, unsigned lobes);
 
+/* The solid-angle density with which surface_sample_bsdf (lobes, camera paths or light paths alike) returns the
+ * world direction w: bsdf_pdf over the selected lobes, 0 where a consistency check fails (the sampler fails
+ * there). Delta lobes have none: meaningful for the non-delta lobes only. */
+double surface_pdf(const surface_site *ss, vec3 w, unsigned lobes);
+
 typedef struct {
     vec3 w;        /* world direction, unit */
     vec3 weight;   /* f·|cos|/pdf, and for light paths the adjoint shading-normal factor */

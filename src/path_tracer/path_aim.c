@@ -293,6 +293,45 @@ static void ellipse_direction_vertex(pixel_ctx *c, path_state *ps, const medium 
     ps->beta = mix > 0.0 ? v3_scale(ps->beta, f / mix) : v3s(0.0);
 }
 
+/* Whether the sampler toward the next control vertex runs at the surface site ss (docs/darts.md §14.4): the
+ * medium version's gating (elliptical connections on, not a parallel beam, not uniform time) and a BSDF
+ * without delta lobes (mixed delta and smooth lobes would need the discrete probabilities in the mixture). */
+static int surface_aims(const pixel_ctx *c, const surface_site *ss)
+{
+    const pt_pass *pp = c->pass;
+    unsigned lobes = bsdf_lobes(ss->b);
+    return pp->p->ellipse_directions && pp->p->ellipse_surface_directions && !pp->p->uniform_time &&
+           c->aim.g->enable_elliptical && c->aim.g->active && !emitter_is_parallel_beam(&pp->s->lights[c->aim.light]) &&
+           lobes && !(lobes & BSDF_LOBE_SPECULAR);
+}
+
+int pt_aim_surface_sample(pixel_ctx *c, const path_state *ps, const surface_site *ss, surface_sample *out)
+{
+    const scene *s = c->pass->s;
+    pt_aim *a = &c->aim;
+    /* the side the path arrived from: where every reflection leaves into */
+    int med = surface_medium_toward(ss, ps->medium, ss->wi_world);
+    if (!surface_aims(c, ss) || med == MEDIUM_VACUUM || !medium_scatters(&s->media[med])) {
+        double u[3] = {rng_uniform(c->rng), rng_uniform(c->rng), rng_uniform(c->rng)};
+        return surface_sample_bsdf(ss, u, BSDF_LOBES_ALL, 0, out);
+    }
+    const medium *m = &s->media[med];
+    const darts_guide *g = a->g;
+    vec3 x = surface_spawn(s, ss, ss->wi_world);
+    ellipse_record_init(&a->rec, g, &a->bin, x, ps->time, m->eta, g->ellipse_residual, v3_avg(m->sigma_t),
+                        rng_uniform(c->rng));
+    double share = segment_connects(c, ps, m) ? c->pass->p->ellipse_direction_share : 0.0;
+    double u[4];
+    for (int k = 0; k < 4; k++) u[k] = rng_uniform(c->rng);
+    if (!ellipse_direction_surface_sample(ss, x, a->pt.y, a->rec.T, share, u, out)) return 0;
+    /* the segment takes the record only where it starts where the record was drawn, in the same medium: then it
+     * is the record the segment would draw (docs/darts.md §14.4); elsewhere (a transmission, a reflection whose
+     * origin moves to the other geometric side) the segment draws its own */
+    vec3 y = surface_spawn(s, ss, out->w);
+    a->rec_ready = surface_medium_toward(ss, ps->medium, out->w) == med && y.x == x.x && y.y == x.y && y.z == x.z;
+    return 1;
+}
+
 void pt_aim_scatter_direction(pixel_ctx *c, path_state *ps)
 {
     const pt_pass *pp = c->pass;

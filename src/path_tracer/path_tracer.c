@@ -258,9 +258,13 @@ static int scatter_surface(pixel_ctx *c, path_state *ps, const hit_record *h)
     if (c->pass->deriv) deriv_surface_vertex(c->pass->deriv, &ps->dv, sf->bsdf);
     if ((bsdf_lobes(b) & ~BSDF_LOBE_SPECULAR) && bounces_count(&c->pass->p->bounces, ps->depth + 1))
         connect_lights(c, ps, h->p, NULL, &ss);
-    double u[3] = {rng_uniform(c->rng), rng_uniform(c->rng), rng_uniform(c->rng)};
     surface_sample smp;
-    if (!surface_sample_bsdf(&ss, u, BSDF_LOBES_ALL, 0, &smp)) return 0;
+    if (c->aim.on) {
+        if (!pt_aim_surface_sample(c, ps, &ss, &smp)) return 0;
+    } else {
+        double u[3] = {rng_uniform(c->rng), rng_uniform(c->rng), rng_uniform(c->rng)};
+        if (!surface_sample_bsdf(&ss, u, BSDF_LOBES_ALL, 0, &smp)) return 0;
+    }
     ps->beta = v3_mul(ps->beta, smp.weight);
     ps->d = smp.w;
     ps->after_delta = (smp.lobe & BSDF_LOBE_SPECULAR) != 0;

@@ -79,6 +79,10 @@ int pt_aim_medium_segment(pixel_ctx *c, path_state *ps, double tmax, int *event,
 /* A new direction at the medium vertex ps->o (aimed): EDA or time-angular with MIS, or the phase function;
  * ps->beta updated. */
 void pt_aim_scatter_direction(pixel_ctx *c, path_state *ps);
+/* The direction at the surface site ss of an aimed path (BSDF sampling; with ellipse_surface_directions the
+ * mixture with the sampler toward the next control vertex, docs/darts.md §14.4, whose record the next segment
+ * may then take as drawn): as surface_sample_bsdf for a camera path. 0 when the path ends. */
+int pt_aim_surface_sample(pixel_ctx *c, const path_state *ps, const surface_site *ss, surface_sample *out);
 /* The light connection of the aimed path from x (a medium vertex, or the surface site ss), as
  * connect_lights but to its one light, weighted 1/(sel_pdf·bin.pdf) and counted in its bin only. */
 void pt_aim_connect(pixel_ctx *c, const path_state *ps, vec3 x, const phase_function *pf, const surface_site *ss);

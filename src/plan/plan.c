@@ -79,6 +79,7 @@ int plan_resolve(const scene *s, render_plan *p, dp_error *err)
     p->time_angular_share = in->time_angular_share;
     p->ellipse_directions = in->ellipse_directions;
     p->ellipse_direction_share = in->ellipse_direction_share;
+    p->ellipse_surface_directions = in->ellipse_surface_directions;
     p->uniform_time = resolve_uniform_time(s, p);
     if (darts_plan_resolve(s, p->type, &p->shading, &p->darts, err)) return -1;
     if (sliced_primitives_check(s, p, err)) { /* what the sliced primitives do not support */

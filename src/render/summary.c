@@ -107,7 +107,8 @@ void summary_print_path_method(const scene *s, const render_plan *p)
            d->ellipse_residual == RESIDUAL_EXPONENTIAL ? "exponential" : "uniform",
            d->control_vertex_mis ? "MIS with an in-bin exponential" : "no MIS");
     if (d->enable_elliptical && p->ellipse_directions)
-        printf("; directions toward the next connection (share %g)", p->ellipse_direction_share);
+        printf("; directions toward the next connection (share %g%s)", p->ellipse_direction_share,
+               p->ellipse_surface_directions ? ", surfaces too" : "");
     if (p->window.camera_unwarp) printf("; camera-unwarped time: no sampler aims along the camera segment");
     print_media(s, p);
     printf("\n");

@@ -37,6 +37,12 @@ vec3 surface_eval_cos(const surface_site *ss, vec3 w, unsigned lobes)
     return v3_scale(bsdf_eval(ss->b, ss->albedo, ss->wi, wo, lobes), fabs(wo.z));
 }
 
+double surface_pdf(const surface_site *ss, vec3 w, unsigned lobes)
+{
+    if (!consistent(ss, w)) return 0.0;
+    return bsdf_pdf(ss->b, ss->albedo, ss->wi, bsdf_to_local(&ss->fr, w), lobes);
+}
+
 int surface_sample_bsdf(const surface_site *ss, const double u[3], unsigned lobes, int adjoint, surface_sample *out)
 {
     bsdf_sample bs;

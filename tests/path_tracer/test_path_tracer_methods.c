@@ -14,10 +14,30 @@
 #include "fixtures.h"
 #include "render_fixtures.h"
 
+/* Replaces the first `from` in text (of size len) by `to`. */
+static void replace_once(char *text, size_t len, const char *from, const char *to)
+{
+    char *at = strstr(text, from);
+    assert_non_null(at);
+    char rest[16384];
+    snprintf(rest, sizeof rest, "%s", at + strlen(from));
+    snprintf(at, len - (size_t)(at - text), "%s%s", to, rest);
+}
+
+/* The surfaces variant of the fog box (docs/darts.md §14.4): fog 5 times thinner, so most light reaches the
+ * camera by way of the walls, and the red wall a rough plastic (a glossy and a diffuse lobe). */
+static void surfaces_variant(char *text, size_t len)
+{
+    replace_once(text, len, "[0.45, 0.4, 0.5]", "[0.09, 0.08, 0.1]");
+    replace_once(text, len, "[0.05, 0.08, 0.03]", "[0.01, 0.016, 0.006]");
+    replace_once(text, len, "\"type\": \"lambert\", \"albedo\": [0.7, 0.15, 0.1]",
+                 "\"type\": \"rough_plastic\", \"roughness\": 0.3, \"ior\": 1.5, \"albedo\": [0.7, 0.15, 0.1]");
+}
+
 /* The fog box (render_fixtures.c) at 16² with the path tracer, a gate or frames (`time`), and the method's
- * keys; lights: NULL for the box's own, else the primitives text replacing it. */
-static void method_totals(const char *time, const char *method, int unwarp, const char *lights, long passes,
-                          uint64_t seed, int frames, cell_totals *t, double *seconds)
+ * keys; lights: NULL for the box's own, else the primitives text replacing it; surfaces: surfaces_variant. */
+static void method_totals(const char *time, const char *method, int unwarp, const char *lights, int surfaces,
+                          long passes, uint64_t seed, int frames, cell_totals *t, double *seconds)
 {
     char integrator[1024], text[16384];
     snprintf(integrator, sizeof integrator, "\"type\": \"path_tracer\", \"max_bounces\": 8, %s%s%s%s", time,
@@ -32,6 +52,7 @@ static void method_totals(const char *time, const char *method, int unwarp, cons
         snprintf(rest, sizeof rest, "%s", end + strlen("} } ],"));
         snprintf(at, sizeof text - (size_t)(at - text), "%s ],%s", lights, rest);
     }
+    if (surfaces) surfaces_variant(text, sizeof text);
     cell_render(text, passes, seed, frames, t, seconds);
 }
 
@@ -74,18 +95,18 @@ static int wanted(const char *label)
     return !only || strstr(label, only);
 }
 
-static void check_methods(const char *time, int unwarp, const char *lights, int frames, const method_case *mc, int n,
-                          long ref_passes)
+static void check_methods(const char *time, int unwarp, const char *lights, int surfaces, int frames,
+                          const method_case *mc, int n, long ref_passes)
 {
     cell_totals ref, m;
     double t_ref, t_m;
     int any = 0;
     for (int i = 0; i < n; i++) any |= wanted(mc[i].label);
     if (!any) return;
-    method_totals(time, "", unwarp, lights, ref_passes, 11, frames, &ref, &t_ref);
+    method_totals(time, "", unwarp, lights, surfaces, ref_passes, 11, frames, &ref, &t_ref);
     for (int i = 0; i < n; i++) {
         if (!wanted(mc[i].label)) continue;
-        method_totals(time, mc[i].keys, unwarp, lights, mc[i].passes, 23 + i, frames, &m, &t_m);
+        method_totals(time, mc[i].keys, unwarp, lights, surfaces, mc[i].passes, 23 + i, frames, &m, &t_m);
         double z = compare_cells(mc[i].label, &ref, &m, t_ref, t_m);
         free(m.x);
         assert_true(z < Z_MAX);
@@ -110,8 +131,28 @@ static void test_gate(void **state)
         {"elliptical, directions share 0.9", "\"enable_elliptical\": true, \"ellipse_direction_share\": 0.9", 3000},
         {"DARTS, no ellipse directions",
          "\"enable_guiding\": true, \"enable_elliptical\": true, \"ellipse_directions\": false", 3000},
+        {"DARTS, directions share 1", "\"enable_guiding\": true, \"enable_elliptical\": true, \"ellipse_direction_share\": 1",
+         3000},
     };
-    check_methods(GATE, 0, NULL, 0, mc, (int)(sizeof mc / sizeof mc[0]), 12000);
+    check_methods(GATE, 0, NULL, 0, 0, mc, (int)(sizeof mc / sizeof mc[0]), 12000);
+}
+
+/* The surface vertices' directions toward the next connection (docs/darts.md §14.4) where surfaces matter: the
+ * fog 5 times thinner, the red wall a rough plastic (glossy and diffuse lobes), the same gate; the mixture
+ * at shares 0.5 and 1 (every surface direction from the ellipse sampler), with and without DA, and the
+ * surface version off. */
+static void test_surfaces(void **state)
+{
+    (void)state;
+    const method_case mc[] = {
+        {"surfaces: DARTS", "\"enable_guiding\": true, \"enable_elliptical\": true", 3000},
+        {"surfaces: DARTS, share 1", "\"enable_guiding\": true, \"enable_elliptical\": true, \"ellipse_direction_share\": 1",
+         3000},
+        {"surfaces: elliptical only, share 1", "\"enable_elliptical\": true, \"ellipse_direction_share\": 1", 3000},
+        {"surfaces: DARTS, surface directions off",
+         "\"enable_guiding\": true, \"enable_elliptical\": true, \"ellipse_surface_directions\": false", 3000},
+    };
+    check_methods(GATE, 0, NULL, 1, 0, mc, (int)(sizeof mc / sizeof mc[0]), 12000);
 }
 
 /* Frame mode (each DARTS camera path serves one frame, divided by its probability): every tile of the union
@@ -123,7 +164,7 @@ static void test_frames(void **state)
         {"DARTS, 4 frames", "\"enable_guiding\": true, \"enable_elliptical\": true", 3000},
         {"uniform time, 4 frames", "\"time_sampling\": \"uniform\"", 3000},
     };
-    check_methods("\"start_time\": 4.3, \"transient_time_width\": 0.25, \"frame_num\": 4", 0, NULL, 4, mc, 2, 12000);
+    check_methods("\"start_time\": 4.3, \"transient_time_width\": 0.25, \"frame_num\": 4", 0, NULL, 0, 4, mc, 2, 12000);
 }
 
 /* Camera-unwarped time (the camera segment takes no time: no DARTS sampler aims along it) and two lights with
@@ -135,7 +176,7 @@ static void test_unwarped_and_pulsed_lights(void **state)
         {"DARTS, unwarped", "\"enable_guiding\": true, \"enable_elliptical\": true", 3000},
         {"uniform time, unwarped", "\"time_sampling\": \"uniform\"", 3000},
     };
-    check_methods("\"transient_time_center\": 1.75, \"transient_time_width\": 0.5", 1, NULL, 0, mc, 2, 12000);
+    check_methods("\"transient_time_center\": 1.75, \"transient_time_width\": 0.5", 1, NULL, 0, 0, mc, 2, 12000);
     const char *lights =
         "{ \"type\": \"point\", \"emission\": [4, 4, 4], \"pulse_start\": 0.2, \"pulse_width\": 0.3,"
         "  \"transform\": { \"position\": [0.3, 1.5, 0.2] } },"
@@ -145,13 +186,14 @@ static void test_unwarped_and_pulsed_lights(void **state)
         {"DARTS, two pulsed lights", "\"enable_guiding\": true, \"enable_elliptical\": true", 3000},
         {"uniform time, two pulsed lights", "\"time_sampling\": \"uniform\"", 3000},
     };
-    check_methods(GATE, 0, lights, 0, mc2, 2, 12000);
+    check_methods(GATE, 0, lights, 0, 0, mc2, 2, 12000);
 }
 
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_gate),
+        cmocka_unit_test(test_surfaces),
     };
     /* make stress only (85 s on 2 cores): frame mode, camera-unwarped time and two pulsed lights per tile (make
      * test checks the path tracer's frames as the reference of test_photon_frames, unwarped time and pulses
