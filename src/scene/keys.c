@@ -129,7 +129,7 @@ static const scene_key table[] = {
     {.name = "da_defensive", IN(da_defensive), .type = KEY_NUMBER, .read_by = PT | PP, .changes_image = 1, .def = 0.2,
      IN_RANGE(0, 0.999), .meaning = "Uniform share of the DA-RIS candidate selection"},
     {.name = "ellipse_directions", IN(ellipse_directions), .type = KEY_BOOL, .read_by = PT, .changes_image = 1,
-     .def = 1, .meaning = "DARTS path tracer: medium vertices also draw directions toward the next segment's elliptical light connection (MIS)"},
+     .def = 1, .meaning = "DARTS path tracer: medium vertices (and surfaces, ellipse_surface_directions) also draw directions toward the next segment's elliptical light connection (MIS)"},
     {.name = "ellipse_direction_share", IN(ellipse_direction_share), .type = KEY_NUMBER, .read_by = PT,
      .changes_image = 1, .def = 0.5, IN_RANGE(0, 1),
      .meaning = "Share of those directions against the phase function (or EDA) in the one-sample MIS"},

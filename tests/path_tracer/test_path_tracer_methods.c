@@ -3,7 +3,8 @@
  * sampling, elliptical control vertices, both, with EDA, with and without the directions toward the next
  * connection (docs/darts.md §14.3, on by default wherever control vertices run), in frame mode,
  * camera-unwarped, with two pulsed lights, behind a glass-free box of Lambertian walls) and the uniform-time
- * path tracer. Every method is an
+ * path tracer; and (test_surfaces) the directions toward the next connection at surface vertices
+ * (docs/darts.md §14.4) on a variant where surfaces carry most of the light. Every method is an
  * unbiased estimator of the same image, so on the fog box (HG g = 0.3, coloured fog, multiple scattering and
  * surfaces, a 0.5-wide gate) each 4 × 4 tile's mean must agree with the plain path tracer's: z from the
  * spread of per-pass tile totals of both renders (thousands of passes, so the standard errors have
