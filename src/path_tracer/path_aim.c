@@ -14,7 +14,8 @@
  * Per medium vertex: the direction (EDA with MIS; uniform time: time-angular with MIS; else the phase
  * function); with elliptical connections and ellipse_directions, the next segment's record is drawn at the
  * vertex and the direction mixes in the sampler toward its control vertex (docs/darts.md §14.3). Surface
- * vertices connect to the path's light as in the plain path tracer. */
+ * vertices connect to the path's light as in the plain path tracer; with BSDFs without delta lobes their
+ * direction mixes the same sampler with BSDF sampling (pt_aim_surface_sample, docs/darts.md §14.4). */
 #include <stdlib.h>
 
 #include "path_tracer_internal.h"
