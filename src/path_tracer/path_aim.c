@@ -306,6 +306,16 @@ static int surface_aims(const pixel_ctx *c, const surface_site *ss)
            lobes && !(lobes & BSDF_LOBE_SPECULAR);
 }
 
+/* Whether the target can be on the side a direction from ss leaves into: always for a BSDF that transmits, else
+ * only where it is on the arriving side of the surface's plane. Behind an opaque surface the ellipse sampler's
+ * directions cluster about e, below the surface, and score nothing: its share is then 0. A choice made per vertex,
+ * not per direction, so it keeps every estimate unbiased (docs/darts.md §14.4). */
+static int light_on_leaving_side(const surface_site *ss, vec3 x, vec3 target)
+{
+    if (bsdf_transmits(ss->b)) return 1;
+    return v3_dot(v3_sub(target, x), ss->ng_hit) * v3_dot(ss->wi_world, ss->ng_hit) > 0.0;
+}
+
 int pt_aim_surface_sample(pixel_ctx *c, const path_state *ps, const surface_site *ss, surface_sample *out)
 {
     const scene *s = c->pass->s;
@@ -321,7 +331,8 @@ int pt_aim_surface_sample(pixel_ctx *c, const path_state *ps, const surface_site
     vec3 x = surface_spawn(s, ss, ss->wi_world);
     ellipse_record_init(&a->rec, g, &a->bin, x, ps->time, m->eta, g->ellipse_residual, v3_avg(m->sigma_t),
                         rng_uniform(c->rng));
-    double share = segment_connects(c, ps, m) ? c->pass->p->ellipse_direction_share : 0.0;
+    double share = segment_connects(c, ps, m) && light_on_leaving_side(ss, x, a->pt.y)
+                       ? c->pass->p->ellipse_direction_share : 0.0;
     double u[4];
     for (int k = 0; k < 4; k++) u[k] = rng_uniform(c->rng);
     if (!ellipse_direction_surface_sample(ss, x, a->pt.y, a->rec.T, share, u, out)) return 0;
