@@ -340,7 +340,7 @@ int pt_aim_surface_sample(pixel_ctx *c, const path_state *ps, const surface_site
      * is the record the segment would draw (docs/darts.md §14.4); elsewhere (a transmission, a reflection whose
      * origin moves to the other geometric side) the segment draws its own */
     vec3 y = surface_spawn(s, ss, out->w);
-    a->rec_ready = surface_medium_toward(ss, ps->medium, out->w) == med && y.x == x.x && y.y == x.y && y.z == x.z;
+    a->rec_ready = surface_medium_toward(ss, ps->medium, out->w) == med && v3_is_zero(v3_sub(y, x));
     return 1;
 }
 

@@ -34,8 +34,8 @@ typedef struct {
     darts_bin reach;     /* the bin's end widened by η_lb·extent: no contribution through any other point of
                           * the light can arrive before the early exit's bound says */
     ellipse_record rec;  /* at the start of the current medium segment (valid: the residual can reach the bin) */
-    int rec_ready;       /* rec was drawn at the medium vertex the next segment starts from (its T shared with
-                          * the vertex's direction, docs/darts.md §14.3): the segment takes it as drawn */
+    int rec_ready;       /* rec was drawn at the vertex (medium or surface) the next segment starts from (its T
+                          * shared with the vertex's direction, docs/darts.md §14.3–14.4): the segment takes it */
     double pre_r;        /* uniform time: the distance drawn at a medium vertex before its direction; < 0: none */
 } pt_aim;
 
