@@ -8,7 +8,8 @@
 # reference, and that MSE minus the reference's own noise (REF_NOISE, default 0.0003: see
 # ../shared/references/README.md). Without PEER_TUNGSTEN it runs dartspp alone and says so. REFERENCE
 # "none" (a scene without an unbiased reference, e.g. the dragon) leaves the MSE columns out.
-# Seeds are 1..SEEDS for both (seed 99 made the authors' 40-minute image; use other seeds against it); 8 or
+# Seeds are 1..SEEDS for both (seed 99 made the authors' 40-minute image; use other seeds against it), or
+# FIRST_SEED..FIRST_SEED+SEEDS−1 with FIRST_SEED set (an independent set; the files keep the names s1..sSEEDS); 8 or
 # more (fewer refused unless FEW_SEEDS=1). After that table, bench/seed_stats.py's: the full and the trimmed MSE
 # (the 0.1 % of pixels of largest error dropped), the seed variance and the bias² of the mean apart from the
 # noise, each theirs ÷ ours with a 95 % bootstrap interval over seeds.
@@ -41,7 +42,8 @@ wh=$(python3 -c "import json,sys; d=json.load(open(sys.argv[1])); r=d['camera'][
 w=${wh%% *}; rest=${wh#* }; h=${rest%% *}; paths=${rest#* }
 
 echo "date: $(date -u +%Y-%m-%dT%H:%MZ)  machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ *//')"
-echo "scene: $scene, ${secs} s per run, $threads threads, seeds 1..$seeds, reference $(basename "$ref")"
+first=${FIRST_SEED:-1}
+echo "scene: $scene, ${secs} s per run, $threads threads, seeds $first..$((first + seeds - 1)), reference $(basename "$ref")"
 echo "dartspp options: ${DARTSPP_ARGS:-(the scene file as it is)}"
 [ -n "$peer" ] || echo "PEER_TUNGSTEN is not set: dartspp alone (build the authors' renderer per ../shared/docs/peer-benchmark.md)"
 echo
@@ -50,12 +52,12 @@ s=1
 [ -z "${PEER_TABLE_ONLY:-}" ] || s=$((seeds + 1))
 while [ "$s" -le "$seeds" ]; do
     # shellcheck disable=SC2086
-    "$bin" render "$scene" --threads "$threads" --seed "$s" --time "$secs" ${DARTSPP_ARGS:-} --output "$o/ours-s$s.pfm" \
+    "$bin" render "$scene" --threads "$threads" --seed "$((first + s - 1))" --time "$secs" ${DARTSPP_ARGS:-} --output "$o/ours-s$s.pfm" \
         > "$o/ours-s$s.txt" 2>&1 || { tail -5 "$o/ours-s$s.txt" >&2; exit 1; }
     its=$(sed -n 's/^rendered \([0-9]*\) passes in \([0-9.]*\) s.*/\1 \2/p' "$o/ours-s$s.txt")
     echo "ours $s $its" >> "$o/runs.txt"
     if [ -n "$peer" ]; then
-        (cd "$o" && "$peer" -t "$threads" -s "$s" --timeout "${secs}s" --spp 100000000 -c 0 -r -e "$o/theirs-s$s.pfm" \
+        (cd "$o" && "$peer" -t "$threads" -s "$((first + s - 1))" --timeout "${secs}s" --spp 100000000 -c 0 -r -e "$o/theirs-s$s.pfm" \
             -o "$o/theirs-s$s.png" "$scene_abs" > "$o/theirs-s$s.txt" 2>&1) ||
             { tail -5 "$o/theirs-s$s.txt" >&2; exit 1; }
         n=$(grep -c '^Completed [0-9]*/' "$o/theirs-s$s.txt" || true)
