@@ -59,6 +59,20 @@ typedef struct {
 void darts_scan_camera_side(const scene *s, const surface_shading *sh, camera_side_scan *out);
 
 
+/* ---- camera-side control vertices (ours, issue 52; camera_cv.c, docs/darts.md §5.5) ----
+ * The point of a record's equal-time ellipsoid in a direction φ drawn from the camera, uniform over the
+ * pinhole's film widened by a margin (a fraction of each half-extent): a density ∝ 1/ρ² about the camera
+ * (ρ = |y − cam|), as the camera's importance. The photon pass combines it with the vertex-side control vertex
+ * by the balance heuristic (camera_control_vertices). */
+typedef struct {
+    int on;                  /* a pinhole camera */
+    vec3 pos, right, up, forward;
+    double plane_dist;       /* the image plane's distance: x ∈ [−half_x, half_x], y ∈ [−half_y, half_y] on it */
+    double half_x, half_y;
+    double share;            /* the share of the vertices that draw one */
+    double thin;             /* ρ_thin: of the points closer to the camera than this, a share ρ/ρ_thin is kept (0: all) */
+} camera_film;
+
 /* EDA direction sampling in one medium. */
 typedef struct {
     int on;
@@ -73,6 +87,7 @@ typedef struct {
                             * unwarped photon points: spheres need none) */
     int enable_elliptical_asked; /* as written (control vertices may be off for η) */
     int control_vertex_mis;
+    int camera_control_vertices; /* photon points with control vertices, camera-warped, a pinhole camera */
     residual_sampling ellipse_residual;
     int strict_time_width;
     int early_exit;
@@ -123,6 +138,8 @@ typedef struct {
     int enable_elliptical;  /* elliptical control vertices run */
     int enable_guiding;     /* DA distance sampling */
     int control_vertex_mis; /* control vertices by one-sample MIS with an exponential (control_vertex_sample) */
+    camera_film film;       /* camera_control_vertices: medium vertices also place camera-side control vertices
+                             * (film.on; set by the photon pass, which knows the camera) */
     residual_sampling ellipse_residual;
     int strict_surfaces;    /* strict time mode's start test on surface photons */
     int early_exit;         /* paths end once no photon can reach their bin */
@@ -201,6 +218,10 @@ static inline double darts_reach_along(double S, double C, double cos_theta)
  * pdf(t) = p(T)·(T − C·cosθ)/(T − t). The photon weight is σs·e^{−σt·t}/pdf(t). */
 int ellipse_control_vertex(const ellipse_record *r, vec3 d, double tmax, double *t, double *pdf_t);
 
+/* Density of the record's residual S (uniform, or the truncated exponential of eq. 21–22); 0 outside
+ * [S_lo, S_hi]. */
+double ellipse_residual_pdf(const ellipse_record *r, double S, residual_sampling mode, double sigma);
+
 /* Density in t of ellipse_control_vertex at distance t along d (residual density × dS/dt), 0 outside. */
 double ellipse_control_vertex_pdf(const ellipse_record *r, vec3 d, double t, residual_sampling mode, double sigma);
 
@@ -229,6 +250,20 @@ int sphere_control_vertex(double tau, double eta, const darts_bin *b, double tma
                           double *pdf_t);
 /* Its density at t (0 outside the interval). */
 double sphere_control_vertex_pdf(double tau, double eta, const darts_bin *b, double tmax, double sigma, double t);
+
+/* ---- camera-side control vertices: the functions (camera_cv.c) ---- */
+/* 1 for a pinhole camera (f->on), 0 otherwise (f->on = 0: no direction has density). */
+int camera_film_init(camera_film *f, const camera *c, double margin);
+/* A unit direction from the pinhole uniform over the film, with its solid-angle density. */
+vec3 camera_film_direction(const camera_film *f, double u1, double u2, double *pdf);
+double camera_film_direction_pdf(const camera_film *f, vec3 w);
+/* The record's control vertex y in a film direction (u1, u2) from the camera, at its residual T; pdf_v: the
+ * density of y in volume measure. 0 when the record is not valid or C = 0. */
+int camera_control_vertex(const ellipse_record *r, const camera_film *f, double u1, double u2, double u3, vec3 *y,
+                          double *pdf_v);
+/* Its density in volume measure at any y (0 where φ is off the film or T(y) outside [S_lo, S_hi]). */
+double camera_control_vertex_pdf(const ellipse_record *r, const camera_film *f, vec3 y, residual_sampling mode,
+                                 double sigma);
 
 /* ---- control vertices behind mirrors (ours; camera_side_scan above, issue 18) ----
  * One-sample MIS over the techniques of one medium segment: the control vertex of the record with focus

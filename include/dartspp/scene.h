@@ -259,6 +259,7 @@ typedef struct {
     int surface_chains;
     int early_exit;
     int control_vertex_mis;
+    int camera_control_vertices;
     int ellipse_residual;           /* residual_sampling (darts.h): uniform or exponential */
     int enable_two_sided_shading;
     int enable_consistency_checks;

@@ -53,6 +53,8 @@ static void resolve_samplers(const scene *s, integrator_type type, darts_plan *d
     d->enable_elliptical_asked = in->enable_elliptical;
     d->enable_elliptical = d->active && in->enable_elliptical && ((unwarped && !pt) || scene_eta_uniform(s));
     d->control_vertex_mis = in->control_vertex_mis;
+    d->camera_control_vertices = in->camera_control_vertices && type == INTEGRATOR_PHOTON_POINTS &&
+                                 d->enable_elliptical && !unwarped && s->cam.type == CAMERA_PINHOLE;
     d->ellipse_residual = in->ellipse_residual ? RESIDUAL_EXPONENTIAL : RESIDUAL_UNIFORM;
     d->strict_time_width = in->strict_time_width;
     d->early_exit = in->early_exit;

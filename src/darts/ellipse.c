@@ -65,8 +65,7 @@ static double ellipse_distance(double C, double cos_theta, double S)
     return 0.5 * (S - C) * (S + C) / (S - C * cos_theta);
 }
 
-/* Density of the residual S of the record (uniform, or the truncated exponential of eq. 21–22). */
-static double residual_pdf(const ellipse_record *r, double S, residual_sampling mode, double sigma)
+double ellipse_residual_pdf(const ellipse_record *r, double S, residual_sampling mode, double sigma)
 {
     if (!(S >= r->S_lo && S <= r->S_hi)) return 0.0;
     double L = r->S_hi - r->S_lo, a = sigma * L;
@@ -81,7 +80,7 @@ double ellipse_control_vertex_pdf(const ellipse_record *r, vec3 d, double t, res
     vec3 to_cam = v3_sub(v3_scale(r->e, r->C), v3_scale(d, t)); /* cam − x(t) */
     double ell = v3_len(to_cam), S = t + ell;
     if (!(ell > 0.0)) return 0.0;
-    return residual_pdf(r, S, mode, sigma) * (S - r->C * cos_theta) / ell; /* p(S)·dS/dt */
+    return ellipse_residual_pdf(r, S, mode, sigma) * (S - r->C * cos_theta) / ell; /* p(S)·dS/dt */
 }
 
 int control_vertex_sample(const ellipse_record *r, vec3 d, double tmax, residual_sampling mode, double sigma,

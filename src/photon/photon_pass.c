@@ -35,6 +35,11 @@ typedef struct {
     darts_bin reach;       /* the bin widened by the surface slack: the early exit's bound */
     ellipse_record rec;    /* of the current vertex (DARTS, in a medium) */
     cv_techniques cvt;     /* g->cv_multi: the records of every focus at the current vertex (cvt.rec[0] = rec) */
+    /* camera-side control vertices (g->film.on): the medium vertex the current segment leaves, if it is one */
+    int ccv;               /* 1: the segment leaves a medium vertex (its direction drawn by the phase or EDA) */
+    vec3 ccv_w_in;         /* the direction that arrived there */
+    vec3 ccv_beta;         /* the throughput there before the direction's weight f/p_ω */
+    double ccv_dir_pdf;    /* p_ω of the segment's direction */
     vec3 o, d, beta;
     int med, bounce, medium_events;
     double time;
@@ -76,6 +81,14 @@ static void deriv_segment(const light_path *lp, deriv_path *dv, int med, double 
     deriv_transmittance(lp->in->deriv, dv, med, len);
     deriv_time(lp->in->deriv, dv, med, len);
 }
+
+/* The part of the camera film outside the image that camera-side control vertices also cover (a fraction of
+ * each half-extent): photons there still reach the image's edge through their radius. */
+#define CAMERA_FILM_MARGIN 0.2
+/* The share of the medium vertices that draw a camera-side control vertex: enough for its density to outweigh
+ * the vertex side's near the camera (docs/darts.md §5.5), while the sensor pass's cost of its photons, which
+ * lie closer to the camera and cover more pixels, stays small (bench/results/peer.md). */
+#define CAMERA_CV_SHARE 0.25
 
 /* The DARTS samplers serve the volume map: they run only while its budget has room. */
 static int aims_at_volume(const light_path *lp) { return lp->g->active && lp->volume_open; }
@@ -187,6 +200,7 @@ static void mirror_records(light_path *lp, const medium *m)
 /* A new vertex at lp->o: the ellipse record its samplers share (DARTS, inside a medium). */
 static void new_vertex(light_path *lp)
 {
+    lp->ccv = 0; /* medium_event sets it once it has drawn the direction */
     /* unwarped, the control vertex needs no record and DA and EDA are off (plan.c) */
     if (!aims_at_volume(lp) || lp->med == MEDIUM_VACUUM || lp->g->camera_unwarp) return;
     const medium *m = &lp->s->media[lp->med];
@@ -213,6 +227,49 @@ static int surface_time_ok(const light_path *lp, vec3 x)
 
 static int medium_event(light_path *lp, const medium *m, double t, int darts);
 
+/* p_ω at the medium vertex the segment leaves (lp->ccv): the phase function's, or EDA's mixture. */
+static double medium_direction_pdf(const light_path *lp, const medium *m, vec3 w)
+{
+    const eda_table *et = lp->in->eda ? lp->in->eda->table[lp->med] : NULL;
+    return et ? eda_direction_pdf(et, lp->in->eda->alpha[lp->med], &m->phase, lp->ccv_w_in, &lp->rec, w)
+              : phase_eval(&m->phase, lp->ccv_w_in, w);
+}
+
+/* Density in volume measure of the vertex-side control vertex at y = x + t·w (the technique medium_segment
+ * draws along the path's direction): p_ω(w)·p(t)/t², p(t) the density in t of the distance technique. */
+static double vertex_side_density(const light_path *lp, double dir_pdf, vec3 w, double tmax, double t)
+{
+    const darts_guide *g = lp->g;
+    double sigma = v3_avg(lp->s->media[lp->med].sigma_t);
+    double p_t = g->cv_multi ? cv_techniques_pdf(&lp->cvt, w, tmax, g->control_vertex_mis, g->ellipse_residual, sigma, t)
+                             : control_vertex_pdf(&lp->rec, w, t, g->control_vertex_mis, g->ellipse_residual, sigma);
+    return dir_pdf * p_t / (t * t);
+}
+
+/* The camera-side control vertex of the medium vertex the segment leaves (lp->ccv; docs/darts.md §5.5): y on
+ * the record's ellipsoid in a film direction from the camera, seen from the vertex (nothing before it along
+ * the way), stored with f/(p_vertex + p_camera) in volume measure,
+ *   f(y) = β₀·f_p(ω_in, ω)·σs·e^{−σt·t}/t²  (the balance heuristic over the two techniques). */
+static void camera_side_control_vertex(light_path *lp, const medium *m)
+{
+    const darts_guide *g = lp->g;
+    double u1 = rng_uniform(lp->rng), u2 = rng_uniform(lp->rng), u3 = rng_uniform(lp->rng), p_cam;
+    vec3 y;
+    if (!camera_control_vertex(&lp->rec, &g->film, u1, u2, u3, &y, &p_cam)) return;
+    vec3 to_y = v3_sub(y, lp->o);
+    double t = v3_len(to_y);
+    if (!(t > 0.0)) return;
+    vec3 w = v3_scale(to_y, 1.0 / t);
+    hit_record h;
+    double tmax = scene_intersect(lp->s, lp->o, w, INFINITY, &h) ? h.t : INFINITY;
+    if (!(t < tmax)) return; /* a surface between: the vertex does not see y */
+    double p_vertex = vertex_side_density(lp, medium_direction_pdf(lp, m, w), w, tmax, t);
+    double f = phase_eval(&m->phase, lp->ccv_w_in, w) / (t * t);
+    vec3 tr = v3_mul(m->sigma_s, v3_exp_neg(v3_scale(m->sigma_t, t)));
+    vec3 power = v3_scale(v3_mul(lp->ccv_beta, tr), f / (p_vertex + p_cam));
+    store(lp, &lp->tb->vol, &lp->pc->n_vol, y, w, power, lp->bounce + 1, lp->time + m->eta * t, &lp->dv);
+}
+
 /* One medium segment up to tmax: the control vertex (elliptical), then the distance sample. Returns 1 for
  * a medium event (lp advanced to the scattering vertex), 0 for the surface at tmax, -1 to end the path. */
 static int medium_segment(light_path *lp, double tmax)
@@ -236,6 +293,12 @@ static int medium_segment(light_path *lp, double tmax)
         }
         if (made) { /* W = σs e^{−σt t}/p(t) (docs/darts.md §5.2) */
             vec3 w = v3_scale(v3_mul(m->sigma_s, v3_exp_neg(v3_scale(m->sigma_t, t))), 1.0 / pdf);
+            if (lp->ccv) { /* the balance heuristic against the camera-side technique (§5.5) */
+                double p_vertex = lp->ccv_dir_pdf * pdf / (t * t);
+                double p_cam = camera_control_vertex_pdf(&lp->rec, &g->film, v3_add(lp->o, v3_scale(lp->d, t)),
+                                                         g->ellipse_residual, sigma);
+                w = v3_scale(w, p_vertex / (p_vertex + p_cam));
+            }
             deriv_path cv = lp->dv; /* the control vertex's segment and σs: factors of its photon only */
             if (lp->in->deriv) {
                 deriv_segment(lp, &cv, lp->med, t);
@@ -244,6 +307,7 @@ static int medium_segment(light_path *lp, double tmax)
             store(lp, &lp->tb->vol, &lp->pc->n_vol, v3_add(lp->o, v3_scale(lp->d, t)), lp->d, v3_mul(lp->beta, w),
                   lp->bounce + 1, lp->time + m->eta * t, &cv);
         }
+        if (lp->ccv) camera_side_control_vertex(lp, m);
     }
     int event;
     double t;
@@ -314,6 +378,7 @@ static int medium_event(light_path *lp, const medium *m, double t, int darts)
     vec3 w_in = lp->d;
     path_vertex v = vertex_begin(lp, PATH_VERTEX_VOLUME, lp->o, lp->beta, lp->med);
     const eda_table *et = darts && in->eda ? in->eda->table[lp->med] : NULL;
+    vec3 beta0 = lp->beta;
     if (et) { /* EDA with MIS against the phase function (docs/darts.md §8.2) */
         double u[4], w;
         for (int k = 0; k < 4; k++) u[k] = rng_uniform(lp->rng);
@@ -322,6 +387,12 @@ static int medium_event(light_path *lp, const medium *m, double t, int darts)
     } else {
         double u1 = rng_uniform(lp->rng), u2 = rng_uniform(lp->rng);
         lp->d = phase_sample(&m->phase, lp->d, u1, u2);
+    }
+    if (darts && g->film.on && lp->rec.valid) {
+        lp->ccv = 1;
+        lp->ccv_w_in = w_in;
+        lp->ccv_beta = beta0;
+        lp->ccv_dir_pdf = medium_direction_pdf(lp, m, lp->d);
     }
     if (in->deriv) deriv_phase(in->deriv, &lp->dv, lp->med, w_in, lp->d); /* f/p weights of either sampler */
     vertex_end(lp, &v, 1, 0);
@@ -560,6 +631,15 @@ void photon_pass_input_init(photon_pass_input *in, const scene *s, const render_
                               .deriv_stride = deriv_on(&p->deriv) ? photon_deriv_stride(p->deriv.count) : 0,
                               .iteration = iteration, .stop = stop};
     darts_guide_init(&p->darts, &p->window, s->cam.pos, &in->guide);
+    /* camera-side control vertices: volume photons (not beams or vertices), and no derivative records (their
+     * photons would need the derivative state of a direction the path did not take) */
+    if (p->darts.camera_control_vertices && !in->beams && !in->vertices && !in->deriv &&
+        camera_film_init(&in->guide.film, &s->cam, CAMERA_FILM_MARGIN)) {
+        in->guide.film.share = CAMERA_CV_SHARE;
+        /* ρ_thin: where a disc of the first volume radius spans the film's half-width (x = 1 at plane_dist) */
+        double r0 = p->r_vol.r0;
+        in->guide.film.thin = isfinite(r0) && r0 < 1e10 ? r0 * s->cam.plane_dist : 0.0;
+    }
 }
 
 /* Light paths in independent batches; with surface chains on, they stop once the volume budget is full. */
