@@ -293,7 +293,7 @@ static int medium_segment(light_path *lp, double tmax)
         }
         if (made) { /* W = σs e^{−σt t}/p(t) (docs/darts.md §5.2) */
             vec3 w = v3_scale(v3_mul(m->sigma_s, v3_exp_neg(v3_scale(m->sigma_t, t))), 1.0 / pdf);
-            if (lp->ccv) { /* the balance heuristic against the camera-side technique (§5.5) */
+            if (lp->ccv) { /* the balance heuristic against the camera-side technique (docs/darts.md §5.5) */
                 double p_vertex = lp->ccv_dir_pdf * pdf / (t * t);
                 double p_cam = camera_control_vertex_pdf(&lp->rec, &g->film, v3_add(lp->o, v3_scale(lp->d, t)),
                                                          g->ellipse_residual, sigma);

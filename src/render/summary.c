@@ -51,6 +51,19 @@ static void print_media(const scene *s, const render_plan *p)
     }
 }
 
+/* camera_control_vertices as asked: on, or why not (docs/darts.md §5.5). */
+static void print_camera_side_cv(const render_plan *p)
+{
+    const darts_plan *d = &p->darts;
+    const char *off = p->window.camera_unwarp ? "camera-unwarped time"
+                      : !d->enable_elliptical ? "no elliptical control vertices"
+                      : !d->camera_control_vertices ? "not a pinhole camera"
+                      : p->volume_photon_type != VOLUME_PHOTON_POINTS ? "not volume photon points"
+                      : deriv_on(&p->deriv) ? "derivatives" : NULL;
+    if (off) printf("; camera-side control vertices off (%s)", off);
+    else printf("; camera-side control vertices on (a quarter of the medium vertices)");
+}
+
 /* Which photon-pass samplers run (docs/design.md §4.3: the summary says which parts are active). */
 void summary_print_photon_pass(const scene *s, const render_plan *p)
 {
@@ -74,6 +87,7 @@ void summary_print_photon_pass(const scene *s, const render_plan *p)
            : d->enable_elliptical ? "on"
            : d->enable_elliptical_asked ? "off: refractive index not uniform" : "off",
            d->ellipse_residual == RESIDUAL_EXPONENTIAL ? "exponential" : "uniform", d->strict_time_width ? "on" : "off");
+    if (s->integrator.camera_control_vertices) print_camera_side_cv(p);
     if (d->side.seen && d->darts_mirrors == DARTS_MIRRORS_FULL) print_continued_surfaces(s, d);
     if (p->window.camera_unwarp) print_unwarped(s, d);
     print_media(s, p);
