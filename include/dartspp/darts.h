@@ -73,6 +73,11 @@ typedef struct {
     double thin;             /* ρ_thin: of the points closer to the camera than this, a share ρ/ρ_thin is kept (0: all) */
 } camera_film;
 
+/* The share of the medium vertices that draw a camera-side control vertex (camera_film.share in a render):
+ * enough for its density to outweigh the vertex side's near the camera, while the sensor pass's cost of its
+ * photons, which lie closer to the camera and cover more pixels, stays small (bench/results/peer.md). */
+#define CAMERA_CV_SHARE 0.25
+
 /* EDA direction sampling in one medium. */
 typedef struct {
     int on;

@@ -85,10 +85,6 @@ static void deriv_segment(const light_path *lp, deriv_path *dv, int med, double 
 /* The part of the camera film outside the image that camera-side control vertices also cover (a fraction of
  * each half-extent): photons there still reach the image's edge through their radius. */
 #define CAMERA_FILM_MARGIN 0.2
-/* The share of the medium vertices that draw a camera-side control vertex: enough for its density to outweigh
- * the vertex side's near the camera (docs/darts.md §5.5), while the sensor pass's cost of its photons, which
- * lie closer to the camera and cover more pixels, stays small (bench/results/peer.md). */
-#define CAMERA_CV_SHARE 0.25
 
 /* The DARTS samplers serve the volume map: they run only while its budget has room. */
 static int aims_at_volume(const light_path *lp) { return lp->g->active && lp->volume_open; }

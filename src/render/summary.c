@@ -61,7 +61,7 @@ static void print_camera_side_cv(const render_plan *p)
                       : p->volume_photon_type != VOLUME_PHOTON_POINTS ? "not volume photon points"
                       : deriv_on(&p->deriv) ? "derivatives" : NULL;
     if (off) printf("; camera-side control vertices off (%s)", off);
-    else printf("; camera-side control vertices on (a quarter of the medium vertices)");
+    else printf("; camera-side control vertices on (%g of the medium vertices)", CAMERA_CV_SHARE);
 }
 
 /* Which photon-pass samplers run (docs/design.md §4.3: the summary says which parts are active). */
