@@ -77,6 +77,9 @@ typedef struct {
  * enough for its density to outweigh the vertex side's near the camera, while the sensor pass's cost of its
  * photons, which lie closer to the camera and cover more pixels, stays small (bench/results/peer.md). */
 #define CAMERA_CV_SHARE 0.25
+/* ρ_thin in units of the distance r₀·plane_dist at which a disc of the first volume radius r₀ spans the film's
+ * half-width: closer than ρ_thin a share ρ/ρ_thin of the camera-side points is kept (docs/darts.md §5.5). */
+#define CAMERA_CV_THIN 4.0
 
 /* EDA direction sampling in one medium. */
 typedef struct {

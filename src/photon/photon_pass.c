@@ -632,9 +632,10 @@ void photon_pass_input_init(photon_pass_input *in, const scene *s, const render_
     if (p->darts.camera_control_vertices && !in->beams && !in->vertices && !in->deriv &&
         camera_film_init(&in->guide.film, &s->cam, CAMERA_FILM_MARGIN)) {
         in->guide.film.share = CAMERA_CV_SHARE;
-        /* ρ_thin: where a disc of the first volume radius spans the film's half-width (x = 1 at plane_dist) */
+        /* ρ_thin: CAMERA_CV_THIN times where a disc of the first volume radius spans the film's half-width
+         * (x = 1 at plane_dist) */
         double r0 = p->r_vol.r0;
-        in->guide.film.thin = isfinite(r0) && r0 < 1e10 ? r0 * s->cam.plane_dist : 0.0;
+        in->guide.film.thin = isfinite(r0) && r0 < 1e10 ? CAMERA_CV_THIN * r0 * s->cam.plane_dist : 0.0;
     }
 }
 
