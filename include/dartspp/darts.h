@@ -62,11 +62,11 @@ void darts_scan_camera_side(const scene *s, const surface_shading *sh, camera_si
 /* ---- camera-side control vertices (ours, issue 52; camera_cv.c, docs/darts.md §5.5) ----
  * The point of a record's equal-time ellipsoid in a direction φ drawn from the camera, uniform over the
  * pinhole's film widened by a margin (a fraction of each half-extent): a density ∝ 1/ρ² about the camera
- * (ρ = |y − cam|), as the camera's importance. The photon pass combines it with the vertex-side control vertex
- * by the balance heuristic (camera_control_vertices). */
+ * (ρ = |y − cam|), as the camera's importance (∝ 1/ρ closer than ρ_thin, where a share ρ/ρ_thin is kept). The
+ * photon pass combines it with the vertex-side control vertex by the balance heuristic (camera_control_vertices). */
 typedef struct {
     int on;                  /* a pinhole camera */
-    vec3 pos, right, up, forward;
+    vec3 right, up, forward;
     double plane_dist;       /* the image plane's distance: x ∈ [−half_x, half_x], y ∈ [−half_y, half_y] on it */
     double half_x, half_y;
     double share;            /* the share of the vertices that draw one */
@@ -265,8 +265,9 @@ int camera_film_init(camera_film *f, const camera *c, double margin);
 /* A unit direction from the pinhole uniform over the film, with its solid-angle density. */
 vec3 camera_film_direction(const camera_film *f, double u1, double u2, double *pdf);
 double camera_film_direction_pdf(const camera_film *f, vec3 w);
-/* The record's control vertex y in a film direction (u1, u2) from the camera, at its residual T; pdf_v: the
- * density of y in volume measure. 0 when the record is not valid or C = 0. */
+/* The record's control vertex y in a film direction (u1, u2) from the camera, at its residual T, kept when u3 is
+ * below f->share (times ρ/ρ_thin closer than ρ_thin); pdf_v: the density of y in volume measure, the kept share
+ * included. 0 when the record is not valid, C = 0, or the point is not kept. */
 int camera_control_vertex(const ellipse_record *r, const camera_film *f, double u1, double u2, double u3, vec3 *y,
                           double *pdf_v);
 /* Its density in volume measure at any y (0 where φ is off the film or T(y) outside [S_lo, S_hi]). */

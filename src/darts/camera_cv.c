@@ -15,7 +15,7 @@ int camera_film_init(camera_film *f, const camera *c, double margin)
 {
     *f = (camera_film){0};
     if (c->type != CAMERA_PINHOLE || !(c->plane_dist > 0.0) || c->width <= 0 || c->height <= 0) return 0;
-    f->pos = c->pos, f->right = c->right, f->up = c->up, f->forward = c->forward;
+    f->right = c->right, f->up = c->up, f->forward = c->forward;
     f->plane_dist = c->plane_dist;
     /* the image plane spans x ∈ [−1, 1], y ∈ [−h/w, h/w] (camera_ray_dir) */
     f->half_x = 1.0 + margin;
@@ -57,7 +57,7 @@ static double camera_cv_density(double p_phi, double p_T, double T, double C, do
     return isfinite(v) && v > 0.0 ? v : 0.0;
 }
 
-/* The share of the samples at distance ρ from the camera that are kept: min(1, ρ/ρ_thin). */
+/* The share of the samples at distance ρ from the camera that are kept: share·min(1, ρ/ρ_thin). */
 static double kept_share(const camera_film *f, double rho)
 {
     return f->share * (f->thin > 0.0 && rho < f->thin ? rho / f->thin : 1.0);
