@@ -289,10 +289,10 @@ static int medium_segment(light_path *lp, double tmax)
         }
         if (made) { /* W = σs e^{−σt t}/p(t) (docs/darts.md §5.2) */
             vec3 w = v3_scale(v3_mul(m->sigma_s, v3_exp_neg(v3_scale(m->sigma_t, t))), 1.0 / pdf);
+            vec3 y = v3_add(lp->o, v3_scale(lp->d, t));
             if (lp->ccv) { /* the balance heuristic against the camera-side technique (docs/darts.md §5.5) */
                 double p_vertex = lp->ccv_dir_pdf * pdf / (t * t);
-                double p_cam = camera_control_vertex_pdf(&lp->rec, &g->film, v3_add(lp->o, v3_scale(lp->d, t)),
-                                                         g->ellipse_residual, sigma);
+                double p_cam = camera_control_vertex_pdf(&lp->rec, &g->film, y, g->ellipse_residual, sigma);
                 w = v3_scale(w, p_vertex / (p_vertex + p_cam));
             }
             deriv_path cv = lp->dv; /* the control vertex's segment and σs: factors of its photon only */
@@ -300,8 +300,8 @@ static int medium_segment(light_path *lp, double tmax)
                 deriv_segment(lp, &cv, lp->med, t);
                 deriv_medium_vertex(lp->in->deriv, &cv, lp->med);
             }
-            store(lp, &lp->tb->vol, &lp->pc->n_vol, v3_add(lp->o, v3_scale(lp->d, t)), lp->d, v3_mul(lp->beta, w),
-                  lp->bounce + 1, lp->time + m->eta * t, &cv);
+            store(lp, &lp->tb->vol, &lp->pc->n_vol, y, lp->d, v3_mul(lp->beta, w), lp->bounce + 1, lp->time + m->eta * t,
+                  &cv);
         }
         if (lp->ccv) camera_side_control_vertex(lp, m);
     }
