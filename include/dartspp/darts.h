@@ -62,7 +62,7 @@ void darts_scan_camera_side(const scene *s, const surface_shading *sh, camera_si
 /* ---- camera-side control vertices (ours, issue 52; camera_cv.c, docs/darts.md §5.5) ----
  * The point of a record's equal-time ellipsoid in a direction φ drawn from the camera, uniform over the
  * pinhole's film widened by a margin (a fraction of each half-extent): a density ∝ 1/ρ² about the camera
- * (ρ = |y − cam|), as the camera's importance (∝ 1/ρ closer than ρ_thin, where a share ρ/ρ_thin is kept). The
+ * (ρ = |y − cam|), as the camera's importance (uniform closer than ρ_thin, where a share (ρ/ρ_thin)² is kept). The
  * photon pass combines it with the vertex-side control vertex by the balance heuristic (camera_control_vertices). */
 typedef struct {
     int on;                  /* a pinhole camera */
@@ -70,7 +70,7 @@ typedef struct {
     double plane_dist;       /* the image plane's distance: x ∈ [−half_x, half_x], y ∈ [−half_y, half_y] on it */
     double half_x, half_y;
     double share;            /* the share of the vertices that draw one */
-    double thin;             /* ρ_thin: of the points closer to the camera than this, a share ρ/ρ_thin is kept (0: all) */
+    double thin;             /* ρ_thin: of the points closer to the camera than this, a share (ρ/ρ_thin)² is kept (0: all) */
 } camera_film;
 
 /* The share of the medium vertices that draw a camera-side control vertex (camera_film.share in a render):
@@ -78,8 +78,8 @@ typedef struct {
  * photons, which lie closer to the camera and cover more pixels, stays small (bench/results/peer.md). */
 #define CAMERA_CV_SHARE 0.25
 /* ρ_thin in units of the distance r₀·plane_dist at which a disc of the first volume radius r₀ spans the film's
- * half-width: closer than ρ_thin a share ρ/ρ_thin of the camera-side points is kept (docs/darts.md §5.5). */
-#define CAMERA_CV_THIN 4.0
+ * half-width: closer than ρ_thin a share (ρ/ρ_thin)² of the camera-side points is kept (docs/darts.md §5.5). */
+#define CAMERA_CV_THIN 8.0
 
 /* EDA direction sampling in one medium. */
 typedef struct {
@@ -266,7 +266,7 @@ int camera_film_init(camera_film *f, const camera *c, double margin);
 vec3 camera_film_direction(const camera_film *f, double u1, double u2, double *pdf);
 double camera_film_direction_pdf(const camera_film *f, vec3 w);
 /* The record's control vertex y in a film direction (u1, u2) from the camera, at its residual T, kept when u3 is
- * below f->share (times ρ/ρ_thin closer than ρ_thin); pdf_v: the density of y in volume measure, the kept share
+ * below f->share (times (ρ/ρ_thin)² closer than ρ_thin); pdf_v: the density of y in volume measure, the kept share
  * included. 0 when the record is not valid, C = 0, or the point is not kept. */
 int camera_control_vertex(const ellipse_record *r, const camera_film *f, double u1, double u2, double u3, vec3 *y,
                           double *pdf_v);

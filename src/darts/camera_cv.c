@@ -57,10 +57,13 @@ static double camera_cv_density(double p_phi, double p_T, double T, double C, do
     return isfinite(v) && v > 0.0 ? v : 0.0;
 }
 
-/* The share of the samples at distance ρ from the camera that are kept: share·min(1, ρ/ρ_thin). */
+/* The share of the samples at distance ρ from the camera that are kept: share·min(1, (ρ/ρ_thin)²). A photon at ρ
+ * covers ∝ 1/ρ² pixels of the film, so the quadratic share holds a sample's expected sensor-pass cost to at
+ * most that of one at ρ_thin (docs/darts.md §5.5). */
 static double kept_share(const camera_film *f, double rho)
 {
-    return f->share * (f->thin > 0.0 && rho < f->thin ? rho / f->thin : 1.0);
+    double q = f->thin > 0.0 && rho < f->thin ? rho / f->thin : 1.0;
+    return f->share * q * q;
 }
 
 int camera_control_vertex(const ellipse_record *r, const camera_film *f, double u1, double u2, double u3, vec3 *y,

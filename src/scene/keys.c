@@ -127,7 +127,7 @@ static const scene_key table[] = {
     {.name = "control_vertex_mis", IN(control_vertex_mis), .type = KEY_BOOL, .read_by = PT | PP, .changes_image = 1,
      .def = 1, .meaning = "MIS of the elliptical and free-flight techniques"},
     {.name = "camera_control_vertices", IN(camera_control_vertices), .type = KEY_BOOL, .read_by = PP,
-     .changes_image = 1, .def = 0,
+     .changes_image = 1, .def = 1,
      .meaning = "DARTS photon points: a quarter of the medium vertices also place a control vertex found from the camera, by a film direction (MIS with the vertex's own; docs/darts.md §5.5)"},
     {.name = "da_defensive", IN(da_defensive), .type = KEY_NUMBER, .read_by = PT | PP, .changes_image = 1, .def = 0.2,
      IN_RANGE(0, 0.999), .meaning = "Uniform share of the DA-RIS candidate selection"},
