@@ -62,7 +62,7 @@ void darts_scan_camera_side(const scene *s, const surface_shading *sh, camera_si
 /* ---- camera-side control vertices (ours, issue 52; camera_cv.c, docs/darts.md §5.5) ----
  * The point of a record's equal-time ellipsoid in a direction φ drawn from the camera, uniform over the
  * pinhole's film widened by a margin (a fraction of each half-extent): a density ∝ 1/ρ² about the camera
- * (ρ = |y − cam|), as the camera's importance (uniform closer than ρ_thin, where a share (ρ/ρ_thin)² is kept). The
+ * (ρ = |y − cam|), as the camera's importance (bounded closer than ρ_thin, where a share (ρ/ρ_thin)² is kept). The
  * photon pass combines it with the vertex-side control vertex by the balance heuristic (camera_control_vertices). */
 typedef struct {
     int on;                  /* a pinhole camera */
