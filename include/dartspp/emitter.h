@@ -90,6 +90,10 @@ static inline int emitter_connectable(const emitter *e) { return (e->flags & EMI
 static inline int emitter_is_parallel_beam(const emitter *e) { return (e->flags & EMITTER_PARALLEL_BEAM) != 0; }
 static inline int emitter_hittable(const emitter *e) { return (e->flags & EMITTER_HITTABLE) != 0; }
 static inline int emitter_direct_draws(const emitter *e) { return (e->flags & EMITTER_DIRECT_DRAWS) != 0; }
+/* Next-event estimation reaches the emitter without drawing a point on it (point, spot, parallel beams):
+ * the connection is the exact direct light, so photon points connect it instead of storing first-bounce
+ * surface photons (surface_direct_connections, docs/defaults.md §3.8). */
+static inline int emitter_connects_exactly(const emitter *e) { return emitter_connectable(e) && !emitter_direct_draws(e); }
 
 /* ---- what a sample gives ---- */
 /* Emission: the first vertex and direction of a light path. */

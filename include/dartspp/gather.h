@@ -31,6 +31,9 @@ typedef struct {
     double alpha_reg;               /* light connections at camera vertices after a glossy bounce evaluate
                                      * microfacet lobes with α at least this (docs/defaults.md §3.7); 0: off */
     int k_surf;                     /* gather_photon_count */
+    int surface_direct;             /* surface_direct_connections: at gathered lobes, the lights that
+                                     * emitter_connects_exactly are connected (the photon pass stored no
+                                     * first-bounce photon of theirs) */
     bounce_limits bounces;          /* which light + camera paths count */
     surface_shading shading;        /* BSDF frames and the gather/continue split (same as the photon pass) */
     int camera_leg_projected;       /* 0: Euclidean distance segment origin → photon (reference) */

@@ -204,6 +204,9 @@ typedef struct {
     int max_bounces;                /* path segments; photons of longer paths cannot count */
     double t_end;                   /* the window's end (INFINITY: steady state) */
     int include_surfaces, low_order_scattering;
+    int surface_direct;             /* surface_direct_connections: no surface photon at a light path's first
+                                     * vertex from a light that emitter_connects_exactly (the sensor pass
+                                     * connects that light there) */
     int beams;                      /* volume_photon_type "beams": the volume budget holds beams (the medium
                                      * segments; long ones with DARTS), no volume photons */
     int vertices;                   /* sliced primitives: record every light-path vertex (path_vertex); the volume

@@ -57,6 +57,7 @@ typedef struct render_plan {
      * 3 for points (their 2-D kernel and time). Zero without a delta gate. */
     radius_schedule w_gate;
     int include_surfaces, low_order_scattering, surface_chains;
+    int surface_direct;              /* surface_direct_connections, with surfaces included (emitter_connects_exactly) */
     volume_photon_type_choice volume_photon_type; /* points, or short beams (src/photon_beams) */
     camera_leg_choice camera_leg;
     volume_gather_choice volume_gather;

@@ -257,6 +257,7 @@ typedef struct {
     int darts_mirrors;              /* darts_mirrors_choice */
     double mirror_defensive;
     int surface_chains;
+    int surface_direct_connections;
     int early_exit;
     int control_vertex_mis;
     int camera_control_vertices;

@@ -13,6 +13,7 @@ typedef struct {
     film_pixel *pix;
     dp_rng *rng;     /* continuations through specular and near-specular lobes */
     primary_line *line; /* where the primary line's medium segments are recorded for the splat, or NULL */
+    double eta_lb, eta_ub; /* the scene's smallest and largest refractive index: bounds of a straight leg's time */
 } pixel_ctx;
 
 typedef struct {
@@ -126,14 +127,28 @@ static void gather_surface(pixel_ctx *c, const surface_site *ss, unsigned lobes,
     }
 }
 
-/* Direct light at a surface the camera path continues through on a non-delta lobe: the photons stored here
- * serve the gathered lobes only, so next-event estimation adds it (light → surface → camera) to every light
- * that allows it, with the continued lobes evaluated. Delta lobes see area lights by hits (hit_emission).
+/* Whether a straight light connection of length dist, leaving the camera path at path time t, can land in
+ * the film's window: its time lies in [t + η_lb·dist, t + η_ub·dist], widened by a margin for the ray
+ * offsets. One that cannot is not traced (the film would drop it): with a narrow gate most are not. */
+static int connection_can_count(const pixel_ctx *c, double t, double dist)
+{
+    const time_window *tw = &c->pix->f->window;
+    if (!tw->gated || c->g->deriv) return 1; /* derivatives: the time kernels reach past the window */
+    double margin = 1e-4 * (1.0 + dist);
+    return t + c->eta_lb * dist - margin < time_window_end(tw) && t + c->eta_ub * dist + margin >= tw->start;
+}
+
+/* Direct light by next-event estimation (light → surface → camera), with `lobes` evaluated, to every light
+ * that allows it, or (exact_only) to those that emitter_connects_exactly.
+ * - At a surface the camera path continues through on a non-delta lobe, for every light: the photons stored
+ *   here serve the gathered lobes only. Delta lobes see area lights by hits (hit_emission).
+ * - At gathered lobes with surface_direct_connections, for the exact lights only: the photon pass stored no
+ *   first-bounce photon of theirs (docs/defaults.md §3.8).
  * At a vertex the camera path reached through a glossy bounce (after_glossy), the lobes are evaluated with
  * α raised to g->alpha_reg: a point light seen in a second glossy reflection is otherwise a highlight that
  * the first bounce's sampling finds by chance (the dragon's fireflies, docs/defaults.md §3.7). */
-static void direct_light(pixel_ctx *c, const surface_site *site, unsigned lobes, int med, vec3 thr, double t_cam,
-                         int b_cam, int after_glossy, const deriv_path *at)
+static void direct_light(pixel_ctx *c, const surface_site *site, unsigned lobes, int exact_only, int med, vec3 thr,
+                         double t_cam, int b_cam, int after_glossy, const deriv_path *at)
 {
     const scene *s = c->s;
     if (!bounces_count(&c->g->bounces, b_cam + 1)) return;
@@ -149,7 +164,7 @@ static void direct_light(pixel_ctx *c, const surface_site *site, unsigned lobes,
     }
     for (int i = 0; i < s->light_count; i++) {
         const emitter *L = &s->lights[i];
-        if (!emitter_connectable(L)) continue;
+        if (!(exact_only ? emitter_connects_exactly(L) : emitter_connectable(L))) continue;
         double u[2] = {0.0, 0.0};
         if (emitter_direct_draws(L)) u[0] = rng_uniform(c->rng), u[1] = rng_uniform(c->rng);
         emitter_direct ed;
@@ -158,6 +173,7 @@ static void direct_light(pixel_ctx *c, const surface_site *site, unsigned lobes,
         if (v3_max(f) <= 0.0) continue;
         vec3 tr;
         double offset = path_time_offset(s, L, c->rng), t = t_cam + offset;
+        if (!connection_can_count(c, t, v3_len(v3_sub(ed.y, ss->p)))) continue;
         c->pix->rays += 1;
         vec3 target = v3_is_zero(ed.n) ? ed.y
                       : scene_offset_ray_origin(s, ed.y, v3_dot(ed.wi, ed.n) < 0.0 ? ed.n : v3_neg(ed.n));
@@ -242,8 +258,11 @@ static void trace_sensor_path(pixel_ctx *c, vec3 o, vec3 d)
         photon_split split = surface_photon_split(bs, &c->g->shading);
         if (cam) deriv_surface_vertex(c->g->deriv, cam, sf->bsdf); /* every estimate here evaluates the BSDF */
         if (split.gather) gather_surface(c, &ss, split.gather, thr, t_cam, b_cam, cam);
+        if (split.gather && c->g->surface_direct)
+            direct_light(c, &ss, split.gather, 1, med, thr, t_cam, b_cam, after_glossy, cam);
         if (!split.cont) return;
-        if (split.cont & ~BSDF_LOBE_SPECULAR) direct_light(c, &ss, split.cont, med, thr, t_cam, b_cam, after_glossy, cam);
+        if (split.cont & ~BSDF_LOBE_SPECULAR)
+            direct_light(c, &ss, split.cont, 0, med, thr, t_cam, b_cam, after_glossy, cam);
         double u[3] = {rng_uniform(c->rng), rng_uniform(c->rng), rng_uniform(c->rng)};
         surface_sample smp;
         if (!surface_sample_bsdf(&ss, u, split.cont, 0, &smp)) return;
@@ -261,12 +280,14 @@ typedef struct {
     const scene *s;
     const gather_input *g;
     primary_line *lines; /* per pixel, or NULL */
+    double eta_lb, eta_ub; /* the scene's smallest and largest refractive index */
 } pass_ctx;
 
 static void sample_pixel(void *ctx, film_pixel *pix, vec3 o, vec3 dir, dp_rng *rng)
 {
     const pass_ctx *p = ctx;
-    pixel_ctx c = {.s = p->s, .g = p->g, .pix = pix, .rng = rng, .line = p->lines ? &p->lines[pix->px] : NULL};
+    pixel_ctx c = {.s = p->s, .g = p->g, .pix = pix, .rng = rng, .line = p->lines ? &p->lines[pix->px] : NULL,
+                   .eta_lb = p->eta_lb, .eta_ub = p->eta_ub};
     trace_sensor_path(&c, o, dir);
 }
 
@@ -298,7 +319,11 @@ double gather_pass_bytes(const scene *s, int splat, const photon *sample, size_t
  * per recorded segment (volume_gather "beam", and the splat's fallback). */
 double gather_pass(const scene *s, const gather_input *g, film *f, uint64_t seed, long iteration)
 {
-    pass_ctx p = {s, g, NULL};
+    pass_ctx p = {s, g, NULL, s->integrator.vacuum_eta, s->integrator.vacuum_eta};
+    for (int i = 0; i < s->medium_count; i++) {
+        p.eta_lb = fmin(p.eta_lb, s->media[i].eta);
+        p.eta_ub = fmax(p.eta_ub, s->media[i].eta);
+    }
     /* NULL: queries in the walk; so with derivatives, whose camera state the walk carries (a primary line would
      * need one per segment) */
     if (g->vol && !g->deriv) p.lines = malloc(volume_splat_bytes(s->cam.width, s->cam.height));

@@ -395,6 +395,14 @@ static int medium_event(light_path *lp, const medium *m, double t, int darts)
     return 1;
 }
 
+/* At a surface the path reached straight from a light that emitter_connects_exactly, with
+ * surface_direct_connections: the sensor pass connects that light at every gathered surface, so the photon
+ * here would count the direct light twice (docs/defaults.md §3.8). lp->bounce is already this vertex's. */
+static int direct_by_connection(const light_path *lp)
+{
+    return lp->in->surface_direct && lp->bounce == 1 && emitter_connects_exactly(&lp->s->lights[lp->light]);
+}
+
 /* Scattering at a surface hit: a surface photon where the BSDF has lobes the sensor pass gathers
  * (surface_photon_split), then the adjoint BSDF sample. Returns 0 to end the path. */
 static int surface_event(light_path *lp, const hit_record *h)
@@ -413,7 +421,8 @@ static int surface_event(light_path *lp, const hit_record *h)
     lp->medium_events = 0;
     surface_site ss;
     if (!surface_site_init(&ss, s, &lp->in->shading, h, lp->d)) return 0;
-    if (surface_photon_split(b, &lp->in->shading).gather && lp->in->include_surfaces && surface_time_ok(lp, h->p))
+    if (surface_photon_split(b, &lp->in->shading).gather && lp->in->include_surfaces && !direct_by_connection(lp) &&
+        surface_time_ok(lp, h->p))
         store(lp, &lp->tb->surf, &lp->pc->n_surf, h->p, lp->d, surface_photon_power(&ss, lp->beta), lp->bounce,
               lp->time, &lp->dv);
     path_vertex v = vertex_begin(lp, PATH_VERTEX_SURFACE, h->p, lp->beta, lp->med);
@@ -618,6 +627,7 @@ void photon_pass_input_init(photon_pass_input *in, const scene *s, const render_
                               .max_bounces = p->bounces.max,
                               .t_end = plan_window_end(p, iteration),
                               .include_surfaces = p->include_surfaces, .low_order_scattering = p->low_order_scattering,
+                              .surface_direct = p->surface_direct,
                               .beams = p->volume_photon_type != VOLUME_PHOTON_POINTS,
                               .vertices = volume_type_sliced(p->volume_photon_type),
                               .surface_chains = p->surface_chains,

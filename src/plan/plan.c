@@ -43,6 +43,7 @@ static void resolve_photon_points(const integrator_settings *in, render_plan *p)
     p->include_surfaces = in->include_surfaces;
     p->low_order_scattering = in->low_order_scattering;
     p->surface_chains = in->surface_chains;
+    p->surface_direct = in->surface_direct_connections && in->include_surfaces;
     p->camera_leg = in->camera_leg;
     p->volume_gather = in->volume_gather;
     /* the path tracer's passes weigh 1 and regularize nothing */

@@ -64,10 +64,21 @@ static void print_camera_side_cv(const render_plan *p)
     else printf("; camera-side control vertices on (%g of the medium vertices)", CAMERA_CV_SHARE);
 }
 
+/* surface_direct_connections: how many lights the sensor pass connects at gathered surfaces (docs/defaults.md §3.8). */
+static void print_surface_direct(const scene *s, const render_plan *p)
+{
+    int n = 0;
+    for (int i = 0; p->surface_direct && i < s->light_count; i++) n += emitter_connects_exactly(&s->lights[i]);
+    if (n > 0)
+        printf("surfaces: the direct light of %d of %d lights connected from the camera, not stored as photons "
+               "(surface_direct_connections)\n", n, s->light_count);
+}
+
 /* Which photon-pass samplers run (docs/design.md §4.3: the summary says which parts are active). */
 void summary_print_photon_pass(const scene *s, const render_plan *p)
 {
     const darts_plan *d = &p->darts;
+    print_surface_direct(s, p);
     if (volume_type_sliced(p->volume_photon_type)) /* docs/sliced_primitives.md */
         printf("volume: %s (delta-sliced %s; long primitives: unbiased); beams' radius r0*gamma_i\n",
                slice_type_summary(p->volume_photon_type),

@@ -143,6 +143,11 @@ static const scene_key table[] = {
      .meaning = "DARTS paths end once their time bin is out of reach"},
     {.name = "surface_chains", IN(surface_chains), .type = KEY_BOOL, .read_by = PP, .changes_image = 1, .def = 1,
      .meaning = "DARTS surface photons from Markov chains over light paths once the volume budget is full"},
+    {.name = "surface_direct_connections", IN(surface_direct_connections), .type = KEY_BOOL, .read_by = PP,
+     .changes_image = 1, .def = 1,
+     .meaning = "Direct light of point, spot and other lights reached without sampling, at the surfaces the sensor "
+                "pass gathers: connected from the camera path instead of gathered from first-bounce photons "
+                "(docs/defaults.md §3.8)"},
     {.name = "darts_mirrors", IN(darts_mirrors), CHOICES("full", "straight"), .read_by = PP,
      .changes_image = 1, .def = 0,
      .meaning = "Behind mirrors and glossy surfaces: aim at their foci (full) or assume a straight camera leg"},

@@ -55,11 +55,12 @@ static void test_threads_bit_identical(void **state)
     assert_true(p1.n_vol > 0 && p1.n_surf > 0);
     assert_true(p1.vol_paths < p1.paths && p1.surf_paths < p1.paths);
     photon_set_free(&p1);
-    /* Single scattering (at most one photon per path), no volume budget: all 20000 paths in three batches. */
+    /* Single scattering (at most one photon per path), no volume budget: all 20000 paths in three batches.
+     * The direct light's surface photons kept (surface_direct_connections off), else this set has none. */
     {
-        const char *sets[] = {"max_bounces=2", "volume_photon_count=1e6"};
+        const char *sets[] = {"max_bounces=2", "volume_photon_count=1e6", "surface_direct_connections=false"};
         scene s1;
-        load_scene(t.path, sets, 2, &s1);
+        load_scene(t.path, sets, 3, &s1);
         photon_pass_thread_check(&s1, &p1);
         assert_int_equal(p1.paths, 20000);
         assert_int_equal(p1.vol_paths, 20000);
