@@ -259,8 +259,15 @@ void assert_photon_identical(const photon *a, const photon *b)
 int run_photon_pass(const scene *s, uint64_t seed, long iteration, double surface_radius, photon_set *out,
                     dp_error *err)
 {
+    return run_photon_pass_share(s, seed, iteration, surface_radius, 1.0, out, err);
+}
+
+int run_photon_pass_share(const scene *s, uint64_t seed, long iteration, double surface_radius, double chain_share,
+                          photon_set *out, dp_error *err)
+{
     render_plan p;
     if (plan_resolve(s, &p, err)) return -1;
+    p.chain_share = chain_share;
     photon_pass_input in;
     photon_pass_input_init(&in, s, &p, NULL, seed, iteration, NULL);
     in.surface_slack = p.include_surfaces ? p.darts.eta_ub * surface_radius : 0.0;

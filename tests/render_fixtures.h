@@ -182,6 +182,9 @@ void assert_photon_identical(const photon *a, const photon *b);
  * radius surface_radius. */
 int run_photon_pass(const scene *s, uint64_t seed, long iteration, double surface_radius, photon_set *out,
                     dp_error *err);
+/* The same with the plan's chain_share set (surface_paths: the chains trace this share of the paths left). */
+int run_photon_pass_share(const scene *s, uint64_t seed, long iteration, double surface_radius, double chain_share,
+                          photon_set *out, dp_error *err);
 /* The DARTS guide of the scene's plan. */
 void scene_guide(const scene *s, darts_guide *g);
 

@@ -31,6 +31,7 @@ typedef struct {
     double alpha_reg;               /* light connections at camera vertices after a glossy bounce evaluate
                                      * microfacet lobes with α at least this (docs/defaults.md §3.7); 0: off */
     int k_surf;                     /* gather_photon_count */
+    int row_step;                   /* 0 or 1: every row; k: only the rows y % k == 0 (a pilot's subsample) */
     int surface_direct;             /* surface_direct_connections: at gathered lobes, the lights that
                                      * emitter_connects_exactly are connected (the photon pass stored no
                                      * first-bounce photon of theirs) */

@@ -45,6 +45,11 @@
       "that can count")                                                                                                \
     X(double, chain_small, RENDER_SUM, 0, "surface chains: small steps proposed")                                      \
     X(double, chain_accepted, RENDER_SUM, 0, "surface chains: small steps accepted")                                   \
+    X(double, chain_share, RENDER_KEPT, 0, "surface_paths auto: the share of the light paths left once the volume "   \
+      "budget is full that the chains trace (0: not chosen, all)")                                                    \
+    X(double, pilot_ratio, RENDER_KEPT, 0, "surface_paths auto: the pilot's surface variance over its volume "        \
+      "variance, both at every path")                                                                                  \
+    X(double, t_pilot, RENDER_KEPT, 0, "surface_paths auto: seconds of the pilot")                                    \
     X(double, t_cluster, RENDER_KEPT, 0, "several ranks: rank 0's seconds in the rounds' agreement "                   \
       "and the reductions")                                                                                            \
     X(long, reductions, RENDER_KEPT, 0, "several ranks: film reductions onto rank 0 "                                  \

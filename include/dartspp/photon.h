@@ -211,6 +211,8 @@ typedef struct {
                                      * segments; long ones with DARTS), no volume photons */
     int vertices;                   /* sliced primitives: record every light-path vertex (path_vertex); the volume
                                      * budget counts vertices, and the same paths' beams are kept with them */
+    double chain_share;             /* the share of the light paths left once the volume budget is full that
+                                     * the chains trace (render_plan.chain_share) */
     int surface_chains;             /* DARTS: once the volume budget is full, the surface photons come from
                                      * Markov chains over light paths (surface_chain.c) */
     darts_guide guide;              /* DARTS bins, bounds and switches; guide.active 0: baseline */

@@ -31,4 +31,14 @@ void photon_points_last_radii(const render_plan *p, long passes, render_stats *s
  * a pilot batch's yield), their maps, the sensor pass's primary lines and splat, the batch buffers. */
 void photon_points_memory(const scene *s, const render_plan *p, memory_estimate *m);
 
+/* surface_paths "auto" (src/photon_points/chain_share.c, docs/defaults.md §3.9): whether plan p chooses its
+ * chains' share by a pilot; the share for the pilot's surface and volume variances (both with every path);
+ * and the pilot itself (saying so on messages, if not NULL), which sets p->chain_share (and st->chain_share,
+ * pilot_ratio, t_pilot) from two independent draws of a pass with seed's own streams. Nothing when p does not
+ * choose. 0, or -1 with err. */
+int photon_points_auto_chains(const render_plan *p);
+double photon_points_chain_share_rule(double v_surface, double v_volume);
+int photon_points_choose_chain_share(const scene *s, render_plan *p, const eda_set *eda, uint64_t seed,
+                                     const dp_stop_flag *stop, FILE *messages, render_stats *st, dp_error *err);
+
 #endif

@@ -35,6 +35,9 @@ static inline double schedule_radius(const radius_schedule *r, long iteration)
     return progressive_radius(r->r0, r->alpha, iteration, r->dims);
 }
 
+/* The estimates of photon points' sensor pass (render_plan.sensor_parts). */
+enum { SENSOR_SURFACE = 1, SENSOR_VOLUME = 2 };
+
 typedef struct render_plan {
     /* One decided value per setting, named as its key where it is one; the stages read these, never
      * scene.integrator. */
@@ -58,6 +61,15 @@ typedef struct render_plan {
     radius_schedule w_gate;
     int include_surfaces, low_order_scattering, surface_chains;
     int surface_direct;              /* surface_direct_connections, with surfaces included (emitter_connects_exactly) */
+    surface_paths_choice surface_paths;
+    int sensor_parts;                /* photon points' estimates the sensor pass gathers: SENSOR_SURFACE |
+                                      * SENSOR_VOLUME from plan_resolve; the pilot of surface_paths "auto" renders
+                                      * each alone (src/photon_points/chain_share.c) */
+    int sensor_row_step;             /* the sensor pass samples the rows y % step == 0: 1 from plan_resolve; the
+                                      * pilot of surface_paths "auto" takes every 4th */
+    double chain_share;              /* the share of the light paths left once the volume budget is full that the
+                                      * surface chains trace: 1 from plan_resolve, set by the pilot of
+                                      * surface_paths "auto" (photon_points_choose_chain_share) */
     volume_photon_type_choice volume_photon_type; /* points, or short beams (src/photon_beams) */
     camera_leg_choice camera_leg;
     volume_gather_choice volume_gather;

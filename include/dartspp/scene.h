@@ -214,6 +214,7 @@ typedef enum { CAMERA_LEG_EUCLIDEAN, CAMERA_LEG_PROJECTED } camera_leg_choice;
 typedef enum { VOLUME_GATHER_SPLAT, VOLUME_GATHER_BEAM } volume_gather_choice;
 typedef enum { RADIUS_SCHEDULE_2D, RADIUS_SCHEDULE_3D } radius_schedule_choice;
 typedef enum { PASS_WEIGHTS_KERNEL_AREA, PASS_WEIGHTS_EQUAL } pass_weights_choice;
+typedef enum { SURFACE_PATHS_AUTO, SURFACE_PATHS_ALL } surface_paths_choice;
 typedef enum { DARTS_MIRRORS_FULL, DARTS_MIRRORS_STRAIGHT } darts_mirrors_choice;
 
 typedef struct {
@@ -258,6 +259,7 @@ typedef struct {
     double mirror_defensive;
     int surface_chains;
     int surface_direct_connections;
+    int surface_paths;              /* surface_paths_choice */
     int early_exit;
     int control_vertex_mis;
     int camera_control_vertices;

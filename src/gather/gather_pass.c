@@ -286,6 +286,11 @@ typedef struct {
 static void sample_pixel(void *ctx, film_pixel *pix, vec3 o, vec3 dir, dp_rng *rng)
 {
     const pass_ctx *p = ctx;
+    int step = p->g->row_step;
+    if (step > 1 && (pix->px / (size_t)p->s->cam.width) % (size_t)step != 0) { /* a pilot's subsample: not sampled */
+        if (p->lines) p->lines[pix->px].n = 0;
+        return;
+    }
     pixel_ctx c = {.s = p->s, .g = p->g, .pix = pix, .rng = rng, .line = p->lines ? &p->lines[pix->px] : NULL,
                    .eta_lb = p->eta_lb, .eta_ub = p->eta_ub};
     trace_sensor_path(&c, o, dir);

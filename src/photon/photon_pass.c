@@ -630,7 +630,7 @@ void photon_pass_input_init(photon_pass_input *in, const scene *s, const render_
                               .surface_direct = p->surface_direct,
                               .beams = p->volume_photon_type != VOLUME_PHOTON_POINTS,
                               .vertices = volume_type_sliced(p->volume_photon_type),
-                              .surface_chains = p->surface_chains,
+                              .surface_chains = p->surface_chains, .chain_share = p->chain_share,
                               .surface_slack = plan_surface_slack(p, iteration), .shading = p->shading,
                               .eda = eda, .seed = seed,
                               .deriv = deriv_on(&p->deriv) ? &p->deriv : NULL,
@@ -719,7 +719,10 @@ static int merge_chains(pass_totals *pt, const photon_pass_input *in, const thre
 #define CHAIN_BATCH 32
 static int chain_paths(const scene *s, const photon_pass_input *in, int nt, thread_bufs *tb, pass_totals *pt)
 {
-    long left = (long)in->light_paths - pt->next;
+    /* surface_paths "auto": a share of the paths left (photon_points_choose_chain_share); the chain photons
+     * stand for the paths the chains traced, so any share keeps the surface map's expectation */
+    double share = in->chain_share > 0.0 && in->chain_share < 1.0 ? in->chain_share : 1.0;
+    long left = (long)ceil(((double)(long)in->light_paths - (double)pt->next) * share);
     long n_chains = (left + CHAIN_STEPS - 1) / CHAIN_STEPS;
     int batch = 8 * nt > CHAIN_BATCH ? 8 * nt : CHAIN_BATCH;
     chain_count *cc = malloc((size_t)batch * sizeof *cc);

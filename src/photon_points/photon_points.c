@@ -27,7 +27,8 @@ int photon_points_pass(const scene *s, const render_plan *p, const eda_set *eda,
     photon_set ps;
     photon_pass_input pin;
     photon_pass_input_init(&pin, s, p, eda, seed, iteration, stop);
-    gather_input g = {.k_surf = p->gather_photon_count, .surface_direct = p->surface_direct, .bounces = p->bounces, .shading = p->shading,
+    gather_input g = {.k_surf = p->gather_photon_count, .surface_direct = p->surface_direct,
+                      .row_step = p->sensor_row_step, .bounces = p->bounces, .shading = p->shading,
                       .camera_leg_projected = p->camera_leg == CAMERA_LEG_PROJECTED, .camera_unwarp = p->window.camera_unwarp,
                       .volume_splat = p->volume_gather == VOLUME_GATHER_SPLAT,
                       .stop = stop, .r_vol = schedule_radius(&p->r_vol, iteration),
@@ -60,8 +61,9 @@ int photon_points_pass(const scene *s, const render_plan *p, const eda_set *eda,
     if (!rc && ps.n_surf > 0 && !(sm = surface_map_build(ps.surf, ps.n_surf, err))) rc = -1;
     double t2 = dp_seconds();
     if (!rc) {
-        g.vol = vm;
-        g.surf = sm;
+        g.vol = p->sensor_parts & SENSOR_VOLUME ? vm : NULL;
+        g.surf = p->sensor_parts & SENSOR_SURFACE ? sm : NULL;
+        if (!(p->sensor_parts & SENSOR_SURFACE)) g.surface_direct = 0;
         g.surf_photons = ps.surf;
         g.vol_photons = ps.vol;
         g.n_vol = ps.n_vol;

@@ -32,6 +32,13 @@ static int pilot_pass(const scene *s, const render_plan *p, photon_set *ps, int 
 void photon_points_memory(const scene *s, const render_plan *p, memory_estimate *m)
 {
     memory_item_add(m, "EDA tables", "integrator.eda_shape", (double)eda_set_bytes(s, &p->darts));
+    if (photon_points_auto_chains(p)) { /* chain_share.c: a film of its own and four gate images, beside the render's */
+        double px = (double)s->cam.width * s->cam.height;
+        int layers = time_window_layers(&p->window);
+        memory_item_add(m, "surface_paths auto: the pilot's film and images", "integrator.surface_paths",
+                        2 * px * 3 * sizeof(double) + 2 * px * 3 * (double)layers * sizeof(float) +
+                            4 * px * 3 * sizeof(float));
+    }
     double V = p->volume_photon_count, S = p->photon_count, batch_photons = 1.0, batch_beams = 0.0, batch_verts = 0.0;
     photon_set pilot;
     int chains, piloted = pilot_pass(s, p, &pilot, &chains);

@@ -44,6 +44,10 @@ static void resolve_photon_points(const integrator_settings *in, render_plan *p)
     p->low_order_scattering = in->low_order_scattering;
     p->surface_chains = in->surface_chains;
     p->surface_direct = in->surface_direct_connections && in->include_surfaces;
+    p->surface_paths = in->surface_paths;
+    p->chain_share = 1.0;
+    p->sensor_parts = SENSOR_SURFACE | SENSOR_VOLUME;
+    p->sensor_row_step = 1;
     p->camera_leg = in->camera_leg;
     p->volume_gather = in->volume_gather;
     /* the path tracer's passes weigh 1 and regularize nothing */

@@ -11,6 +11,7 @@ static const integrator_entry table[INTEGRATOR_COUNT] = {
                                 .warn = warn_path_tracer},
     [INTEGRATOR_PHOTON_POINTS] = {.type = INTEGRATOR_PHOTON_POINTS,
                                   .pass = photon_points_pass,
+                                  .prepare = photon_points_choose_chain_share,
                                   .last_pass_figures = photon_points_last_radii,
                                   .memory = photon_points_memory,
                                   .print_method = summary_print_photon_pass,

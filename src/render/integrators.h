@@ -25,6 +25,10 @@ typedef struct {
     void (*print_method)(const scene *s, const render_plan *p);
     /* How it reaches light e (docs/emitters.md §7), for the summary's list of lights (summary.c). */
     const char *(*light_technique)(const emitter *e, const render_plan *p);
+    /* Before the first pass, choices its passes need that cost work (surface_paths "auto": a pilot); it may
+     * set fields of *p that plan_resolve leaves at their defaults. NULL: none. */
+    int (*prepare)(const scene *s, render_plan *p, const eda_set *eda, uint64_t seed, const dp_stop_flag *stop,
+                   FILE *messages, render_stats *st, dp_error *err);
     /* The warnings only it needs (warnings.c); NULL: none. */
     void (*warn)(FILE *out, const scene *s, const render_plan *p);
 } integrator_entry;

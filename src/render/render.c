@@ -243,15 +243,25 @@ static int render_film_lidar(const scene *s, film *f)
     return 0;
 }
 
+/* The integrator's choices that cost work (integrator_entry.prepare) into q, a copy of the plan. */
+static int prepare_plan(const scene *s, render_plan *q, const eda_set *eda, const render_options *opt,
+                        render_stats *st, dp_error *err)
+{
+    const integrator_entry *e = integrator_entry_of(q->type);
+    return e->prepare ? e->prepare(s, q, eda, opt->seed, opt->stop, opt->messages, st, err) : 0;
+}
+
 /* The passes, with the plan resolved and the film initialised. */
-static int render_passes(const scene *s, const render_plan *p, const render_options *opt, film *f, render_stats *st,
-                         dp_error *err)
+static int render_passes(const scene *s, const render_plan *plan, const render_options *opt, film *f,
+                         render_stats *st, dp_error *err)
 {
     eda_set eda = {0};
+    render_plan q = *plan; /* read only but for prepare_plan's choices: its arrays stay plan's */
+    const render_plan *p = &q;
     int ready = !eda_set_prepare(s, &p->darts, &p->window, &eda, opt->messages, err) &&
                 !film_init(f, s->cam.width, s->cam.height, &p->window, err) && !render_film_derivs(s, f, err) &&
                 !render_film_lidar(s, f) &&
-                !(opt->resume && film_resume(f, opt->resume, err));
+                !(opt->resume && film_resume(f, opt->resume, err)) && !prepare_plan(s, &q, &eda, opt, st, err);
     const render_cluster *c = opt->cluster && opt->cluster->size > 1 ? opt->cluster : NULL;
     /* a rank without its EDA tables or film: none starts, and every rank exits with the largest status (2 when
      * a rank's cause is bad input), whichever rank's exit mpirun reports */
@@ -266,7 +276,7 @@ static int render_passes(const scene *s, const render_plan *p, const render_opti
     long spp = opt->spp >= 0 ? opt->spp : p->spp;
     double limit = opt->time_limit >= 0 ? opt->time_limit : p->timeout;
     progress_line pl = {.tty = isatty(2), .last_print = -1e9, .last_passes = -1};
-    double t0 = dp_seconds();
+    double t0 = dp_seconds() - st->t_pilot; /* the pilot's time counts against the time limit */
     int rc = 0;
     st->passes = f->passes; /* 0, or the passes of the film resumed */
     long first = st->resumed_passes = f->passes;

@@ -225,6 +225,10 @@ static void print_photon_stats(const render_stats *st)
                "that can count; %.1f%% of the small steps accepted\n",
                100.0 * st->chain_paths / st->photon_paths, 100.0 * st->chain_visible / fmax(st->chain_large, 1.0),
                100.0 * st->chain_accepted / fmax(st->chain_small, 1.0));
+    if (st->chain_share > 0)
+        printf("surface_paths auto: the chains traced %.1f%% of the light paths left once the volume budget was full "
+               "(pilot %.2f s: the surface estimate's variance %.3g times the volume estimate's)\n",
+               100.0 * st->chain_share, st->t_pilot, st->pilot_ratio);
     if (st->photon_paths > 0)
         printf("photon points: %.3g photon paths (%.2f M/s in the photon pass), %.3g photons stored; "
                "time in photon pass %.2f s, map builds %.2f s, sensor pass %.2f s; last radii r_vol %.4g, R_surf %.4g\n",

@@ -148,6 +148,9 @@ static const scene_key table[] = {
      .meaning = "Direct light of point, spot and other lights reached without sampling, at the surfaces the sensor "
                 "pass gathers: connected from the camera path instead of gathered from first-bounce photons "
                 "(docs/defaults.md §3.8)"},
+    {.name = "surface_paths", IN(surface_paths), CHOICES("auto", "all"), .read_by = PP, .changes_image = 1, .def = 0,
+     .meaning = "DARTS surface chains: trace as many of the light paths left once the volume budget is full as a "
+                "pilot finds worth their time (auto), or all of them (docs/defaults.md §3.9)"},
     {.name = "darts_mirrors", IN(darts_mirrors), CHOICES("full", "straight"), .read_by = PP,
      .changes_image = 1, .def = 0,
      .meaning = "Behind mirrors and glossy surfaces: aim at their foci (full) or assume a straight camera leg"},

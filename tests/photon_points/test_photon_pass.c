@@ -208,9 +208,8 @@ static void surface_power_cells(const photon_set *p, double *cells)
  * a grid over the box. One χ² over the cells with power (the two means' difference over its standard
  * error, estimated across iterations), and the total within 4 standard errors. The chains must also
  * concentrate the work: at least 3x the surface photons of the independent paths. */
-static void test_surface_chains_keep_the_surface_map(void **state)
+static void chains_keep_the_surface_map(double share)
 {
-    (void)state;
     char text[8192];
     box_scene_text(text, sizeof text, 16, DARTS_BOX_32K("0.1"));
     box_scene_make_grey(text);
@@ -230,8 +229,10 @@ static void test_surface_chains_keep_the_surface_map(void **state)
         for (int m = 0; m < 2; m++) {
             dp_error err;
             photon_set p;
-            if (run_photon_pass(m ? &son : &soff, 31, i, 0.05, &p, &err)) fail_msg("%s", err.msg);
-            assert_int_equal(p.surf_paths, 32768);
+            if (run_photon_pass_share(m ? &son : &soff, 31, i, 0.05, m ? share : 1.0, &p, &err)) fail_msg("%s", err.msg);
+            /* the chains trace the share of the paths left after the independent ones (ceil) */
+            if (m) assert_int_equal(p.chain.traced, (long)ceil((32768.0 - (double)(p.surf_paths - p.chain.traced)) * share));
+            else assert_int_equal(p.surf_paths, 32768);
             if (m) {
                 assert_true(p.chain.traced > 0);
                 st.traced += p.chain.traced, st.large += p.chain.large, st.visible += p.chain.visible;
@@ -269,10 +270,24 @@ static void test_surface_chains_keep_the_surface_map(void **state)
     assert_true(dof >= 20);
     assert_true(fabs(z) < 4.0);
     assert_true(p > 1e-3);
-    assert_true(photons[1] > 3 * photons[0]);
+    assert_true(photons[1] > (share < 1.0 ? 1 : 3) * photons[0]);
     scene_free(&son);
     scene_free(&soff);
     tmp_scene_remove(&t);
+}
+
+static void test_surface_chains_keep_the_surface_map(void **state)
+{
+    (void)state;
+    chains_keep_the_surface_map(1.0);
+}
+
+/* surface_paths "auto" (docs/defaults.md §3.9): chains that trace a quarter of the paths left keep the surface
+ * map's expectation too, their photons standing for the paths they traced. */
+static void test_chain_share_keeps_the_surface_map(void **state)
+{
+    (void)state;
+    chains_keep_the_surface_map(0.25);
 }
 
 /* The DARTS early exit ends a light path once no later vertex can reach its bin, and the fast path stops
@@ -353,6 +368,7 @@ int main(void)
         cmocka_unit_test(test_cache_aligned_storage),
         cmocka_unit_test(test_surface_photons_after_volume_budget_full),
         cmocka_unit_test(test_surface_chains_keep_the_surface_map),
+        cmocka_unit_test(test_chain_share_keeps_the_surface_map),
         cmocka_unit_test(test_early_exit_keeps_every_photon),
     };
     /* DARTSPP_TEST_FILTER=name (cmocka wildcards) runs only the matching tests */
