@@ -9,9 +9,11 @@
  * alone and its volume estimate alone; half the mean squared difference of the two draws' images is each
  * estimate's variance (chain photons are correlated, and a difference of draws sees that where a sum of
  * squared contributions would not). The times are not measured: they would make the images depend on the
- * machine's load. We take C_r = C_s(1), which the three paper scenes bracket (C_r/C_s 0.8 on the fog box,
- * 0.9 on the staircase, 2.4 on the dragon); the error is flat near q*, so a factor of two in C_r/C_s costs
- * little. The pilot's streams are its own (PILOT_KEY), so every pass stays an independent draw given q, and
+ * machine's load. We take C_r = C_s(1), which the three paper scenes bracket (C_r/C_s about 0.8 on the fog
+ * box, 0.9 on the staircase, 2.4 on the dragon, from their phase times); the error is flat near q*, so a
+ * factor of two in C_r/C_s costs little. The surface image also holds what does not scale with q (the
+ * direct connections, the surface photons of the paths before the volume budget filled): small on those
+ * scenes. The pilot's streams are its own (PILOT_KEY), so every pass stays an independent draw given q, and
  * q depends only on the scene, the plan and the seed: the same for every rank, thread count and resume.
  * Written here: no library chooses photon budgets. */
 #include <math.h>
@@ -22,7 +24,7 @@
 
 #define PILOT_KEY 0x70696c6f74ULL /* "pilot" */
 #define PILOT_SHARE 0.25          /* the pilot's chains trace this share; their variance is scaled to all */
-#define PILOT_NO_CHAINS 1e-9      /* the volume draws: the volume map fills before the chains, which then stop */
+#define PILOT_NO_CHAINS 1e-9      /* the volume draws need no surface photons: their chains trace one path */
 #define PILOT_ROW_STEP 4          /* its sensor passes sample every 4th row: both variances by the same rows */
 #define CHAIN_SHARE_MIN (1.0 / 16)
 
