@@ -32,6 +32,9 @@ typedef struct {
                                      * microfacet lobes with α at least this (docs/defaults.md §3.7); 0: off */
     int k_surf;                     /* gather_photon_count */
     int row_step;                   /* 0 or 1: every row; k: only the rows y % k == 0 (a pilot's subsample) */
+    double eta_lb, eta_ub;          /* the scene's smallest and largest refractive index (darts_plan): a
+                                     * straight light connection's time bounds; 0: unknown, every connection
+                                     * traced */
     int surface_direct;             /* surface_direct_connections: at gathered lobes, the lights that
                                      * emitter_connects_exactly are connected (the photon pass stored no
                                      * first-bounce photon of theirs) */

@@ -13,7 +13,6 @@ typedef struct {
     film_pixel *pix;
     dp_rng *rng;     /* continuations through specular and near-specular lobes */
     primary_line *line; /* where the primary line's medium segments are recorded for the splat, or NULL */
-    double eta_lb, eta_ub; /* the scene's smallest and largest refractive index: bounds of a straight leg's time */
 } pixel_ctx;
 
 typedef struct {
@@ -133,9 +132,10 @@ static void gather_surface(pixel_ctx *c, const surface_site *ss, unsigned lobes,
 static int connection_can_count(const pixel_ctx *c, double t, double dist)
 {
     const time_window *tw = &c->pix->f->window;
-    if (!tw->gated || c->g->deriv) return 1; /* derivatives: the time kernels reach past the window */
+    const gather_input *g = c->g;
+    if (!tw->gated || g->deriv || !(g->eta_ub > 0.0)) return 1; /* derivatives: the time kernels reach past it */
     double margin = 1e-4 * (1.0 + dist);
-    return t + c->eta_lb * dist - margin < time_window_end(tw) && t + c->eta_ub * dist + margin >= tw->start;
+    return t + g->eta_lb * dist - margin < time_window_end(tw) && t + g->eta_ub * dist + margin >= tw->start;
 }
 
 /* Direct light by next-event estimation (light → surface → camera), with `lobes` evaluated, to every light
@@ -280,7 +280,6 @@ typedef struct {
     const scene *s;
     const gather_input *g;
     primary_line *lines; /* per pixel, or NULL */
-    double eta_lb, eta_ub; /* the scene's smallest and largest refractive index */
 } pass_ctx;
 
 static void sample_pixel(void *ctx, film_pixel *pix, vec3 o, vec3 dir, dp_rng *rng)
@@ -291,8 +290,7 @@ static void sample_pixel(void *ctx, film_pixel *pix, vec3 o, vec3 dir, dp_rng *r
         if (p->lines) p->lines[pix->px].n = 0;
         return;
     }
-    pixel_ctx c = {.s = p->s, .g = p->g, .pix = pix, .rng = rng, .line = p->lines ? &p->lines[pix->px] : NULL,
-                   .eta_lb = p->eta_lb, .eta_ub = p->eta_ub};
+    pixel_ctx c = {.s = p->s, .g = p->g, .pix = pix, .rng = rng, .line = p->lines ? &p->lines[pix->px] : NULL};
     trace_sensor_path(&c, o, dir);
 }
 
@@ -324,11 +322,7 @@ double gather_pass_bytes(const scene *s, int splat, const photon *sample, size_t
  * per recorded segment (volume_gather "beam", and the splat's fallback). */
 double gather_pass(const scene *s, const gather_input *g, film *f, uint64_t seed, long iteration)
 {
-    pass_ctx p = {s, g, NULL, s->integrator.vacuum_eta, s->integrator.vacuum_eta};
-    for (int i = 0; i < s->medium_count; i++) {
-        p.eta_lb = fmin(p.eta_lb, s->media[i].eta);
-        p.eta_ub = fmax(p.eta_ub, s->media[i].eta);
-    }
+    pass_ctx p = {s, g, NULL};
     /* NULL: queries in the walk; so with derivatives, whose camera state the walk carries (a primary line would
      * need one per segment) */
     if (g->vol && !g->deriv) p.lines = malloc(volume_splat_bytes(s->cam.width, s->cam.height));

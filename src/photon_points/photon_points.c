@@ -28,7 +28,8 @@ int photon_points_pass(const scene *s, const render_plan *p, const eda_set *eda,
     photon_pass_input pin;
     photon_pass_input_init(&pin, s, p, eda, seed, iteration, stop);
     gather_input g = {.k_surf = p->gather_photon_count, .surface_direct = p->surface_direct,
-                      .row_step = p->sensor_row_step, .bounces = p->bounces, .shading = p->shading,
+                      .row_step = p->sensor_row_step, .eta_lb = p->darts.eta_lb, .eta_ub = p->darts.eta_ub,
+                      .bounces = p->bounces, .shading = p->shading,
                       .camera_leg_projected = p->camera_leg == CAMERA_LEG_PROJECTED, .camera_unwarp = p->window.camera_unwarp,
                       .volume_splat = p->volume_gather == VOLUME_GATHER_SPLAT,
                       .stop = stop, .r_vol = schedule_radius(&p->r_vol, iteration),
